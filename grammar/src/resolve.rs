@@ -1,0 +1,1756 @@
+//! The semantic pass: from the syntax tree to a checked `Script`.
+//!
+//! Every check reports into one list, so a file's mistakes all come out in one run; a
+//! `Script` is returned only when none of them is an error. What is checked: units and
+//! ranges of every number, actors declared once and referenced only when declared, at most
+//! one appearance of an actor per composition, durations > 0, positions inside the stage,
+//! blocking that does not overlap, a timeline whose pinned starts and timecodes are in order,
+//! and the parameters each path shape needs.
+
+use std::collections::HashMap;
+use std::path::Path as FsPath;
+
+use crate::ast::{self, DurationKeyword, PathValue, Quantity, ShotBody, Statement, TransitionKind};
+use crate::diag::{Code, Diagnostic};
+use crate::script::*;
+use crate::span::Span;
+use crate::suggest::did_you_mean;
+use crate::vocab::{wrap_angle_rad, CameraAngle, MoveKind};
+
+/// What the semantic pass needs from outside the script.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Options<'o> {
+    /// Names of the built-in drone profiles; when empty, `drone NAME` is not checked.
+    pub known_drones: &'o [&'o str],
+    /// The script's directory, against which `drone "…"` and `path waypoints "…"` are
+    /// resolved; `None` leaves files unread (and waypoint lists empty).
+    pub base_dir: Option<&'o FsPath>,
+}
+
+/// Longest time the language accepts anywhere: a day.
+const MAX_TIME_S: f64 = 86_400.0;
+const EPS_S: f64 = 1e-9;
+
+/// Resolve a parsed file. Returns the script when no diagnostic is an error.
+pub fn resolve<'a>(file: &ast::File<'a>, opts: &Options<'_>) -> (Option<Script>, Vec<Diagnostic>) {
+    let mut failed_lines = Vec::new();
+    let mut failed_actors = Vec::new();
+    let mut failed_stage = false;
+    for line in file.lines.iter().filter(|l| l.error) {
+        failed_lines.push(line.span.start);
+        let text = file
+            .source
+            .get(line.span.start..line.span.end)
+            .unwrap_or("");
+        let mut words = text.split_whitespace();
+        match words.next() {
+            Some("stage") => failed_stage = true,
+            Some("actor") => failed_actors.extend(words.next()),
+            _ => {}
+        }
+    }
+    let mut r = Resolver {
+        opts,
+        diags: Vec::new(),
+        failed_lines,
+        failed_actors,
+        failed_stage,
+    };
+    let script = r.run(file);
+    let ok = !r.diags.iter().any(Diagnostic::is_error);
+    (if ok { Some(script) } else { None }, r.diags)
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Dim {
+    Length,
+    Time,
+    Angle,
+}
+
+impl Dim {
+    fn unit(self) -> &'static str {
+        match self {
+            Dim::Length => "m",
+            Dim::Time => "s",
+            Dim::Angle => "deg",
+        }
+    }
+
+    fn noun(self) -> &'static str {
+        match self {
+            Dim::Length => "a length in metres",
+            Dim::Time => "a time in seconds",
+            Dim::Angle => "an angle in degrees",
+        }
+    }
+
+    /// Units a user may write instead, with the factor to ours.
+    fn unit_factor(unit: &str) -> Option<(Dim, f64)> {
+        Some(match unit {
+            "m" | "meter" | "meters" | "metre" | "metres" => (Dim::Length, 1.0),
+            "cm" => (Dim::Length, 0.01),
+            "mm" => (Dim::Length, 0.001),
+            "km" => (Dim::Length, 1000.0),
+            "ft" => (Dim::Length, 0.3048),
+            "in" => (Dim::Length, 0.0254),
+            "s" | "sec" | "secs" | "second" | "seconds" => (Dim::Time, 1.0),
+            "ms" => (Dim::Time, 0.001),
+            "min" | "mins" | "minute" | "minutes" => (Dim::Time, 60.0),
+            "h" => (Dim::Time, 3600.0),
+            "deg" | "degree" | "degrees" | "degs" => (Dim::Angle, 1.0),
+            "rad" => (Dim::Angle, 180.0 / std::f64::consts::PI),
+            _ => return None,
+        })
+    }
+}
+
+/// A resolved shot body before it is placed on the clock.
+struct Pending {
+    transition: Transition,
+    content: Option<ShotContent>,
+    duration_s: Option<f64>,
+}
+
+struct Resolver<'o, 'a> {
+    opts: &'o Options<'o>,
+    diags: Vec<Diagnostic>,
+    /// Start offsets of the lines that failed to parse: a `then` after one of them may be
+    /// continuing it, so no "nothing to continue" error is reported.
+    failed_lines: Vec<usize>,
+    /// Names on `actor` lines that failed to parse: not reported again as unknown.
+    failed_actors: Vec<&'a str>,
+    /// A `stage` line failed to parse: no "missing stage" error.
+    failed_stage: bool,
+}
+
+fn fmt_num(v: f64) -> String {
+    let r = (v * 1000.0).round() / 1000.0;
+    let s = format!("{r}");
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
+impl<'o, 'a> Resolver<'o, 'a> {
+    fn err(&mut self, d: Diagnostic) {
+        self.diags.push(d);
+    }
+
+    // -----------------------------------------------------------------------------------
+    // Numbers
+
+    /// A number of the given dimension, in our unit (radians for angles). `unit_optional`:
+    /// a bare number is taken in our unit (coordinates).
+    fn quantity(
+        &mut self,
+        q: &Quantity<'_>,
+        dim: Dim,
+        what: &str,
+        unit_optional: bool,
+    ) -> Option<f64> {
+        let mut value = q.value;
+        match q.unit {
+            None if !unit_optional => {
+                self.err(
+                    Diagnostic::error(
+                        Code::MissingUnit,
+                        q.span,
+                        format!("{what} `{}` has no unit", q.number),
+                    )
+                    .with_label(format!("{} needed", dim.noun()))
+                    .with_help(format!("write `{}{}`", q.number, dim.unit())),
+                );
+                return None;
+            }
+            None => {}
+            Some(u) if u.text == dim.unit() => {}
+            Some(u) => {
+                let mut d = Diagnostic::error(
+                    Code::WrongUnit,
+                    u.span,
+                    match Dim::unit_factor(u.text) {
+                        Some((d, _)) if d != dim => {
+                            format!("{what} must be {}, not `{}`", dim.noun(), u.text)
+                        }
+                        Some(_) => format!(
+                            "{what} is written in `{}`; dronecine uses `{}`",
+                            u.text,
+                            dim.unit()
+                        ),
+                        None => format!("unknown unit `{}` in {what}", u.text),
+                    },
+                )
+                .with_label(format!("expected `{}`", dim.unit()));
+                d.help = Some(match Dim::unit_factor(u.text) {
+                    Some((d, f)) if d == dim => {
+                        format!("write `{}{}`", fmt_num(q.value * f), dim.unit())
+                    }
+                    _ => format!("write `{}{}`", q.number, dim.unit()),
+                });
+                self.err(d);
+                return None;
+            }
+        }
+        if !value.is_finite() || value.abs() > 1e9 {
+            self.err(
+                Diagnostic::error(
+                    Code::OutOfRange,
+                    q.span,
+                    format!("{what} `{}` is too large", shorten(q.number)),
+                )
+                .with_help("write a number of at most nine digits before the point"),
+            );
+            return None;
+        }
+        if dim == Dim::Angle {
+            value = value.to_radians();
+        }
+        Some(value)
+    }
+
+    /// A unitless number (turns, screen coordinates).
+    fn plain(&mut self, q: &Quantity<'_>, what: &str) -> Option<f64> {
+        if let Some(u) = q.unit {
+            self.err(
+                Diagnostic::error(
+                    Code::WrongUnit,
+                    u.span,
+                    format!("{what} has no unit, found `{}`", u.text),
+                )
+                .with_help(format!("write `{}`", q.number)),
+            );
+            return None;
+        }
+        if !q.value.is_finite() || q.value.abs() > 1e9 {
+            self.err(Diagnostic::error(
+                Code::OutOfRange,
+                q.span,
+                format!("{what} `{}` is too large", shorten(q.number)),
+            ));
+            return None;
+        }
+        Some(q.value)
+    }
+
+    /// Check `lo <= v <= hi` (or `lo < v` when `open_lo`) and report with the range.
+    fn range(
+        &mut self,
+        v: f64,
+        span: Span,
+        what: &str,
+        lo: f64,
+        open_lo: bool,
+        hi: f64,
+        unit: &str,
+    ) -> Option<f64> {
+        let below = if open_lo { v <= lo } else { v < lo };
+        if below || v > hi {
+            let lo_txt = if open_lo {
+                format!("more than {}{unit}", fmt_num(lo))
+            } else {
+                format!("at least {}{unit}", fmt_num(lo))
+            };
+            self.err(
+                Diagnostic::error(
+                    Code::OutOfRange,
+                    span,
+                    format!(
+                        "{what} is {}{unit}; it must be {lo_txt} and at most {}{unit}",
+                        fmt_num(v),
+                        fmt_num(hi)
+                    ),
+                )
+                .with_help(format!(
+                    "choose a value between {}{unit} and {}{unit}",
+                    fmt_num(lo),
+                    fmt_num(hi)
+                )),
+            );
+            return None;
+        }
+        Some(v)
+    }
+
+    fn time(&mut self, q: &Quantity<'_>, what: &str) -> Option<f64> {
+        let v = self.quantity(q, Dim::Time, what, false)?;
+        self.range(v, q.span, what, 0.0, false, MAX_TIME_S, "s")
+    }
+
+    fn duration(&mut self, d: &ast::Duration<'_>) -> Option<f64> {
+        let v = self.quantity(&d.value, Dim::Time, "the duration", false)?;
+        if v <= 0.0 {
+            self.err(
+                Diagnostic::error(
+                    Code::NonPositiveDuration,
+                    d.value.span,
+                    format!(
+                        "a duration must be more than 0s, found `{}`",
+                        d.value.number.to_string() + "s"
+                    ),
+                )
+                .with_label("not a positive duration")
+                .with_help("give it a positive length such as `for 4s`"),
+            );
+            return None;
+        }
+        self.range(v, d.value.span, "the duration", 0.0, true, MAX_TIME_S, "s")
+    }
+
+    fn point(&mut self, p: &ast::Point<'_>, what: &str) -> Option<[f64; 2]> {
+        let x = self.quantity(&p.x, Dim::Length, what, true);
+        let y = self.quantity(&p.y, Dim::Length, what, true);
+        Some([x?, y?])
+    }
+
+    fn inside(&mut self, stage: Option<&Stage>, p: [f64; 2], span: Span, what: &str) {
+        let Some(stage) = stage else { return };
+        if !stage.contains_xy(p) {
+            let (lo, hi) = (stage.min_m(), stage.max_m());
+            self.err(
+                Diagnostic::error(
+                    Code::OutsideStage,
+                    span,
+                    format!("{what} ({}, {}) lies outside the stage", fmt_num(p[0]), fmt_num(p[1])),
+                )
+                .with_label("outside the stage")
+                .with_help(format!(
+                    "the stage spans x from {} to {} and y from {} to {}; move the point inside or enlarge the stage",
+                    fmt_num(lo[0]),
+                    fmt_num(hi[0]),
+                    fmt_num(lo[1]),
+                    fmt_num(hi[1])
+                )),
+            );
+        }
+    }
+
+    fn inside_height(&mut self, stage: Option<&Stage>, z: f64, span: Span, what: &str) {
+        let Some(stage) = stage else { return };
+        if z < 0.0 || z > stage.size_m[2] + 1e-9 {
+            self.err(
+                Diagnostic::error(
+                    Code::OutsideStage,
+                    span,
+                    format!("{what} {}m is outside the stage's height", fmt_num(z)),
+                )
+                .with_help(format!(
+                    "the stage is {}m high; choose a height from 0m to {}m",
+                    fmt_num(stage.size_m[2]),
+                    fmt_num(stage.size_m[2])
+                )),
+            );
+        }
+    }
+
+    fn actor_ref(
+        &mut self,
+        name: &ast::Text<'_>,
+        declared: &HashMap<&str, Span>,
+        annotation: bool,
+    ) -> bool {
+        if annotation || declared.contains_key(name.text) {
+            return true;
+        }
+        if self.failed_actors.contains(&name.text) {
+            return false;
+        }
+        let mut d = Diagnostic::error(
+            Code::UnknownActor,
+            name.span,
+            format!("unknown actor `{}`", name.text),
+        )
+        .with_label("not declared");
+        d.help = Some(match did_you_mean(name.text, declared.keys().copied()) {
+            Some(s) => s,
+            None => format!(
+                "declare it before the shots: `actor {} height 1.75m at (0, 0) facing 0deg`",
+                name.text
+            ),
+        });
+        self.err(d);
+        false
+    }
+
+    // -----------------------------------------------------------------------------------
+    // The pass
+
+    fn run(&mut self, file: &ast::File<'_>) -> Script {
+        let statements: Vec<&Statement<'_>> = file
+            .lines
+            .iter()
+            .filter_map(|l| l.statement.as_ref())
+            .collect();
+        let any_syntax_error = file.lines.iter().any(|l| l.error);
+
+        let has_timed = statements.iter().any(|s| matches!(s, Statement::Timed(_)));
+        let has_scene_lines = statements.iter().any(|s| !matches!(s, Statement::Timed(_)));
+        let annotation = has_timed && !has_scene_lines;
+
+        // Set-up after the first shot.
+        let mut seen_shot: Option<Span> = None;
+        for s in &statements {
+            match s {
+                Statement::Shot(sh) => {
+                    seen_shot.get_or_insert(sh.span);
+                }
+                Statement::Timed(t) => {
+                    seen_shot.get_or_insert(t.span);
+                }
+                Statement::Stage(_)
+                | Statement::Lens(_)
+                | Statement::Drone(_)
+                | Statement::Actor(_) => {
+                    if let Some(first) = seen_shot {
+                        let what = match s {
+                            Statement::Stage(_) => "stage",
+                            Statement::Lens(_) => "lens",
+                            Statement::Drone(_) => "drone",
+                            _ => "actor",
+                        };
+                        self.err(
+                            Diagnostic::error(
+                                Code::SetupAfterShots,
+                                s.span(),
+                                format!("`{what}` comes after the first shot"),
+                            )
+                            .with_label("scene set-up")
+                            .with_related(first, "the first shot")
+                            .with_help("move the scene set-up (stage, lens, drone, actors) above the first shot"),
+                        );
+                    }
+                }
+                Statement::Blocking(_) => {}
+            }
+        }
+
+        // Settings.
+        let stage = self.stage(&statements);
+        let lens = self.lens(&statements);
+        let drone = self.drone(&statements);
+
+        // Actors.
+        let mut declared: HashMap<&str, Span> = HashMap::new();
+        let mut actors = Vec::new();
+        for s in &statements {
+            if let Statement::Actor(a) = s {
+                if let Some(first) = declared.get(a.name.text) {
+                    self.err(
+                        Diagnostic::error(
+                            Code::DuplicateActor,
+                            a.name.span,
+                            format!("actor `{}` is declared twice", a.name.text),
+                        )
+                        .with_label("declared again here")
+                        .with_related(*first, "first declared here")
+                        .with_help("remove one declaration, or give the second actor another name"),
+                    );
+                    continue;
+                }
+                declared.insert(a.name.text, a.name.span);
+                if let Some(actor) = self.actor(a, stage.as_ref()) {
+                    actors.push(actor);
+                }
+            }
+        }
+
+        // Blocking.
+        let blocking = self.blocking(&statements, &declared, stage.as_ref());
+
+        // Timeline.
+        let mut cast: Vec<String> = actors.iter().map(|a| a.name.clone()).collect();
+        let timeline = self.timeline(
+            &statements,
+            &declared,
+            stage.as_ref(),
+            annotation,
+            &mut cast,
+        );
+
+        let duration_s = timeline.last().map(|s| s.end_s).unwrap_or(0.0);
+        if timeline.is_empty() && !any_syntax_error && !self.diags.iter().any(Diagnostic::is_error)
+        {
+            let span = statements.first().map(|s| s.span()).unwrap_or_default();
+            self.err(
+                Diagnostic::warning(
+                    Code::EmptyScript,
+                    Span::new(span.start, span.start),
+                    "the script has no shots",
+                )
+                .with_help("add a shot such as `MS on A front for 4s`"),
+            );
+        }
+
+        let scene = if annotation || statements.is_empty() {
+            None
+        } else {
+            match stage {
+                Some(stage) => Some(Scene {
+                    stage,
+                    lens,
+                    drone,
+                    actors,
+                    blocking,
+                }),
+                None => {
+                    if !self.failed_stage
+                        && !statements.iter().any(|s| matches!(s, Statement::Stage(_)))
+                    {
+                        let first = statements.first().map(|s| s.span()).unwrap_or_default();
+                        self.err(
+                            Diagnostic::error(Code::MissingStage, first, "the scene has no stage")
+                                .with_label("a scene needs a stage before its shots")
+                                .with_help("add the flight volume above the shots, e.g. `stage 8m x 6m x 3m`"),
+                        );
+                    }
+                    None
+                }
+            }
+        };
+
+        Script {
+            scene,
+            cast,
+            timeline,
+            duration_s,
+        }
+    }
+
+    fn first_of<'s, 'b, T>(
+        &mut self,
+        statements: &'s [&'s Statement<'b>],
+        pick: impl Fn(&'s Statement<'b>) -> Option<&'s T>,
+        span_of: impl Fn(&T) -> Span,
+        what: &str,
+    ) -> Option<&'s T> {
+        let mut found: Option<&T> = None;
+        for s in statements {
+            if let Some(x) = pick(s) {
+                match found {
+                    None => found = Some(x),
+                    Some(first) => self.err(
+                        Diagnostic::error(
+                            Code::DuplicateSetting,
+                            span_of(x),
+                            format!("`{what}` is set twice"),
+                        )
+                        .with_label("set again here")
+                        .with_related(span_of(first), "first set here")
+                        .with_help(format!("keep one `{what}` line")),
+                    ),
+                }
+            }
+        }
+        found
+    }
+
+    fn stage(&mut self, statements: &[&Statement<'_>]) -> Option<Stage> {
+        let st = self.first_of(
+            statements,
+            |s| match s {
+                Statement::Stage(x) => Some(x),
+                _ => None,
+            },
+            |x| x.span,
+            "stage",
+        )?;
+        let mut size = [0.0; 3];
+        let mut ok = true;
+        for (i, (q, axis)) in [(&st.x, "x"), (&st.y, "y"), (&st.z, "z")]
+            .into_iter()
+            .enumerate()
+        {
+            let what = format!("the stage's {axis} size");
+            match self
+                .quantity(q, Dim::Length, &what, false)
+                .and_then(|v| self.range(v, q.span, &what, 0.0, true, 1000.0, "m"))
+            {
+                Some(v) => size[i] = v,
+                None => ok = false,
+            }
+        }
+        ok.then_some(Stage { size_m: size })
+    }
+
+    fn lens(&mut self, statements: &[&Statement<'_>]) -> Option<Lens> {
+        let l = self.first_of(
+            statements,
+            |s| match s {
+                Statement::Lens(x) => Some(x),
+                _ => None,
+            },
+            |x| x.span,
+            "lens",
+        )?;
+        let fov = self
+            .quantity(&l.fov, Dim::Angle, "the lens's field of view", false)
+            .and_then(|v| {
+                self.range(
+                    v.to_degrees(),
+                    l.fov.span,
+                    "the lens's field of view",
+                    1.0,
+                    false,
+                    170.0,
+                    "deg",
+                )
+            })
+            .map(f64::to_radians);
+        let aspect = match &l.aspect {
+            None => Some(16.0 / 9.0),
+            Some(a) => {
+                let mut parts = a
+                    .text
+                    .splitn(2, ':')
+                    .map(|p| p.parse::<f64>().unwrap_or(f64::NAN));
+                let (w, h) = (
+                    parts.next().unwrap_or(f64::NAN),
+                    parts.next().unwrap_or(f64::NAN),
+                );
+                let ratio = w / h;
+                if w > 0.0 && h > 0.0 && ratio.is_finite() && (0.25..=4.0).contains(&ratio) {
+                    Some(ratio)
+                } else {
+                    self.err(
+                        Diagnostic::error(
+                            Code::BadAspect,
+                            a.span,
+                            format!("`{}` is not a usable aspect ratio", a.text),
+                        )
+                        .with_help(
+                            "write width:height with positive numbers, e.g. `16:9` or `4:3`",
+                        ),
+                    );
+                    None
+                }
+            }
+        };
+        Some(Lens {
+            fov_x_rad: fov?,
+            aspect: aspect?,
+        })
+    }
+
+    fn drone(&mut self, statements: &[&Statement<'_>]) -> Option<DroneRef> {
+        let d = self.first_of(
+            statements,
+            |s| match s {
+                Statement::Drone(x) => Some(x),
+                _ => None,
+            },
+            |x| x.span,
+            "drone",
+        )?;
+        match &d.target {
+            ast::DroneTarget::Builtin(name) => {
+                let known = self.opts.known_drones;
+                if !known.is_empty() && !known.contains(&name.text) {
+                    let mut diag = Diagnostic::error(
+                        Code::UnknownDrone,
+                        name.span,
+                        format!("unknown drone profile `{}`", name.text),
+                    )
+                    .with_label("not a built-in profile");
+                    let list = crate::suggest::or_list(known);
+                    diag.help = Some(match did_you_mean(name.text, known.iter().copied()) {
+                        Some(s) => format!("{s} (built-in profiles: {list}; or give a file: `drone \"mine.toml\"`)"),
+                        None => format!("built-in profiles are {list}; for your own, write `drone \"profiles/mine.toml\"`"),
+                    });
+                    self.err(diag);
+                    return None;
+                }
+                Some(DroneRef::Builtin {
+                    name: name.text.to_string(),
+                })
+            }
+            ast::DroneTarget::File(path) => {
+                if let Some(base) = self.opts.base_dir {
+                    if !base.join(path.text).is_file() {
+                        self.err(
+                            Diagnostic::error(
+                                Code::FileNotFound,
+                                path.span,
+                                format!("drone profile file `{}` not found", path.text),
+                            )
+                            .with_label(format!("looked in {}", base.join(path.text).display()))
+                            .with_help(
+                                "file names are relative to the script's folder; check the name",
+                            ),
+                        );
+                        return None;
+                    }
+                }
+                Some(DroneRef::File {
+                    path: path.text.to_string(),
+                })
+            }
+        }
+    }
+
+    fn actor(&mut self, a: &ast::ActorDecl<'_>, stage: Option<&Stage>) -> Option<Actor> {
+        let mut height = None;
+        let mut position = None;
+        let mut facing = None;
+        let mut ok = true;
+        let mut seen: HashMap<&str, Span> = HashMap::new();
+        for attr in &a.attrs {
+            let key = match attr {
+                ast::ActorAttr::Height(..) => "height",
+                ast::ActorAttr::At(..) => "at",
+                ast::ActorAttr::Facing(..) => "facing",
+            };
+            if let Some(first) = seen.insert(key, attr.span()) {
+                self.err(
+                    Diagnostic::error(
+                        Code::DuplicateAttribute,
+                        attr.span(),
+                        format!("`{key}` is given twice for `{}`", a.name.text),
+                    )
+                    .with_related(first, "first given here")
+                    .with_help(format!("keep one `{key}`")),
+                );
+                ok = false;
+                continue;
+            }
+            match attr {
+                ast::ActorAttr::Height(_, q) => {
+                    height = self
+                        .quantity(q, Dim::Length, "the actor's height", false)
+                        .and_then(|v| {
+                            self.range(v, q.span, "the actor's height", 0.2, false, 3.0, "m")
+                        });
+                    ok &= height.is_some();
+                }
+                ast::ActorAttr::At(_, p) => {
+                    position = self.point(p, "a position");
+                    if let Some(pos) = position {
+                        self.inside(
+                            stage,
+                            pos,
+                            p.span,
+                            &format!("the start position of `{}`", a.name.text),
+                        );
+                    }
+                    ok &= position.is_some();
+                }
+                ast::ActorAttr::Facing(_, q) => {
+                    facing = self.quantity(q, Dim::Angle, "the facing angle", false);
+                    ok &= facing.is_some();
+                }
+            }
+        }
+        for (key, value, fix) in [
+            (
+                "height",
+                height.is_some() || seen.contains_key("height"),
+                "height 1.75m",
+            ),
+            (
+                "position",
+                position.is_some() || seen.contains_key("at"),
+                "at (0, 0)",
+            ),
+        ] {
+            if !value {
+                self.err(
+                    Diagnostic::error(
+                        Code::MissingAttribute,
+                        a.name.span,
+                        format!("actor `{}` has no {key}", a.name.text),
+                    )
+                    .with_label(format!("{key} missing"))
+                    .with_help(format!(
+                        "add `{fix}`: `actor {} height 1.75m at (0, 0) facing 0deg`",
+                        a.name.text
+                    )),
+                );
+                ok = false;
+            }
+        }
+        if !ok {
+            return None;
+        }
+        Some(Actor {
+            name: a.name.text.to_string(),
+            height_m: height?,
+            position_m: position?,
+            facing_rad: wrap_angle_rad(facing.unwrap_or(0.0)),
+            span: a.span,
+        })
+    }
+
+    fn blocking(
+        &mut self,
+        statements: &[&Statement<'_>],
+        declared: &HashMap<&str, Span>,
+        stage: Option<&Stage>,
+    ) -> Vec<Movement> {
+        let mut moves: Vec<Movement> = Vec::new();
+        for s in statements {
+            let Statement::Blocking(b) = s else { continue };
+            let known = self.actor_ref(&b.actor, declared, false);
+            let start = self.time(&b.at, "the start time");
+            let action = match &b.action {
+                ast::Action::Walk(_, p) => self.point(p, "a position").map(|to| {
+                    self.inside(
+                        stage,
+                        to,
+                        p.span,
+                        &format!("the walk target of `{}`", b.actor.text),
+                    );
+                    Action::Walk { to_m: to }
+                }),
+                ast::Action::Turn(_, q) => {
+                    self.quantity(q, Dim::Angle, "the angle", false)
+                        .map(|a| Action::Turn {
+                            to_rad: wrap_angle_rad(a),
+                        })
+                }
+            };
+            let dur = match &b.duration {
+                None => {
+                    self.err(
+                        Diagnostic::error(
+                            Code::MissingDuration,
+                            Span::new(b.span.end, b.span.end),
+                            "this movement has no duration",
+                        )
+                        .with_label("add how long it takes")
+                        .with_help("end the line with `over 4s`"),
+                    );
+                    None
+                }
+                Some(d) => {
+                    if d.keyword == DurationKeyword::For {
+                        self.err(
+                            Diagnostic::warning(
+                                Code::DurationKeyword,
+                                d.span,
+                                "a movement is timed with `over`",
+                            )
+                            .with_help(format!(
+                                "write `over {}{}`",
+                                d.value.number,
+                                d.value.unit.map(|u| u.text).unwrap_or("s")
+                            )),
+                        );
+                    }
+                    self.duration(d)
+                }
+            };
+            if let (true, Some(start), Some(action), Some(dur)) = (known, start, action, dur) {
+                moves.push(Movement {
+                    actor: b.actor.text.to_string(),
+                    start_s: start,
+                    end_s: start + dur,
+                    action,
+                    span: b.span,
+                });
+            }
+        }
+        // Overlaps, per actor, in time order.
+        moves.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
+        let mut last_end: HashMap<&str, (f64, Span)> = HashMap::new();
+        let mut overlapping = Vec::new();
+        for (i, m) in moves.iter().enumerate() {
+            if let Some(&(end, span)) = last_end.get(m.actor.as_str()) {
+                if m.start_s < end - EPS_S {
+                    overlapping.push(
+                        Diagnostic::error(
+                            Code::OverlappingMovement,
+                            m.span,
+                            format!(
+                                "`{}` is still moving until {}s when this movement starts at {}s",
+                                m.actor,
+                                fmt_num(end),
+                                fmt_num(m.start_s)
+                            ),
+                        )
+                        .with_label("overlaps the previous movement")
+                        .with_related(span, "this movement is not over yet")
+                        .with_help(format!(
+                            "start it `at {}s` or later, or shorten the previous one",
+                            fmt_num(end)
+                        )),
+                    );
+                    let _ = i;
+                    continue;
+                }
+            }
+            last_end.insert(m.actor.as_str(), (m.end_s, m.span));
+        }
+        let bad = !overlapping.is_empty();
+        self.diags.extend(overlapping);
+        if bad {
+            moves.clear();
+        }
+        moves
+    }
+
+    fn timeline(
+        &mut self,
+        statements: &[&Statement<'_>],
+        declared: &HashMap<&str, Span>,
+        stage: Option<&Stage>,
+        annotation: bool,
+        cast: &mut Vec<String>,
+    ) -> Vec<Shot> {
+        let mut timeline: Vec<Shot> = Vec::new();
+        let mut clock = 0.0_f64;
+        let mut prev_end_span: Option<Span> = None;
+        // What a `then` continues: the previous shot's content, if it resolved.
+        let mut prev: Option<(Span, Option<ShotContent>)> = None;
+        let mut first_untimed: Option<Span> = None;
+        let mut first_timed: Option<Span> = None;
+
+        for s in statements {
+            let (span, body, pin, timecodes) = match s {
+                Statement::Shot(sh) => {
+                    first_untimed.get_or_insert(sh.span);
+                    if let Some(t) = first_timed {
+                        self.mixed(sh.span, t);
+                    }
+                    (sh.span, &sh.body, sh.pin.as_ref(), None)
+                }
+                Statement::Timed(t) => {
+                    first_timed.get_or_insert(t.span);
+                    if let Some(u) = first_untimed {
+                        self.mixed(t.span, u);
+                    }
+                    (t.span, &t.body, None, Some(t))
+                }
+                _ => continue,
+            };
+
+            let pending = self.shot_body(body, prev.as_ref(), declared, stage, annotation, cast);
+            let content_ok = pending.content.is_some();
+
+            // Place it on the clock.
+            let mut start = clock;
+            let mut pinned = false;
+            let mut duration = pending.duration_s;
+            if let Some(t) = timecodes {
+                if let Some(d) = body.duration() {
+                    self.err(
+                        Diagnostic::error(
+                            Code::DurationInTimedEntry,
+                            d.span,
+                            "a timed entry takes its duration from its timecodes",
+                        )
+                        .with_help("remove the duration, or change the timecodes"),
+                    );
+                }
+                let a = self.timecode(&t.start);
+                let b = self.timecode(&t.end);
+                if let (Some(a), Some(b)) = (a, b) {
+                    if b <= a {
+                        self.err(
+                            Diagnostic::error(
+                                Code::TimecodeOrder,
+                                t.start.span.to(t.end.span),
+                                format!(
+                                    "this entry ends at {} before it starts at {}",
+                                    t.end.text, t.start.text
+                                ),
+                            )
+                            .with_help(
+                                "the second timecode is the end; it must come after the first",
+                            ),
+                        );
+                        duration = None;
+                    } else {
+                        if a < clock - EPS_S {
+                            let mut d = Diagnostic::error(
+                                Code::TimecodeOrder,
+                                t.start.span,
+                                format!(
+                                    "this entry starts at {} while the previous one runs until {}s",
+                                    t.start.text,
+                                    fmt_num(clock)
+                                ),
+                            )
+                            .with_help(
+                                "entries must follow each other in time; fix either timecode",
+                            );
+                            if let Some(p) = prev_end_span {
+                                d = d.with_related(p, "the previous entry");
+                            }
+                            self.err(d);
+                        }
+                        start = a;
+                        pinned = true;
+                        duration = Some(b - a);
+                    }
+                } else {
+                    duration = None;
+                }
+            } else if let Some(p) = pin {
+                if let Some(at) = self.time(p, "the start time") {
+                    if at < clock - EPS_S {
+                        let mut d = Diagnostic::error(
+                            Code::PinnedStartOverlaps,
+                            p.span,
+                            format!(
+                                "this shot is pinned at {}s but the shots before it run until {}s",
+                                fmt_num(at),
+                                fmt_num(clock)
+                            ),
+                        )
+                        .with_label("starts too early")
+                        .with_help(format!(
+                            "pin it `at {}s` or later, or shorten the shots before it",
+                            fmt_num(clock)
+                        ));
+                        if let Some(p) = prev_end_span {
+                            d = d.with_related(p, "the previous shot");
+                        }
+                        self.err(d);
+                    } else {
+                        start = at;
+                        pinned = true;
+                    }
+                }
+            } else if body.duration().is_none() {
+                let end = body.span().end;
+                self.err(
+                    Diagnostic::error(Code::MissingDuration, Span::new(end, end), "this shot has no duration")
+                        .with_label("add how long it lasts")
+                        .with_help(match body {
+                            ShotBody::Framed(f) if matches!(f.transition.as_ref().map(|t| &t.kind), Some(TransitionKind::Move { kind, .. }) if *kind != MoveKind::Hold) => {
+                                "end the line with `over 6s`: how long the move takes"
+                            }
+                            _ => "end the line with `for 4s`: how long the shot lasts",
+                        }),
+                );
+            }
+
+            if let Some(d) = duration {
+                let end = start + d;
+                if content_ok {
+                    timeline.push(Shot {
+                        start_s: start,
+                        end_s: end,
+                        pinned,
+                        transition: pending.transition,
+                        content: pending.content.clone().expect("checked above"),
+                        span,
+                    });
+                }
+                clock = end;
+            }
+            prev_end_span = Some(span);
+            prev = Some((span, pending.content));
+        }
+        timeline
+    }
+
+    fn mixed(&mut self, span: Span, other: Span) {
+        self.err(
+            Diagnostic::error(
+                Code::MixedTiming,
+                span,
+                "timed (subtitle) entries and untimed shots are mixed",
+            )
+            .with_related(other, "the first entry of the other kind")
+            .with_help(
+                "write every shot with `for`/`over` durations, or every shot with timecodes",
+            ),
+        );
+    }
+
+    /// `[h]h:mm:ss[,mmm]` or `mm:ss[,mmm]` in seconds; 60 seconds is tolerated.
+    fn timecode(&mut self, t: &ast::Text<'_>) -> Option<f64> {
+        let (main, frac) = match t.text.find([',', '.']) {
+            Some(i) => (&t.text[..i], Some(&t.text[i + 1..])),
+            None => (t.text, None),
+        };
+        let fields: Vec<&str> = main.split(':').collect();
+        let nums: Vec<Option<u64>> = fields
+            .iter()
+            .map(|f| if f.len() <= 6 { f.parse().ok() } else { None })
+            .collect();
+        let bad = |this: &mut Self, why: &str| {
+            this.err(
+                Diagnostic::error(
+                    Code::BadTimecode,
+                    t.span,
+                    format!("timecode `{}` {why}", t.text),
+                )
+                .with_help("write hours:minutes:seconds, e.g. `00:01:03` or `00:01:03,500`"),
+            );
+            None
+        };
+        let (h, m, s) = match nums.as_slice() {
+            [Some(h), Some(m), Some(s)] => (*h, *m, *s),
+            [Some(m), Some(s)] => (0, *m, *s),
+            _ => return bad(self, "is not hours:minutes:seconds"),
+        };
+        if m > 59 {
+            return bad(self, "has more than 59 minutes");
+        }
+        if s > 60 {
+            return bad(self, "has more than 60 seconds");
+        }
+        let frac_s = match frac {
+            None => 0.0,
+            Some(f) if !f.is_empty() && f.len() <= 3 => {
+                f.parse::<f64>().unwrap_or(0.0) / 10f64.powi(f.len() as i32)
+            }
+            Some(_) => return bad(self, "has more than three digits of milliseconds"),
+        };
+        Some((h * 3600 + m * 60 + s) as f64 + frac_s)
+    }
+
+    fn shot_body(
+        &mut self,
+        body: &ShotBody<'_>,
+        prev: Option<&(Span, Option<ShotContent>)>,
+        declared: &HashMap<&str, Span>,
+        stage: Option<&Stage>,
+        annotation: bool,
+        cast: &mut Vec<String>,
+    ) -> Pending {
+        match body {
+            ShotBody::Framed(f) => {
+                let transition = match &f.transition {
+                    None => Transition::Cut,
+                    Some(t) => match &t.kind {
+                        TransitionKind::Cut => Transition::Cut,
+                        TransitionKind::Dissolve => Transition::Dissolve,
+                        TransitionKind::Move {
+                            event,
+                            kind,
+                            follow,
+                        } => {
+                            self.continues(t.span, prev);
+                            let follow = follow.as_ref().and_then(|n| {
+                                self.actor_ref(n, declared, annotation)
+                                    .then(|| n.text.to_string())
+                            });
+                            Transition::Move {
+                                kind: *kind,
+                                follow,
+                                event: event.map(|e| e.text.to_string()),
+                            }
+                        }
+                    },
+                };
+                let content = self
+                    .composition(&f.composition, declared, annotation, cast)
+                    .map(ShotContent::Composition);
+                let duration_s = f.duration.as_ref().and_then(|d| {
+                    let is_move = matches!(&transition, Transition::Move { kind, .. } if *kind != MoveKind::Hold);
+                    if is_move && d.keyword == DurationKeyword::For {
+                        self.err(
+                            Diagnostic::warning(Code::DurationKeyword, d.span, "a camera move is timed with `over`")
+                                .with_label("`for` holds a composition")
+                                .with_help(format!("write `over {}`: the move takes that long", quantity_text(&d.value))),
+                        );
+                    } else if !is_move && d.keyword == DurationKeyword::Over {
+                        self.err(
+                            Diagnostic::warning(Code::DurationKeyword, d.span, "a held composition is timed with `for`")
+                                .with_label("`over` times a camera move")
+                                .with_help(format!("write `for {}`", quantity_text(&d.value))),
+                        );
+                    }
+                    self.duration(d)
+                });
+                Pending {
+                    transition,
+                    content,
+                    duration_s,
+                }
+            }
+            ShotBody::Hold(h) => {
+                let content = self
+                    .continues(h.span, prev)
+                    .cloned()
+                    .map(ShotContent::Composition);
+                let duration_s = h.duration.as_ref().and_then(|d| self.duration(d));
+                Pending {
+                    transition: Transition::Move {
+                        kind: MoveKind::Hold,
+                        follow: None,
+                        event: h.event.map(|e| e.text.to_string()),
+                    },
+                    content,
+                    duration_s,
+                }
+            }
+            ShotBody::Path(p) => {
+                if let Some(t) = &p.transition {
+                    if matches!(t.kind, TransitionKind::Move { .. }) {
+                        self.err(
+                            Diagnostic::error(
+                                Code::ThenToPath,
+                                t.span,
+                                "a `then` move cannot lead into a path",
+                            )
+                            .with_label("moves end on a composition")
+                            .with_help("start the path with `cut to path …` (or just `path …`)"),
+                        );
+                    }
+                }
+                let content = self.path(p, declared, stage).map(ShotContent::Path);
+                let duration_s = p.duration.as_ref().and_then(|d| self.duration(d));
+                Pending {
+                    transition: match p.transition.as_ref().map(|t| &t.kind) {
+                        Some(TransitionKind::Dissolve) => Transition::Dissolve,
+                        _ => Transition::Cut,
+                    },
+                    content,
+                    duration_s,
+                }
+            }
+        }
+    }
+
+    /// Check that a `then` line has a composition to continue; return it.
+    fn continues<'p>(
+        &mut self,
+        span: Span,
+        prev: Option<&'p (Span, Option<ShotContent>)>,
+    ) -> Option<&'p Composition> {
+        match prev {
+            None if self.failed_lines.iter().any(|&l| l < span.start) => None,
+            None => {
+                self.err(
+                    Diagnostic::error(Code::ThenWithoutShot, span, "`then` continues a shot, but no shot comes before it")
+                        .with_help("start with a composition such as `MS on A front for 4s`, or write `cut to`"),
+                );
+                None
+            }
+            Some((pspan, Some(ShotContent::Path(_)))) => {
+                self.err(
+                    Diagnostic::error(
+                        Code::ThenAfterPath,
+                        span,
+                        "`then` cannot continue a path: a path has no composition to move from",
+                    )
+                    .with_related(*pspan, "the path")
+                    .with_help("write `cut to` and the composition instead"),
+                );
+                None
+            }
+            Some((_, Some(ShotContent::Composition(c)))) => Some(c),
+            // The previous shot had errors of its own, already reported.
+            Some((_, None)) => None,
+        }
+    }
+
+    fn composition(
+        &mut self,
+        c: &ast::Composition<'_>,
+        declared: &HashMap<&str, Span>,
+        annotation: bool,
+        cast: &mut Vec<String>,
+    ) -> Option<Composition> {
+        let mut ok = true;
+        let mut framings = Vec::new();
+        // actor -> (framing index, span)
+        let mut seen: HashMap<&str, (usize, Span)> = HashMap::new();
+        let mut distinct = 0usize;
+        for (fi, f) in c.framings.iter().enumerate() {
+            let mut subjects = Vec::new();
+            for s in &f.subjects {
+                let name = s.actor.text;
+                if let Some(&(ffi, first)) = seen.get(name) {
+                    let d = if ffi == fi {
+                        Diagnostic::error(
+                            Code::TwoShotSameActor,
+                            s.actor.span,
+                            format!("`{name}` is framed twice in one framing"),
+                        )
+                        .with_label("the same actor again")
+                        .with_related(first, "first here")
+                        .with_help(
+                            "a two-shot frames two different actors: name the other actor here",
+                        )
+                    } else {
+                        Diagnostic::error(
+                            Code::ActorFramedTwice,
+                            s.actor.span,
+                            format!("`{name}` appears in two framings of one composition"),
+                        )
+                        .with_label("framed again")
+                        .with_related(first, "already framed here")
+                        .with_help("an actor appears once per composition; remove one framing or frame another actor")
+                    };
+                    self.err(d);
+                    ok = false;
+                    continue;
+                }
+                seen.insert(name, (fi, s.actor.span));
+                distinct += 1;
+                if annotation {
+                    if !cast.iter().any(|c| c == name) {
+                        cast.push(name.to_string());
+                    }
+                } else if !self.actor_ref(&s.actor, declared, false) {
+                    ok = false;
+                }
+                let (mut sx, mut sy) = (None, None);
+                if let Some(screen) = &s.screen {
+                    match &screen.position {
+                        ast::ScreenPosition::Third(t) => sx = Some(t.screen_x()),
+                        ast::ScreenPosition::Point(x, y) => {
+                            for (q, slot, axis) in [(x, &mut sx, "x"), (y, &mut sy, "y")] {
+                                let what = format!("screen {axis}");
+                                match self.plain(q, &what).and_then(|v| {
+                                    self.range(v, q.span, &what, -1.0, false, 1.0, "")
+                                }) {
+                                    Some(v) => *slot = Some(v),
+                                    None => ok = false,
+                                }
+                            }
+                        }
+                    }
+                }
+                subjects.push(Subject {
+                    actor: name.to_string(),
+                    profile: s.profile.map(|(_, p)| p),
+                    screen_x: sx,
+                    screen_y: sy,
+                });
+            }
+            framings.push(Framing {
+                size: f.size.1,
+                subjects,
+            });
+        }
+        if !annotation && distinct > 2 {
+            self.err(
+                Diagnostic::error(
+                    Code::TooManyActors,
+                    c.span,
+                    format!(
+                        "this composition frames {distinct} actors; a drone frames at most two"
+                    ),
+                )
+                .with_help("frame one or two actors per composition (cut between them for more)"),
+            );
+            ok = false;
+        }
+        ok.then(|| Composition {
+            camera_angle: c.angle.map(|(_, a)| a).unwrap_or(CameraAngle::EyeLevel),
+            framings,
+        })
+    }
+
+    fn path(
+        &mut self,
+        p: &ast::PathShot<'_>,
+        declared: &HashMap<&str, Span>,
+        stage: Option<&Stage>,
+    ) -> Option<Path> {
+        let (kind_span, kind) = (&p.kind.0, &p.kind.1);
+        let shape_name = kind.name();
+        let mut ok = true;
+        let mut given: HashMap<&'static str, (Span, &PathValue<'_>)> = HashMap::new();
+        for param in &p.params {
+            let key = param.value.keyword();
+            if let Some((first, _)) = given.get(key) {
+                self.err(
+                    Diagnostic::error(
+                        Code::DuplicateAttribute,
+                        param.span,
+                        format!("`{key}` is given twice"),
+                    )
+                    .with_related(*first, "first given here")
+                    .with_help(format!("keep one `{key}`")),
+                );
+                ok = false;
+                continue;
+            }
+            given.insert(key, (param.span, &param.value));
+        }
+        let accepted: &[&str] = match kind {
+            ast::PathKind::Square => &["side", "center", "altitude", "clockwise", "looking at"],
+            ast::PathKind::Helix => &[
+                "radius",
+                "center",
+                "from",
+                "turns",
+                "clockwise",
+                "looking at",
+            ],
+            ast::PathKind::Orbit => &[
+                "around",
+                "center",
+                "radius",
+                "altitude",
+                "turns",
+                "clockwise",
+                "looking at",
+            ],
+            ast::PathKind::Waypoints(_) => &["looking at"],
+        };
+        for param in &p.params {
+            let key = param.value.keyword();
+            if !accepted.contains(&key) {
+                let shown: Vec<&str> = accepted
+                    .iter()
+                    .copied()
+                    .filter(|k| *k != "clockwise")
+                    .collect();
+                self.err(
+                    Diagnostic::error(
+                        Code::UnexpectedPathParameter,
+                        param.span,
+                        format!("a {shape_name} path takes no `{key}`"),
+                    )
+                    .with_label("not a parameter of this shape")
+                    .with_help(format!(
+                        "a {shape_name} path takes {}",
+                        crate::suggest::or_list(&shown)
+                    )),
+                );
+                ok = false;
+            }
+        }
+        let need = |this: &mut Self, key: &str, example: &str| -> bool {
+            if given.contains_key(key) {
+                return true;
+            }
+            this.err(
+                Diagnostic::error(
+                    Code::MissingPathParameter,
+                    *kind_span,
+                    format!("a {shape_name} path needs `{key}`"),
+                )
+                .with_label(format!("`{key}` missing"))
+                .with_help(format!("add `{example}`")),
+            );
+            false
+        };
+        let length = |this: &mut Self, key: &str, what: &str, positive: bool| -> Option<f64> {
+            let Some((span, PathValue::Side(q) | PathValue::Altitude(q) | PathValue::Radius(q))) =
+                given.get(key).copied()
+            else {
+                return None;
+            };
+            let _ = span;
+            let v = this.quantity(q, Dim::Length, what, false)?;
+            if positive {
+                this.range(v, q.span, what, 0.0, true, 1000.0, "m")
+            } else {
+                Some(v)
+            }
+        };
+        let center = |this: &mut Self| -> Option<[f64; 2]> {
+            match given.get("center").copied() {
+                Some((_, PathValue::Center(pt))) => this.point(pt, "the centre"),
+                _ => Some([0.0, 0.0]),
+            }
+        };
+        let turns = |this: &mut Self| -> Option<f64> {
+            match given.get("turns").copied() {
+                Some((_, PathValue::Turns(q))) => {
+                    this.plain(q, "the number of turns").and_then(|v| {
+                        this.range(v, q.span, "the number of turns", 0.0, true, 100.0, "")
+                    })
+                }
+                _ => Some(1.0),
+            }
+        };
+        let clockwise = matches!(
+            given.get("clockwise"),
+            Some((_, PathValue::Clockwise(true)))
+        );
+        let looking_at = match given.get("looking at").copied() {
+            Some((_, PathValue::LookingAt(n))) => {
+                if self.actor_ref(n, declared, false) {
+                    Some(n.text.to_string())
+                } else {
+                    ok = false;
+                    None
+                }
+            }
+            _ => None,
+        };
+
+        let shape = match kind {
+            ast::PathKind::Square => {
+                let has = need(self, "side", "side 2m") & need(self, "altitude", "altitude 1.5m");
+                let side = length(self, "side", "the side", true);
+                let alt = length(self, "altitude", "the altitude", true);
+                let c = center(self);
+                match (has, side, alt, c) {
+                    (true, Some(side), Some(alt), Some(c)) => {
+                        let h = side / 2.0;
+                        let corners = [[c[0] - h, c[1] - h], [c[0] + h, c[1] + h]];
+                        if corners
+                            .iter()
+                            .any(|p| stage.is_some_and(|s| !s.contains_xy(*p)))
+                        {
+                            self.inside(stage, corners[0], p.span, "a corner of the square");
+                            self.inside(stage, corners[1], p.span, "a corner of the square");
+                            ok = false;
+                        }
+                        self.inside_height(stage, alt, given["altitude"].0, "the altitude");
+                        Some(PathShape::Square {
+                            side_m: side,
+                            center_m: c,
+                            altitude_m: alt,
+                            clockwise,
+                        })
+                    }
+                    _ => None,
+                }
+            }
+            ast::PathKind::Helix => {
+                let has =
+                    need(self, "radius", "radius 1.5m") & need(self, "from", "from 1m to 2.5m");
+                let radius = length(self, "radius", "the radius", true);
+                let c = center(self);
+                let t = turns(self);
+                let from_to = match given.get("from").copied() {
+                    Some((span, PathValue::FromTo(a, b))) => {
+                        let a = self.quantity(a, Dim::Length, "the start height", false);
+                        let b = self.quantity(b, Dim::Length, "the end height", false);
+                        if let (Some(a), Some(b)) = (a, b) {
+                            self.inside_height(stage, a, span, "the start height");
+                            self.inside_height(stage, b, span, "the end height");
+                        }
+                        a.zip(b)
+                    }
+                    _ => None,
+                };
+                match (has, radius, c, t, from_to) {
+                    (true, Some(r), Some(c), Some(t), Some((a, b))) => {
+                        self.circle_inside(stage, c, r, p.span, "helix");
+                        Some(PathShape::Helix {
+                            radius_m: r,
+                            center_m: c,
+                            from_m: a,
+                            to_m: b,
+                            turns: t,
+                            clockwise,
+                        })
+                    }
+                    _ => None,
+                }
+            }
+            ast::PathKind::Orbit => {
+                let has =
+                    need(self, "radius", "radius 2m") & need(self, "altitude", "altitude 1.5m");
+                let radius = length(self, "radius", "the radius", true);
+                let alt = length(self, "altitude", "the altitude", true);
+                let t = turns(self);
+                let center = match (given.get("around").copied(), given.get("center").copied()) {
+                    (Some((_, PathValue::Around(n))), None) => self
+                        .actor_ref(n, declared, false)
+                        .then(|| OrbitCenter::Actor {
+                            name: n.text.to_string(),
+                        }),
+                    (None, Some((_, PathValue::Center(pt)))) => {
+                        self.point(pt, "the centre").map(|at| {
+                            if let Some(r) = radius {
+                                self.circle_inside(stage, at, r, p.span, "orbit");
+                            }
+                            OrbitCenter::Point { at_m: at }
+                        })
+                    }
+                    (Some((a, _)), Some((c, _))) => {
+                        self.err(
+                            Diagnostic::error(Code::UnexpectedPathParameter, c, "an orbit goes `around` an actor or about a `center`, not both")
+                                .with_related(a, "`around` given here")
+                                .with_help("remove `center (x, y)` to orbit the actor, or `around` to orbit a fixed point"),
+                        );
+                        None
+                    }
+                    _ => {
+                        self.err(
+                            Diagnostic::error(Code::MissingPathParameter, *kind_span, "an orbit needs `around A` or `center (x, y)`")
+                                .with_label("what to orbit?")
+                                .with_help("add `around A` to circle an actor, or `center (0, 0)` for a fixed point"),
+                        );
+                        None
+                    }
+                };
+                if let Some(alt) = alt {
+                    self.inside_height(stage, alt, given["altitude"].0, "the altitude");
+                }
+                match (has, radius, alt, t, center) {
+                    (true, Some(r), Some(alt), Some(t), Some(center)) => Some(PathShape::Orbit {
+                        center,
+                        radius_m: r,
+                        altitude_m: alt,
+                        turns: t,
+                        clockwise,
+                    }),
+                    _ => None,
+                }
+            }
+            ast::PathKind::Waypoints(file) => {
+                self.waypoints(file, stage)
+                    .map(|points_m| PathShape::Waypoints {
+                        file: file.text.to_string(),
+                        points_m,
+                    })
+            }
+        };
+        if !ok {
+            return None;
+        }
+        Some(Path {
+            shape: shape?,
+            looking_at,
+        })
+    }
+
+    fn circle_inside(
+        &mut self,
+        stage: Option<&Stage>,
+        c: [f64; 2],
+        r: f64,
+        span: Span,
+        what: &str,
+    ) {
+        let Some(stage) = stage else { return };
+        let (lo, hi) = (stage.min_m(), stage.max_m());
+        if c[0] - r < lo[0] - 1e-9
+            || c[0] + r > hi[0] + 1e-9
+            || c[1] - r < lo[1] - 1e-9
+            || c[1] + r > hi[1] + 1e-9
+        {
+            self.err(
+                Diagnostic::error(
+                    Code::OutsideStage,
+                    span,
+                    format!("the {what} (radius {}m about ({}, {})) leaves the stage", fmt_num(r), fmt_num(c[0]), fmt_num(c[1])),
+                )
+                .with_help(format!(
+                    "the stage spans x from {} to {} and y from {} to {}; shrink the radius or move the centre",
+                    fmt_num(lo[0]),
+                    fmt_num(hi[0]),
+                    fmt_num(lo[1]),
+                    fmt_num(hi[1])
+                )),
+            );
+        }
+    }
+
+    /// Read a waypoints CSV: one `x, y, z` per line in metres; `#` comments and one header
+    /// line allowed.
+    fn waypoints(&mut self, file: &ast::Text<'_>, stage: Option<&Stage>) -> Option<Vec<[f64; 3]>> {
+        let Some(base) = self.opts.base_dir else {
+            return Some(Vec::new());
+        };
+        let path = base.join(file.text);
+        let text = match std::fs::read(&path) {
+            Ok(bytes) => {
+                match String::from_utf8(bytes) {
+                    Ok(t) => t,
+                    Err(_) => {
+                        self.err(
+                        Diagnostic::error(Code::BadWaypoints, file.span, format!("`{}` is not UTF-8 text", file.text))
+                            .with_help("save the waypoints as a plain-text CSV: x, y, z in metres per line"),
+                    );
+                        return None;
+                    }
+                }
+            }
+            Err(e) => {
+                self.err(
+                    Diagnostic::error(
+                        Code::FileNotFound,
+                        file.span,
+                        format!("cannot read waypoints file `{}`: {e}", file.text),
+                    )
+                    .with_label(format!("looked for {}", path.display()))
+                    .with_help("file names are relative to the script's folder; check the name"),
+                );
+                return None;
+            }
+        };
+        let mut points = Vec::new();
+        let mut header_allowed = true;
+        for (i, line) in text.lines().enumerate() {
+            let l = line.trim();
+            if l.is_empty() || l.starts_with('#') {
+                continue;
+            }
+            let fields: Vec<&str> = l.split(',').map(str::trim).collect();
+            let nums: Vec<Option<f64>> = fields
+                .iter()
+                .map(|f| f.parse::<f64>().ok().filter(|v| v.is_finite()))
+                .collect();
+            if nums.iter().all(Option::is_none) && header_allowed {
+                header_allowed = false;
+                continue;
+            }
+            header_allowed = false;
+            match nums.as_slice() {
+                [Some(x), Some(y), Some(z)] => {
+                    let p = [*x, *y, *z];
+                    if stage.is_some_and(|s| !s.contains(p)) {
+                        self.err(
+                            Diagnostic::error(
+                                Code::OutsideStage,
+                                file.span,
+                                format!(
+                                    "`{}` line {}: waypoint ({}, {}, {}) is outside the stage",
+                                    file.text,
+                                    i + 1,
+                                    x,
+                                    y,
+                                    z
+                                ),
+                            )
+                            .with_help("move the waypoint inside the stage or enlarge the stage"),
+                        );
+                        return None;
+                    }
+                    points.push(p);
+                }
+                _ => {
+                    self.err(
+                        Diagnostic::error(
+                            Code::BadWaypoints,
+                            file.span,
+                            format!(
+                                "`{}` line {}: expected three numbers x, y, z, found `{}`",
+                                file.text,
+                                i + 1,
+                                shorten(l)
+                            ),
+                        )
+                        .with_help("write one waypoint per line as `x, y, z` in metres"),
+                    );
+                    return None;
+                }
+            }
+        }
+        if points.len() < 2 {
+            self.err(
+                Diagnostic::error(
+                    Code::BadWaypoints,
+                    file.span,
+                    format!(
+                        "`{}` has {} waypoint(s); a path needs at least 2",
+                        file.text,
+                        points.len()
+                    ),
+                )
+                .with_help("add waypoints, one `x, y, z` per line"),
+            );
+            return None;
+        }
+        Some(points)
+    }
+}
+
+fn quantity_text(q: &Quantity<'_>) -> String {
+    format!("{}{}", q.number, q.unit.map(|u| u.text).unwrap_or("s"))
+}
+
+fn shorten(s: &str) -> String {
+    if s.chars().count() > 40 {
+        format!("{}…", s.chars().take(37).collect::<String>())
+    } else {
+        s.to_string()
+    }
+}

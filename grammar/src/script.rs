@@ -1,0 +1,233 @@
+//! The resolved script: plain serde data, every check passed, units in the field names.
+//!
+//! This is the contract between the language front end and the compiler. Angles are in
+//! radians wrapped to (−π, π], lengths in metres, times in seconds on the script's clock
+//! (the first shot starts at 0). Actors are referred to by name; every name used here is
+//! declared in `Scene::actors` (or, for a film annotation, listed in `cast`). Spans point
+//! into the source so that later stages can report errors on the line that caused them.
+
+use serde::{Deserialize, Serialize};
+
+use crate::span::Span;
+use crate::vocab::{CameraAngle, MoveKind, Profile, Size};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Script {
+    /// The physical set-up; `None` for a film annotation (subtitle-timed lines only), which
+    /// can be checked but not compiled or flown.
+    pub scene: Option<Scene>,
+    /// Every actor name, in order of declaration (or of first use in an annotation).
+    pub cast: Vec<String>,
+    pub timeline: Vec<Shot>,
+    /// End of the last shot.
+    pub duration_s: f64,
+}
+
+impl Script {
+    pub fn is_annotation(&self) -> bool {
+        self.scene.is_none()
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scene {
+    pub stage: Stage,
+    /// `None`: the drone profile's lens.
+    pub lens: Option<Lens>,
+    /// `None`: the default drone.
+    pub drone: Option<DroneRef>,
+    pub actors: Vec<Actor>,
+    /// Actor movements sorted by start time.
+    pub blocking: Vec<Movement>,
+}
+
+/// The flight volume: x ∈ [−x/2, x/2], y ∈ [−y/2, y/2], z ∈ [0, z], origin at the centre of
+/// the floor.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Stage {
+    pub size_m: [f64; 3],
+}
+
+impl Stage {
+    pub fn min_m(&self) -> [f64; 3] {
+        [-self.size_m[0] / 2.0, -self.size_m[1] / 2.0, 0.0]
+    }
+
+    pub fn max_m(&self) -> [f64; 3] {
+        [self.size_m[0] / 2.0, self.size_m[1] / 2.0, self.size_m[2]]
+    }
+
+    /// Whether a floor point lies inside the stage (borders included).
+    pub fn contains_xy(&self, p: [f64; 2]) -> bool {
+        let (lo, hi) = (self.min_m(), self.max_m());
+        (0..2).all(|i| p[i] >= lo[i] - 1e-9 && p[i] <= hi[i] + 1e-9)
+    }
+
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        let (lo, hi) = (self.min_m(), self.max_m());
+        (0..3).all(|i| p[i] >= lo[i] - 1e-9 && p[i] <= hi[i] + 1e-9)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Lens {
+    /// Horizontal field of view.
+    pub fov_x_rad: f64,
+    /// Frame width over height (16:9 unless written).
+    pub aspect: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum DroneRef {
+    Builtin {
+        name: String,
+    },
+    /// Relative to the script's directory, as written.
+    File {
+        path: String,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Actor {
+    pub name: String,
+    pub height_m: f64,
+    /// Start position on the floor.
+    pub position_m: [f64; 2],
+    /// Start facing, counter-clockwise from +x.
+    pub facing_rad: f64,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Movement {
+    pub actor: String,
+    pub start_s: f64,
+    pub end_s: f64,
+    pub action: Action,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Action {
+    Walk { to_m: [f64; 2] },
+    Turn { to_rad: f64 },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Shot {
+    pub start_s: f64,
+    pub end_s: f64,
+    /// The start was fixed by `at Ns` or a timecode rather than by the previous shot's end.
+    pub pinned: bool,
+    pub transition: Transition,
+    pub content: ShotContent,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Transition {
+    /// A new shot: `cut to`, or a composition line without a transition.
+    Cut,
+    Dissolve,
+    /// `then [as EVENT] MOVE to …` (and `then hold for …`).
+    Move {
+        #[serde(rename = "move")]
+        kind: MoveKind,
+        /// The actor of `follow A`.
+        follow: Option<String>,
+        event: Option<String>,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ShotContent {
+    Composition(Composition),
+    Path(Path),
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Composition {
+    pub camera_angle: CameraAngle,
+    /// One or more framings; several make an over-the-shoulder composition.
+    pub framings: Vec<Framing>,
+}
+
+impl Composition {
+    /// Every actor of the composition, in order.
+    pub fn actors(&self) -> impl Iterator<Item = &str> {
+        self.framings
+            .iter()
+            .flat_map(|f| f.subjects.iter().map(|s| s.actor.as_str()))
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Framing {
+    pub size: Size,
+    pub subjects: Vec<Subject>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Subject {
+    pub actor: String,
+    /// `None`: the compiler chooses (front for one actor; the toric default for two).
+    pub profile: Option<Profile>,
+    /// Requested screen x in [−1, 1]; `None`: the default placement (psl.md §2).
+    pub screen_x: Option<f64>,
+    /// Requested screen y in [−1, 1]; `None`: from the shot size.
+    pub screen_y: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Path {
+    pub shape: PathShape,
+    /// The camera looks at this actor; `None`: along the path.
+    pub looking_at: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum PathShape {
+    Square {
+        side_m: f64,
+        center_m: [f64; 2],
+        altitude_m: f64,
+        clockwise: bool,
+    },
+    Helix {
+        radius_m: f64,
+        center_m: [f64; 2],
+        from_m: f64,
+        to_m: f64,
+        turns: f64,
+        clockwise: bool,
+    },
+    Orbit {
+        center: OrbitCenter,
+        radius_m: f64,
+        altitude_m: f64,
+        turns: f64,
+        clockwise: bool,
+    },
+    Waypoints {
+        file: String,
+        points_m: Vec<[f64; 3]>,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum OrbitCenter {
+    Point {
+        at_m: [f64; 2],
+    },
+    /// Around an actor, following them as they move.
+    Actor {
+        name: String,
+    },
+}

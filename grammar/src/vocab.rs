@@ -1,0 +1,364 @@
+//! The PSL vocabulary: shot sizes, profile angles, camera angles, screen thirds, camera moves.
+//!
+//! This module is the single source of truth for the words of the language and for the
+//! conventions of `psl.md` §3 that belong to the language itself: the camera azimuth of each
+//! profile angle and the screen x of each third. The grammar (`psl.pest`) spells the same
+//! words; `tests::keywords_match_grammar` keeps the two in step.
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+
+/// Shot size, tightest first (psl.md §1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Size {
+    ECU,
+    BCU,
+    CU,
+    MCU,
+    MS,
+    MLS,
+    FS,
+    LS,
+    ELS,
+}
+
+impl Size {
+    pub const ALL: [Size; 9] = [
+        Size::ECU,
+        Size::BCU,
+        Size::CU,
+        Size::MCU,
+        Size::MS,
+        Size::MLS,
+        Size::FS,
+        Size::LS,
+        Size::ELS,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Size::ECU => "ECU",
+            Size::BCU => "BCU",
+            Size::CU => "CU",
+            Size::MCU => "MCU",
+            Size::MS => "MS",
+            Size::MLS => "MLS",
+            Size::FS => "FS",
+            Size::LS => "LS",
+            Size::ELS => "ELS",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Size> {
+        Size::ALL.into_iter().find(|z| z.as_str() == s)
+    }
+}
+
+/// Profile angle: the side of the actor the camera is on (psl.md §1, §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Profile {
+    Front,
+    #[serde(rename = "34left")]
+    ThreeQuarterLeft,
+    Left,
+    #[serde(rename = "34backleft")]
+    ThreeQuarterBackLeft,
+    Back,
+    #[serde(rename = "34backright")]
+    ThreeQuarterBackRight,
+    Right,
+    #[serde(rename = "34right")]
+    ThreeQuarterRight,
+}
+
+impl Profile {
+    pub const ALL: [Profile; 8] = [
+        Profile::Front,
+        Profile::ThreeQuarterLeft,
+        Profile::Left,
+        Profile::ThreeQuarterBackLeft,
+        Profile::Back,
+        Profile::ThreeQuarterBackRight,
+        Profile::Right,
+        Profile::ThreeQuarterRight,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Profile::Front => "front",
+            Profile::ThreeQuarterLeft => "34left",
+            Profile::Left => "left",
+            Profile::ThreeQuarterBackLeft => "34backleft",
+            Profile::Back => "back",
+            Profile::ThreeQuarterBackRight => "34backright",
+            Profile::Right => "right",
+            Profile::ThreeQuarterRight => "34right",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Profile> {
+        Profile::ALL.into_iter().find(|p| p.as_str() == s)
+    }
+
+    /// Camera azimuth around the actor in radians, measured from the actor's facing
+    /// direction, counter-clockwise seen from above (psl.md §3), in (−π, π].
+    pub fn azimuth_rad(self) -> f64 {
+        match self {
+            Profile::Front => 0.0,
+            Profile::ThreeQuarterLeft => FRAC_PI_4,
+            Profile::Left => FRAC_PI_2,
+            Profile::ThreeQuarterBackLeft => 3.0 * FRAC_PI_4,
+            Profile::Back => PI,
+            Profile::ThreeQuarterBackRight => -3.0 * FRAC_PI_4,
+            Profile::Right => -FRAC_PI_2,
+            Profile::ThreeQuarterRight => -FRAC_PI_4,
+        }
+    }
+}
+
+/// Camera angle of a composition; eye level is the default (psl.md §1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CameraAngle {
+    #[default]
+    EyeLevel,
+    High,
+    Low,
+}
+
+impl CameraAngle {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CameraAngle::EyeLevel => "eye level",
+            CameraAngle::High => "high angle",
+            CameraAngle::Low => "low angle",
+        }
+    }
+}
+
+/// A third of the frame (psl.md §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ScreenThird {
+    Left,
+    Center,
+    Right,
+}
+
+impl ScreenThird {
+    pub fn parse(s: &str) -> Option<ScreenThird> {
+        match s {
+            "left" => Some(ScreenThird::Left),
+            "center" | "centre" => Some(ScreenThird::Center),
+            "right" => Some(ScreenThird::Right),
+            _ => None,
+        }
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ScreenThird::Left => "left",
+            ScreenThird::Center => "center",
+            ScreenThird::Right => "right",
+        }
+    }
+
+    /// Screen x in [−1, 1], left to right: the thirds sit at −1/3, 0, +1/3 (psl.md §3).
+    pub fn screen_x(self) -> f64 {
+        match self {
+            ScreenThird::Left => -1.0 / 3.0,
+            ScreenThird::Center => 0.0,
+            ScreenThird::Right => 1.0 / 3.0,
+        }
+    }
+}
+
+/// Camera move of a `then … to` transition.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MoveKind {
+    Hold,
+    Pan,
+    Dolly,
+    Crane,
+    Track,
+    Follow,
+}
+
+impl MoveKind {
+    pub const ALL: [MoveKind; 6] = [
+        MoveKind::Hold,
+        MoveKind::Pan,
+        MoveKind::Dolly,
+        MoveKind::Crane,
+        MoveKind::Track,
+        MoveKind::Follow,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MoveKind::Hold => "hold",
+            MoveKind::Pan => "pan",
+            MoveKind::Dolly => "dolly",
+            MoveKind::Crane => "crane",
+            MoveKind::Track => "track",
+            MoveKind::Follow => "follow",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<MoveKind> {
+        MoveKind::ALL.into_iter().find(|m| m.as_str() == s)
+    }
+}
+
+/// Every reserved word: none of these can name an actor. Must match `keyword` in `psl.pest`.
+pub const KEYWORDS: &[&str] = &[
+    "ECU",
+    "BCU",
+    "CU",
+    "MCU",
+    "MS",
+    "MLS",
+    "FS",
+    "LS",
+    "ELS",
+    "34backleft",
+    "34backright",
+    "34left",
+    "34right",
+    "front",
+    "back",
+    "left",
+    "right",
+    "on",
+    "and",
+    "cut",
+    "dissolve",
+    "then",
+    "as",
+    "to",
+    "for",
+    "over",
+    "at",
+    "hold",
+    "pan",
+    "dolly",
+    "crane",
+    "track",
+    "follow",
+    "high",
+    "low",
+    "eye",
+    "level",
+    "angle",
+    "screen",
+    "center",
+    "centre",
+    "stage",
+    "lens",
+    "drone",
+    "actor",
+    "height",
+    "facing",
+    "walks",
+    "turns",
+    "path",
+    "square",
+    "helix",
+    "orbit",
+    "waypoints",
+    "side",
+    "radius",
+    "altitude",
+    "from",
+    "around",
+    "clockwise",
+    "counterclockwise",
+    "looking",
+    "x",
+];
+
+pub fn is_keyword(word: &str) -> bool {
+    KEYWORDS.contains(&word)
+}
+
+/// Wrap an angle to (−π, π]: the one angle-wrap convention of the project.
+pub fn wrap_angle_rad(a: f64) -> f64 {
+    let w = a.rem_euclid(2.0 * PI); // [0, 2π)
+    if w > PI {
+        w - 2.0 * PI
+    } else {
+        w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn profile_azimuths_follow_psl_section_3() {
+        let deg: Vec<f64> = Profile::ALL
+            .iter()
+            .map(|p| p.azimuth_rad().to_degrees().round())
+            .collect();
+        assert_eq!(
+            deg,
+            [0.0, 45.0, 90.0, 135.0, 180.0, -135.0, -90.0, -45.0],
+            "front, 34left, left, 34backleft, back, 34backright, right, 34right"
+        );
+        // 34left is toward the actor's own left: counter-clockwise from the facing direction.
+        let facing = 0.0_f64; // actor looks along +x
+        let a = facing + Profile::ThreeQuarterLeft.azimuth_rad();
+        assert!(
+            a.sin() > 0.0,
+            "34left camera is on the +y side of an actor facing +x"
+        );
+    }
+
+    #[test]
+    fn profiles_are_45_degrees_apart() {
+        for w in Profile::ALL.windows(2) {
+            let d = wrap_angle_rad(w[1].azimuth_rad() - w[0].azimuth_rad());
+            assert!((d - FRAC_PI_4).abs() < 1e-12, "{:?} → {:?}", w[0], w[1]);
+        }
+    }
+
+    #[test]
+    fn thirds_sit_at_one_third() {
+        assert_eq!(ScreenThird::Left.screen_x(), -1.0 / 3.0);
+        assert_eq!(ScreenThird::Center.screen_x(), 0.0);
+        assert_eq!(ScreenThird::Right.screen_x(), 1.0 / 3.0);
+    }
+
+    #[test]
+    fn wrap_is_half_open_at_minus_pi() {
+        assert_eq!(wrap_angle_rad(PI), PI);
+        assert!((wrap_angle_rad(-PI) - PI).abs() < 1e-12);
+        assert!((wrap_angle_rad(3.0 * PI / 2.0) + FRAC_PI_2).abs() < 1e-12);
+        assert!((wrap_angle_rad(-7.0 * PI) - PI).abs() < 1e-9);
+        assert_eq!(wrap_angle_rad(0.0), 0.0);
+    }
+
+    #[test]
+    fn keywords_match_grammar() {
+        let grammar = include_str!("psl.pest");
+        let start = grammar.find("keyword = @{").expect("keyword rule");
+        let end = start
+            + grammar[start..]
+                .find("~ boundary")
+                .expect("end of keyword rule");
+        let mut in_grammar: Vec<&str> = grammar[start..end].split('"').skip(1).step_by(2).collect();
+        let mut here: Vec<&str> = KEYWORDS.to_vec();
+        in_grammar.sort_unstable();
+        here.sort_unstable();
+        assert_eq!(in_grammar, here);
+        for s in Size::ALL {
+            assert!(is_keyword(s.as_str()));
+        }
+        for p in Profile::ALL {
+            assert!(is_keyword(p.as_str()));
+        }
+    }
+}

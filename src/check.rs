@@ -1,0 +1,180 @@
+//! `dronecine check`: parse and resolve scripts, print a summary or the diagnostics.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use dronecine_grammar::diag::{self, JsonDiagnostic};
+use dronecine_grammar::{Checked, Options, Script, Severity};
+use serde::Serialize;
+
+use crate::files;
+
+#[derive(Serialize)]
+struct FileSummary {
+    file: String,
+    ok: bool,
+    annotation: bool,
+    actors: usize,
+    shots: usize,
+    duration_s: f64,
+    errors: usize,
+    warnings: usize,
+}
+
+#[derive(Serialize)]
+struct JsonReport {
+    files: Vec<FileSummary>,
+    diagnostics: Vec<JsonDiagnostic>,
+}
+
+/// The outcome for one file, rendered or as records.
+pub struct FileResult {
+    pub name: String,
+    /// The text the diagnostics' spans point into.
+    pub text: String,
+    pub checked: Checked,
+}
+
+/// Read, decode and check one script. A file that cannot be read or decoded yields a result
+/// whose diagnostics say why.
+pub fn check_file(path: &std::path::Path) -> FileResult {
+    let name = path.display().to_string();
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) => {
+            let d = dronecine_grammar::Diagnostic::error(
+                dronecine_grammar::Code::FileNotFound,
+                Default::default(),
+                format!("cannot read `{name}`: {e}"),
+            )
+            .with_help(
+                "check the file name; `dronecine check` takes .psl files or folders of them",
+            );
+            return FileResult {
+                name,
+                text: String::new(),
+                checked: Checked {
+                    script: None,
+                    diagnostics: vec![d],
+                },
+            };
+        }
+    };
+    let (text, checked) = match dronecine_grammar::decode(&bytes) {
+        Ok(src) => {
+            let base = files::base_dir(path);
+            let opts = Options {
+                known_drones: dronecine_compiler::profiles::BUILTIN_NAMES,
+                base_dir: Some(&base),
+            };
+            let checked = dronecine_grammar::check(src, &opts);
+            (src.to_string(), checked)
+        }
+        Err((lossy, diagnostics)) => (
+            lossy,
+            Checked {
+                script: None,
+                diagnostics,
+            },
+        ),
+    };
+    FileResult {
+        name,
+        text,
+        checked,
+    }
+}
+
+fn summary_line(name: &str, s: &Script) -> String {
+    let actors = s.cast.len();
+    let shots = s.timeline.len();
+    format!(
+        "{name}: {} {}, {} {}, {:.1} s{}",
+        actors,
+        if actors == 1 { "actor" } else { "actors" },
+        shots,
+        if shots == 1 { "shot" } else { "shots" },
+        s.duration_s,
+        if s.is_annotation() {
+            " (film annotation)"
+        } else {
+            ""
+        }
+    )
+}
+
+pub fn run(inputs: &[PathBuf], json: bool, color: bool) -> ExitCode {
+    let paths = files::expand(inputs);
+    let mut failed = 0usize;
+    let mut report = JsonReport {
+        files: Vec::new(),
+        diagnostics: Vec::new(),
+    };
+    let stdout = std::io::stdout();
+    let stderr = std::io::stderr();
+    if paths.is_empty() {
+        eprintln!(
+            "error: no .psl files found in {}",
+            inputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        return ExitCode::FAILURE;
+    }
+    for path in &paths {
+        let r = check_file(path);
+        let errors = r
+            .checked
+            .diagnostics
+            .iter()
+            .filter(|d| d.severity == Severity::Error)
+            .count();
+        let warnings = r.checked.diagnostics.len() - errors;
+        if errors > 0 {
+            failed += 1;
+        }
+        if json {
+            let script = r.checked.script.as_ref();
+            report.files.push(FileSummary {
+                file: r.name.clone(),
+                ok: errors == 0,
+                annotation: script.is_some_and(Script::is_annotation),
+                actors: script.map_or(0, |s| s.cast.len()),
+                shots: script.map_or(0, |s| s.timeline.len()),
+                duration_s: script.map_or(0.0, |s| s.duration_s),
+                errors,
+                warnings,
+            });
+            report
+                .diagnostics
+                .extend(diag::to_json(&r.name, &r.text, &r.checked.diagnostics));
+        } else {
+            if !r.checked.diagnostics.is_empty() {
+                let text = diag::render(&r.name, &r.text, &r.checked.diagnostics, color, 100);
+                let _ = stderr.lock().write_all(text.as_bytes());
+            }
+            if let Some(s) = &r.checked.script {
+                let _ = writeln!(stdout.lock(), "{}", summary_line(&r.name, s));
+            }
+        }
+    }
+    if json {
+        let _ = serde_json::to_writer_pretty(stdout.lock(), &report);
+        let _ = writeln!(stdout.lock());
+    } else if failed > 0 {
+        let _ = writeln!(
+            stderr.lock(),
+            "error: {failed} of {} {} failed the check",
+            paths.len(),
+            if paths.len() == 1 { "file" } else { "files" }
+        );
+    }
+    if failed > 0 {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    }
+}

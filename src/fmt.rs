@@ -1,0 +1,62 @@
+//! `dronecine fmt`: rewrite scripts in canonical form, or `--check` that they are.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use dronecine_grammar::diag;
+
+use crate::files;
+
+pub fn run(inputs: &[PathBuf], check: bool, color: bool) -> ExitCode {
+    let paths = files::expand(inputs);
+    let mut failed = false;
+    let stderr = std::io::stderr();
+    for path in &paths {
+        let name = path.display().to_string();
+        let bytes = match std::fs::read(path) {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("error: cannot read `{name}`: {e}");
+                failed = true;
+                continue;
+            }
+        };
+        let src = match dronecine_grammar::decode(&bytes) {
+            Ok(s) => s,
+            Err((lossy, diags)) => {
+                let _ = stderr
+                    .lock()
+                    .write_all(diag::render(&name, &lossy, &diags, color, 100).as_bytes());
+                failed = true;
+                continue;
+            }
+        };
+        match dronecine_grammar::format(src) {
+            Err(diags) => {
+                let _ = stderr
+                    .lock()
+                    .write_all(diag::render(&name, src, &diags, color, 100).as_bytes());
+                eprintln!("error: `{name}` was not formatted: fix the errors above first");
+                failed = true;
+            }
+            Ok(formatted) if formatted == src => {}
+            Ok(formatted) => {
+                if check {
+                    println!("would reformat {name}");
+                    failed = true;
+                } else if let Err(e) = files::write_atomic(path, &formatted) {
+                    eprintln!("error: cannot write `{name}`: {e}");
+                    failed = true;
+                } else {
+                    println!("formatted {name}");
+                }
+            }
+        }
+    }
+    if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    }
+}

@@ -1,0 +1,98 @@
+//! `dronecine`: the command line. It only wires the crates together: the language front end
+//! (`dronecine-grammar`), the compiler and the runtime. Each subcommand lives in its own
+//! module.
+
+mod check;
+mod files;
+mod fmt;
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
+
+/// Write a film shot in words; have a drone fly it.
+#[derive(Parser, Debug)]
+#[command(name = "dronecine", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    /// When to colour diagnostics.
+    #[arg(long, value_enum, default_value_t = ColorChoice::Auto, global = true)]
+    color: ColorChoice,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Check `.psl` scripts: parse, resolve, and report every mistake.
+    ///
+    /// Prints one summary line per valid file (actors, shots, total duration) and exits 0;
+    /// on any error prints the diagnostics and exits 1. Directories are searched for `.psl`
+    /// files.
+    Check {
+        /// Scripts or directories of scripts.
+        #[arg(required = true, value_name = "FILE")]
+        files: Vec<PathBuf>,
+        /// Output format: human-readable text or JSON records.
+        #[arg(long, value_enum, default_value_t = Format::Human)]
+        format: Format,
+    },
+    /// Rewrite scripts in canonical form (idempotent; comments are kept).
+    Fmt {
+        /// Scripts or directories of scripts.
+        #[arg(required = true, value_name = "FILE")]
+        files: Vec<PathBuf>,
+        /// Change nothing; exit 1 if any file would be rewritten.
+        #[arg(long)]
+        check: bool,
+    },
+    /// Print a shell completion script.
+    Completions {
+        /// The shell to complete for.
+        shell: clap_complete::Shell,
+    },
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+enum Format {
+    Human,
+    Json,
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+enum ColorChoice {
+    Auto,
+    Always,
+    Never,
+}
+
+impl ColorChoice {
+    fn enabled(self) -> bool {
+        match self {
+            ColorChoice::Always => true,
+            ColorChoice::Never => false,
+            ColorChoice::Auto => {
+                std::env::var_os("NO_COLOR").is_none() && std::io::stderr().is_terminal()
+            }
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let color = cli.color.enabled();
+    match cli.command {
+        Command::Check { files, format } => check::run(&files, format == Format::Json, color),
+        Command::Fmt { files, check } => fmt::run(&files, check, color),
+        Command::Completions { shell } => {
+            clap_complete::generate(
+                shell,
+                &mut Cli::command(),
+                "dronecine",
+                &mut std::io::stdout(),
+            );
+            ExitCode::SUCCESS
+        }
+    }
+}
