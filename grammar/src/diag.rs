@@ -14,7 +14,7 @@ use crate::span::{LineIndex, Span};
 macro_rules! codes {
     ($($variant:ident => $code:literal: $doc:literal,)*) => {
         /// Stable diagnostic codes.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
         pub enum Code {
             $(#[doc = $doc] $variant,)*
         }

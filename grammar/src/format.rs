@@ -13,28 +13,61 @@ use crate::vocab::ScreenThird;
 
 /// Format a parsed file. The caller ensures it parsed without syntax errors.
 pub fn format_file(file: &File<'_>) -> String {
-    let mut out = String::new();
-    let mut blank_pending = false;
+    // Each output line: its statement text and its comment, blank lines already collapsed.
+    let mut rows: Vec<Option<(String, Option<&str>)>> = Vec::new();
     let mut seen_shot = false;
     for line in &file.lines {
         if line.statement.is_none() && line.comment.is_none() {
-            blank_pending = !out.is_empty();
+            if matches!(rows.last(), Some(Some(_))) {
+                rows.push(None);
+            }
             continue;
         }
-        if blank_pending {
-            out.push('\n');
-            blank_pending = false;
-        }
+        let mut text = String::new();
         if let Some(st) = &line.statement {
-            statement(&mut out, st, &mut seen_shot);
-            if line.comment.is_some() {
-                out.push_str("  ");
+            statement(&mut text, st, &mut seen_shot);
+        }
+        rows.push(Some((text, line.comment.map(|c| c.text.trim_end()))));
+    }
+    while matches!(rows.last(), Some(None)) {
+        rows.pop();
+    }
+
+    // Trailing comments on consecutive lines line up, two spaces after the longest statement
+    // of the run (statements longer than ALIGN_MAX are left out of the alignment).
+    const ALIGN_MAX: usize = 72;
+    let trailing = |r: &Option<(String, Option<&str>)>| matches!(r, Some((t, Some(_))) if !t.is_empty());
+    let mut out = String::new();
+    let mut i = 0;
+    while i < rows.len() {
+        let mut j = i;
+        while j < rows.len() && trailing(&rows[j]) {
+            j += 1;
+        }
+        let run = if j > i { &rows[i..j] } else { &rows[i..=i] };
+        let column = run
+            .iter()
+            .filter_map(|r| r.as_ref().map(|(t, _)| t.chars().count()))
+            .filter(|w| *w <= ALIGN_MAX)
+            .max()
+            .unwrap_or(0);
+        for row in run {
+            match row {
+                None => {}
+                Some((text, comment)) => {
+                    out.push_str(text);
+                    if let Some(c) = comment {
+                        if !text.is_empty() {
+                            let pad = column.saturating_sub(text.chars().count()) + 2;
+                            out.extend(std::iter::repeat_n(' ', pad));
+                        }
+                        out.push_str(c);
+                    }
+                }
             }
+            out.push('\n');
         }
-        if let Some(c) = &line.comment {
-            out.push_str(c.text.trim_end());
-        }
-        out.push('\n');
+        i += run.len();
     }
     out
 }

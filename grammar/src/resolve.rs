@@ -1132,7 +1132,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                             Transition::Move {
                                 kind: *kind,
                                 follow,
-                                event: event.map(|e| e.text.to_string()),
+                                event: event.map(|e| event_text(&e)),
                             }
                         }
                     },
@@ -1173,7 +1173,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     transition: Transition::Move {
                         kind: MoveKind::Hold,
                         follow: None,
-                        event: h.event.map(|e| e.text.to_string()),
+                        event: h.event.map(|e| event_text(&e)),
                     },
                     content,
                     duration_s,
@@ -1740,6 +1740,15 @@ impl<'o, 'a> Resolver<'o, 'a> {
             return None;
         }
         Some(points)
+    }
+}
+
+/// The event as plain text: a quoted event verbatim, free words joined by single spaces.
+fn event_text(e: &ast::Event<'_>) -> String {
+    if e.quoted {
+        e.text.to_string()
+    } else {
+        e.text.split_whitespace().collect::<Vec<_>>().join(" ")
     }
 }
 

@@ -265,6 +265,8 @@ pub fn diagnostic(err: &pest::error::Error<Rule>, line: &str, offset: usize) -> 
     expected.sort();
     expected.dedup();
 
+    // Point at the next token, past any blanks pest stopped in front of.
+    let pos = pos + (line[pos..].len() - line[pos..].trim_start_matches([' ', '\t']).len());
     let (found, found_len) = token_at(line, pos);
     let span = Span::new(offset + pos, offset + pos + found_len);
     let found_text = match found {

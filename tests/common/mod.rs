@@ -1,0 +1,50 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use dronecine_grammar::{Checked, Options};
+
+/// Check a script file the way `dronecine check` does: built-in profile names from the
+/// compiler, relative files resolved against the script's folder.
+pub fn check_path(path: &Path) -> (String, Checked) {
+    let src = std::fs::read_to_string(path).expect("test script is UTF-8");
+    let base = path.parent().expect("script has a folder").to_path_buf();
+    let opts = Options {
+        known_drones: dronecine_compiler::profiles::BUILTIN_NAMES,
+        base_dir: Some(&base),
+    };
+    let checked = dronecine_grammar::check(&src, &opts);
+    (src, checked)
+}
+
+/// A serialised value with every `span` field removed, to compare scripts whose text moved.
+pub fn without_spans(v: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match v {
+        Value::Object(m) => Value::Object(
+            m.into_iter()
+                .filter(|(k, _)| k != "span")
+                .map(|(k, v)| (k, without_spans(v)))
+                .collect(),
+        ),
+        Value::Array(a) => Value::Array(a.into_iter().map(without_spans).collect()),
+        v => v,
+    }
+}
+
+pub fn workspace() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The `.psl` files of a folder of the workspace, sorted.
+pub fn scripts(dir: &str) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(workspace().join(dir))
+        .expect("folder exists")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "psl"))
+        .collect();
+    v.sort();
+    v
+}
