@@ -35,32 +35,63 @@ fn check_prints_one_summary_line_per_valid_file() {
     let out = stdout(&o);
     let n = common::scripts("shots").len();
     assert_eq!(out.lines().count(), n, "{out}");
-    assert!(out.contains("shots/transition.psl: 1 actor, 3 shots, 14.0 s"), "{out}");
-    assert!(out.contains("shots/two-actors.psl: 2 actors, 1 shot, 16.0 s"), "{out}");
+    assert!(
+        out.contains("shots/transition.psl: 1 actor, 3 shots, 14.0 s"),
+        "{out}"
+    );
+    assert!(
+        out.contains("shots/two-actors.psl: 2 actors, 1 shot, 16.0 s"),
+        "{out}"
+    );
     assert!(out.contains("(film annotation)"));
 }
 
 #[test]
 fn check_exits_1_with_diagnostics_on_errors() {
-    let o = dronecine(&["check", "shots/square.psl", "tests/bad/unknown-actor-close.psl"]);
+    let o = dronecine(&[
+        "check",
+        "shots/square.psl",
+        "tests/bad/unknown-actor-close.psl",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
     assert!(err.contains("psl::unknown_actor"), "{err}");
     assert!(err.contains("did you mean `Alice`?"), "{err}");
-    assert!(err.contains("tests/bad/unknown-actor-close.psl:6:7"), "{err}");
-    assert!(stdout(&o).contains("shots/square.psl:"), "valid files still get their line");
+    assert!(
+        err.contains("tests/bad/unknown-actor-close.psl:6:7"),
+        "{err}"
+    );
+    assert!(
+        stdout(&o).contains("shots/square.psl:"),
+        "valid files still get their line"
+    );
 }
 
 #[test]
 fn check_json_gives_code_message_file_line_column_help() {
-    let o = dronecine(&["check", "--format", "json", "tests/bad/several-setup.psl", "shots/helix.psl"]);
+    let o = dronecine(&[
+        "check",
+        "--format",
+        "json",
+        "tests/bad/several-setup.psl",
+        "shots/helix.psl",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
     let diags = v["diagnostics"].as_array().unwrap();
     assert!(diags.len() >= 4);
-    let missing_unit = diags.iter().find(|d| d["code"] == "psl::missing_unit").expect("missing unit");
+    let missing_unit = diags
+        .iter()
+        .find(|d| d["code"] == "psl::missing_unit")
+        .expect("missing unit");
     assert_eq!(missing_unit["file"], "tests/bad/several-setup.psl");
-    assert_eq!((missing_unit["line"].as_u64(), missing_unit["column"].as_u64()), (Some(3), Some(16)));
+    assert_eq!(
+        (
+            missing_unit["line"].as_u64(),
+            missing_unit["column"].as_u64()
+        ),
+        (Some(3), Some(16))
+    );
     assert_eq!(missing_unit["help"], "write `1.80m`");
     assert_eq!(missing_unit["severity"], "error");
     let files = v["files"].as_array().unwrap();
@@ -73,7 +104,11 @@ fn check_json_gives_code_message_file_line_column_help() {
 fn check_reports_unreadable_and_binary_files_without_panicking() {
     let o = dronecine(&["check", "no/such/file.psl"]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("cannot read `no/such/file.psl`"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("cannot read `no/such/file.psl`"),
+        "{}",
+        stderr(&o)
+    );
 
     let dir = temp_dir("binary");
     let bin = dir.join("binary.psl");
@@ -81,13 +116,19 @@ fn check_reports_unreadable_and_binary_files_without_panicking() {
     let o = dronecine(&["check", bin.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
-    assert!(err.contains("psl::invalid_utf8") && err.contains("0xFF"), "{err}");
+    assert!(
+        err.contains("psl::invalid_utf8") && err.contains("0xFF"),
+        "{err}"
+    );
     assert!(!err.contains("panicked"));
 
     let empty = dir.join("empty.psl");
     std::fs::write(&empty, b"").unwrap();
     let o = dronecine(&["check", empty.to_str().unwrap()]);
-    assert!(o.status.success(), "an empty script is valid, with a warning");
+    assert!(
+        o.status.success(),
+        "an empty script is valid, with a warning"
+    );
     assert!(stderr(&o).contains("psl::empty_script"));
 }
 
@@ -95,12 +136,19 @@ fn check_reports_unreadable_and_binary_files_without_panicking() {
 fn fmt_rewrites_and_check_mode_reports() {
     let dir = temp_dir("fmt");
     let f = dir.join("messy.psl");
-    std::fs::write(&f, "stage 8m  x 6m x 3m\nactor A height 1.8m at (0,0) facing 0deg\nMS A front for 4s # go\n").unwrap();
+    std::fs::write(
+        &f,
+        "stage 8m  x 6m x 3m\nactor A height 1.8m at (0,0) facing 0deg\nMS A front for 4s # go\n",
+    )
+    .unwrap();
     let path = f.to_str().unwrap();
     let o = dronecine(&["fmt", "--check", path]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stdout(&o).contains("would reformat"));
-    assert!(std::fs::read_to_string(&f).unwrap().contains("8m  x"), "--check changes nothing");
+    assert!(
+        std::fs::read_to_string(&f).unwrap().contains("8m  x"),
+        "--check changes nothing"
+    );
 
     let o = dronecine(&["fmt", path]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -114,22 +162,40 @@ fn fmt_rewrites_and_check_mode_reports() {
     std::fs::write(&f, "MS on A frnt for 4s\n").unwrap();
     let o = dronecine(&["fmt", path]);
     assert_eq!(o.status.code(), Some(1));
-    assert_eq!(std::fs::read_to_string(&f).unwrap(), "MS on A frnt for 4s\n", "a bad file is left alone");
+    assert_eq!(
+        std::fs::read_to_string(&f).unwrap(),
+        "MS on A frnt for 4s\n",
+        "a bad file is left alone"
+    );
 }
 
 #[test]
 fn help_version_and_completions() {
-    for args in [&["--help"][..], &["check", "--help"], &["fmt", "--help"], &["completions", "--help"]] {
+    for args in [
+        &["--help"][..],
+        &["check", "--help"],
+        &["fmt", "--help"],
+        &["completions", "--help"],
+    ] {
         let o = dronecine(args);
         assert!(o.status.success(), "{args:?}");
         assert!(stdout(&o).contains("Usage: dronecine"), "{args:?}");
     }
     let o = dronecine(&["--version"]);
-    assert_eq!(stdout(&o).trim(), format!("dronecine {}", env!("CARGO_PKG_VERSION")));
+    assert_eq!(
+        stdout(&o).trim(),
+        format!("dronecine {}", env!("CARGO_PKG_VERSION"))
+    );
     for shell in ["bash", "zsh", "fish", "powershell", "elvish"] {
         let o = dronecine(&["completions", shell]);
-        assert!(o.status.success() && stdout(&o).contains("dronecine"), "{shell}");
-        assert!(stdout(&o).contains("check") && stdout(&o).contains("fmt"), "{shell}");
+        assert!(
+            o.status.success() && stdout(&o).contains("dronecine"),
+            "{shell}"
+        );
+        assert!(
+            stdout(&o).contains("check") && stdout(&o).contains("fmt"),
+            "{shell}"
+        );
     }
     let o = dronecine(&["completions", "tcsh"]);
     assert_eq!(o.status.code(), Some(2), "clap rejects an unknown shell");

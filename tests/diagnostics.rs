@@ -10,7 +10,9 @@ use dronecine_grammar::{diag, Code};
 
 fn expected_codes(src: &str) -> Vec<String> {
     let first = src.lines().next().unwrap_or("");
-    let list = first.strip_prefix("# expect: ").expect("corpus file starts with `# expect: psl::…`");
+    let list = first
+        .strip_prefix("# expect: ")
+        .expect("corpus file starts with `# expect: psl::…`");
     list.split(',').map(|c| c.trim().to_string()).collect()
 }
 
@@ -21,18 +23,36 @@ fn bad_inputs_are_rejected_with_the_expected_codes() {
         let name = format!("bad/{}", path.file_name().unwrap().to_string_lossy());
         assert!(checked.has_errors(), "{name} must be rejected");
         assert!(checked.script.is_none());
-        let got: BTreeSet<&str> = checked.diagnostics.iter().map(|d| d.code.as_str()).collect();
+        let got: BTreeSet<&str> = checked
+            .diagnostics
+            .iter()
+            .map(|d| d.code.as_str())
+            .collect();
         for code in expected_codes(&src) {
-            assert!(got.contains(code.as_str()), "{name}: expected {code}, got {got:?}");
+            assert!(
+                got.contains(code.as_str()),
+                "{name}: expected {code}, got {got:?}"
+            );
         }
         for d in &checked.diagnostics {
-            assert!(d.span.start <= d.span.end && d.span.end <= src.len(), "{name}: span {:?}", d.span);
+            assert!(
+                d.span.start <= d.span.end && d.span.end <= src.len(),
+                "{name}: span {:?}",
+                d.span
+            );
             assert!(src.is_char_boundary(d.span.start) && src.is_char_boundary(d.span.end));
             assert!(d.help.is_some(), "{name}: {} has no help line", d.code);
-            assert!(!d.message.contains("Rule::") && !d.message.contains("kw_"), "{name}: {}", d.message);
+            assert!(
+                !d.message.contains("Rule::") && !d.message.contains("kw_"),
+                "{name}: {}",
+                d.message
+            );
         }
         let json = diag::to_json(&name, &src, &checked.diagnostics);
-        assert!(json.iter().all(|j| j.line >= 2 && j.column >= 1), "{name}: the header line is fine");
+        assert!(
+            json.iter().all(|j| j.line >= 2 && j.column >= 1),
+            "{name}: the header line is fine"
+        );
         insta::assert_snapshot!(diag::render(&name, &src, &checked.diagnostics, false, 100));
     });
 }
@@ -74,8 +94,14 @@ fn all_mistakes_of_a_file_come_out_in_one_run() {
         .iter()
         .map(|d| {
             let (src, _) = common::check_path(&path);
-            dronecine_grammar::LineIndex::new(&src).line_col(&src, d.span.start).0
+            dronecine_grammar::LineIndex::new(&src)
+                .line_col(&src, d.span.start)
+                .0
         })
         .collect();
-    assert_eq!(lines, [5, 6, 7, 8, 9].into_iter().collect(), "one diagnostic per bad line");
+    assert_eq!(
+        lines,
+        [5, 6, 7, 8, 9].into_iter().collect(),
+        "one diagnostic per bad line"
+    );
 }

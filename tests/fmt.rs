@@ -13,14 +13,21 @@ fn resolved(src: &str) -> serde_json::Value {
 }
 
 fn comments(src: &str) -> Vec<&str> {
-    src.lines().filter_map(|l| l.find('#').map(|i| l[i..].trim_end())).collect()
+    src.lines()
+        .filter_map(|l| l.find('#').map(|i| l[i..].trim_end()))
+        .collect()
 }
 
 #[test]
 fn shipped_scripts_are_canonical() {
     for path in common::scripts("shots") {
         let src = std::fs::read_to_string(&path).unwrap();
-        assert_eq!(fmt(&src), src, "{} is not in canonical form: run `dronecine fmt shots`", path.display());
+        assert_eq!(
+            fmt(&src),
+            src,
+            "{} is not in canonical form: run `dronecine fmt shots`",
+            path.display()
+        );
     }
 }
 
@@ -75,8 +82,12 @@ fn formatting_is_idempotent_keeps_comments_and_meaning() {
 
 #[test]
 fn trailing_comments_on_consecutive_lines_are_aligned() {
-    let out = fmt("stage 8m x 6m x 3m # volume\ndrone ardrone2 # the default\n\nlens 84deg # alone\n");
-    assert_eq!(out, "stage 8m x 6m x 3m  # volume\ndrone ardrone2      # the default\n\nlens 84deg  # alone\n");
+    let out =
+        fmt("stage 8m x 6m x 3m # volume\ndrone ardrone2 # the default\n\nlens 84deg # alone\n");
+    assert_eq!(
+        out,
+        "stage 8m x 6m x 3m  # volume\ndrone ardrone2      # the default\n\nlens 84deg  # alone\n"
+    );
 }
 
 #[test]

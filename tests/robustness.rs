@@ -17,7 +17,11 @@ fn exercise(bytes: &[u8]) {
                 assert!(src.is_char_boundary(d.span.start) && src.is_char_boundary(d.span.end));
             }
             if let Ok(once) = format(src) {
-                assert_eq!(format(&once).as_deref(), Ok(once.as_str()), "fmt not idempotent");
+                assert_eq!(
+                    format(&once).as_deref(),
+                    Ok(once.as_str()),
+                    "fmt not idempotent"
+                );
             }
             (src.to_string(), checked.diagnostics)
         }
@@ -28,12 +32,80 @@ fn exercise(bytes: &[u8]) {
 }
 
 const WORDS: &[&str] = &[
-    "MS", "CU", "ECU", "MLS", "on", "and", "A", "B", "front", "34backright", "left", "screen", "center",
-    "cut", "to", "then", "as", "dolly", "follow", "hold", "for", "over", "4s", "0s", "-1s", "2m", "90deg",
-    "(", ")", ",", "(0, 0)", "stage", "8m", "x", "lens", "drone", "ardrone2", "\"f.toml\"", "actor",
-    "height", "at", "facing", "walks", "turns", "path", "square", "helix", "orbit", "waypoints", "side",
-    "radius", "altitude", "from", "turns", "2", "around", "looking", "high", "angle", "eye", "level", "#",
-    "12", "00:01:03", "-->", "00:01:60", "\n", "\r\n", "\t", "é", "\u{0}", "\u{feff}", "1e999", "9999999999999999999999",
+    "MS",
+    "CU",
+    "ECU",
+    "MLS",
+    "on",
+    "and",
+    "A",
+    "B",
+    "front",
+    "34backright",
+    "left",
+    "screen",
+    "center",
+    "cut",
+    "to",
+    "then",
+    "as",
+    "dolly",
+    "follow",
+    "hold",
+    "for",
+    "over",
+    "4s",
+    "0s",
+    "-1s",
+    "2m",
+    "90deg",
+    "(",
+    ")",
+    ",",
+    "(0, 0)",
+    "stage",
+    "8m",
+    "x",
+    "lens",
+    "drone",
+    "ardrone2",
+    "\"f.toml\"",
+    "actor",
+    "height",
+    "at",
+    "facing",
+    "walks",
+    "turns",
+    "path",
+    "square",
+    "helix",
+    "orbit",
+    "waypoints",
+    "side",
+    "radius",
+    "altitude",
+    "from",
+    "turns",
+    "2",
+    "around",
+    "looking",
+    "high",
+    "angle",
+    "eye",
+    "level",
+    "#",
+    "12",
+    "00:01:03",
+    "-->",
+    "00:01:60",
+    "\n",
+    "\r\n",
+    "\t",
+    "é",
+    "\u{0}",
+    "\u{feff}",
+    "1e999",
+    "9999999999999999999999",
 ];
 
 fn soup() -> impl Strategy<Value = String> {
@@ -49,12 +121,28 @@ fn valid_script() -> impl Strategy<Value = String> {
         prop::sample::select(&["", " front", " 34left", " back", " 34backright"][..]),
         prop::sample::select(&["", " screen left", " screen (0.2, -0.1)"][..]),
         1u32..20,
-        prop::sample::select(&["cut to ", "dissolve to ", "then dolly to ", "then as A sits pan to ", ""][..]),
+        prop::sample::select(
+            &[
+                "cut to ",
+                "dissolve to ",
+                "then dolly to ",
+                "then as A sits pan to ",
+                "",
+            ][..],
+        ),
     )
         .prop_map(|(size, on, actors, profile, screen, secs, trans)| {
             let on = if on { " on " } else { " " };
-            let actors = if actors.contains(" and ") { actors.to_string() } else { format!("{actors}{profile}") };
-            let kw = if trans.starts_with("then") { "over" } else { "for" };
+            let actors = if actors.contains(" and ") {
+                actors.to_string()
+            } else {
+                format!("{actors}{profile}")
+            };
+            let kw = if trans.starts_with("then") {
+                "over"
+            } else {
+                "for"
+            };
             format!("{trans}{size}{on}{actors}{screen} {kw} {secs}s")
         });
     (prop::collection::vec(shot, 1..12), prop::sample::select(&[" ", "  ", "\t"][..])).prop_map(|(shots, sp)| {
@@ -112,12 +200,18 @@ fn empty_and_blank_files() {
 
 #[test]
 fn a_ten_megabyte_line() {
-    let mut s = String::from("stage 8m x 6m x 3m\nactor A height 1.8m at (0, 0) facing 0deg\nMS on A front for 4s ");
+    let mut s = String::from(
+        "stage 8m x 6m x 3m\nactor A height 1.8m at (0, 0) facing 0deg\nMS on A front for 4s ",
+    );
     s.push_str(&"x".repeat(10 << 20));
     let c = check(&s, &Options::default());
     assert_eq!(c.diagnostics.len(), 1);
     let out = diag::render("big.psl", &s, &c.diagnostics, false, 100);
-    assert!(out.len() < 4_000, "the rendering quotes a window, not 10 MB ({} bytes)", out.len());
+    assert!(
+        out.len() < 4_000,
+        "the rendering quotes a window, not 10 MB ({} bytes)",
+        out.len()
+    );
 
     let digits = format!("MS on A front for {}s", "9".repeat(10 << 20));
     exercise(digits.as_bytes());
@@ -128,7 +222,11 @@ fn a_ten_megabyte_line() {
 #[test]
 fn thousands_of_nested_or_repeated_tokens() {
     let header = "stage 8m x 6m x 3m\nactor A height 1.8m at (0, 0) facing 0deg\nactor B height 1.8m at (1, 0) facing 0deg\n";
-    let nested = format!("{header}actor C height 1m at {}0, 0{} facing 0deg\n", "(".repeat(50_000), ")".repeat(50_000));
+    let nested = format!(
+        "{header}actor C height 1m at {}0, 0{} facing 0deg\n",
+        "(".repeat(50_000),
+        ")".repeat(50_000)
+    );
     exercise(nested.as_bytes());
     let ands = format!("{header}MS on A{} for 4s\n", " and B".repeat(50_000));
     let c = check(&ands, &Options::default());
@@ -149,6 +247,9 @@ fn binary_input_is_reported_not_parsed() {
     let bytes: Vec<u8> = (0..=255u8).cycle().take(4096).collect();
     let err = decode(&bytes).unwrap_err();
     assert!(!err.1.is_empty() && err.1.len() <= 10);
-    assert!(err.1.iter().all(|d| d.code == dronecine_grammar::Code::InvalidUtf8));
+    assert!(err
+        .1
+        .iter()
+        .all(|d| d.code == dronecine_grammar::Code::InvalidUtf8));
     exercise(&bytes);
 }

@@ -31,10 +31,19 @@ fn the_paper_test_flights_are_paths() {
     assert_eq!(s.timeline.len(), 1);
     match &s.timeline[0].content {
         ShotContent::Path(Path {
-            shape: PathShape::Square { side_m, center_m, altitude_m, clockwise },
+            shape:
+                PathShape::Square {
+                    side_m,
+                    center_m,
+                    altitude_m,
+                    clockwise,
+                },
             looking_at: None,
         }) => {
-            assert_eq!((*side_m, *center_m, *altitude_m, *clockwise), (2.0, [0.0, 0.0], 1.5, false));
+            assert_eq!(
+                (*side_m, *center_m, *altitude_m, *clockwise),
+                (2.0, [0.0, 0.0], 1.5, false)
+            );
         }
         other => panic!("expected a square, got {other:?}"),
     }
@@ -42,7 +51,17 @@ fn the_paper_test_flights_are_paths() {
 
     let s = script("helix.psl");
     match &s.timeline[0].content {
-        ShotContent::Path(Path { shape: PathShape::Helix { radius_m, from_m, to_m, turns, .. }, .. }) => {
+        ShotContent::Path(Path {
+            shape:
+                PathShape::Helix {
+                    radius_m,
+                    from_m,
+                    to_m,
+                    turns,
+                    ..
+                },
+            ..
+        }) => {
             assert_eq!((*radius_m, *from_m, *to_m, *turns), (1.5, 1.0, 2.5, 2.0));
         }
         other => panic!("expected a helix, got {other:?}"),
@@ -60,8 +79,17 @@ fn the_paper_transition_goes_from_front_to_34backright() {
     assert_eq!(first.framings[0].size, Size::MS);
     assert_eq!(first.framings[0].subjects[0].profile, Some(Profile::Front));
     let second = comp(1);
-    assert_eq!(second.framings[0].subjects[0].profile, Some(Profile::ThreeQuarterBackRight));
-    assert!(matches!(s.timeline[1].transition, Transition::Move { kind: MoveKind::Dolly, .. }));
+    assert_eq!(
+        second.framings[0].subjects[0].profile,
+        Some(Profile::ThreeQuarterBackRight)
+    );
+    assert!(matches!(
+        s.timeline[1].transition,
+        Transition::Move {
+            kind: MoveKind::Dolly,
+            ..
+        }
+    ));
     assert_eq!((s.timeline[1].start_s, s.timeline[1].end_s), (4.0, 10.0));
     // `then hold` keeps the composition it continues.
     assert_eq!(comp(2), second);
@@ -81,7 +109,10 @@ fn two_actors_move_while_the_two_shot_holds() {
     assert_eq!(walkers, ["A", "B"].into_iter().collect());
     let hold = &s.timeline[0];
     let last_move_end = scene.blocking.iter().map(|m| m.end_s).fold(0.0, f64::max);
-    assert!(hold.end_s >= last_move_end, "the framing is held through every movement");
+    assert!(
+        hold.end_s >= last_move_end,
+        "the framing is held through every movement"
+    );
     match &hold.content {
         ShotContent::Composition(c) => {
             assert_eq!(c.framings.len(), 1);
@@ -96,8 +127,14 @@ fn the_long_scene_uses_most_of_the_language() {
     let s = script("scene.psl");
     let scene = s.scene.as_ref().unwrap();
     assert!(scene.lens.is_some() && scene.drone.is_some());
-    assert!(scene.blocking.iter().any(|m| matches!(m.action, Action::Walk { .. })));
-    assert!(scene.blocking.iter().any(|m| matches!(m.action, Action::Turn { .. })));
+    assert!(scene
+        .blocking
+        .iter()
+        .any(|m| matches!(m.action, Action::Walk { .. })));
+    assert!(scene
+        .blocking
+        .iter()
+        .any(|m| matches!(m.action, Action::Turn { .. })));
     let mut moves = std::collections::BTreeSet::new();
     let (mut cut, mut dissolve, mut pinned, mut ots, mut two, mut orbit, mut waypoints) =
         (false, false, false, false, false, false, false);
@@ -117,7 +154,11 @@ fn the_long_scene_uses_most_of_the_language() {
                 angles.insert(c.camera_angle.as_str());
                 ots |= c.framings.len() == 2;
                 two |= c.framings.iter().any(|f| f.subjects.len() == 2);
-                screen |= c.framings.iter().flat_map(|f| &f.subjects).any(|x| x.screen_x.is_some());
+                screen |= c
+                    .framings
+                    .iter()
+                    .flat_map(|f| &f.subjects)
+                    .any(|x| x.screen_x.is_some());
             }
             ShotContent::Path(p) => match p.shape {
                 PathShape::Orbit { .. } => orbit = true,

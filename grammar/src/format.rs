@@ -36,7 +36,8 @@ pub fn format_file(file: &File<'_>) -> String {
     // Trailing comments on consecutive lines line up, two spaces after the longest statement
     // of the run (statements longer than ALIGN_MAX are left out of the alignment).
     const ALIGN_MAX: usize = 72;
-    let trailing = |r: &Option<(String, Option<&str>)>| matches!(r, Some((t, Some(_))) if !t.is_empty());
+    let trailing =
+        |r: &Option<(String, Option<&str>)>| matches!(r, Some((t, Some(_))) if !t.is_empty());
     let mut out = String::new();
     let mut i = 0;
     while i < rows.len() {

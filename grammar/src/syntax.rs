@@ -335,7 +335,10 @@ pub fn diagnostic(err: &pest::error::Error<Rule>, line: &str, offset: usize) -> 
 
     let mut help = None;
     if let Found::Word(w) = found {
-        let words: Vec<&str> = expected.iter().flat_map(|e| e.words().iter().copied()).collect();
+        let words: Vec<&str> = expected
+            .iter()
+            .flat_map(|e| e.words().iter().copied())
+            .collect();
         let same_case_folded = words.iter().find(|c| c.eq_ignore_ascii_case(w) && **c != w);
         help = match same_case_folded {
             Some(c) if c.chars().all(|ch| ch.is_ascii_uppercase()) => {

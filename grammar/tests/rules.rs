@@ -25,25 +25,54 @@ fn rejects(rule: Rule, bad: &[&str]) {
 
 #[test]
 fn size() {
-    accepts(Rule::size, &["ECU", "BCU", "CU", "MCU", "MS", "MLS", "FS", "LS", "ELS"]);
+    accepts(
+        Rule::size,
+        &["ECU", "BCU", "CU", "MCU", "MS", "MLS", "FS", "LS", "ELS"],
+    );
     rejects(Rule::size, &["ms", "XS", "MSS", "M S", ""]);
 }
 
 #[test]
 fn profile() {
-    accepts(Rule::profile, &["front", "34left", "left", "34backleft", "back", "34backright", "right", "34right"]);
-    rejects(Rule::profile, &["Front", "34", "frontal", "3/4left", "34 left"]);
+    accepts(
+        Rule::profile,
+        &[
+            "front",
+            "34left",
+            "left",
+            "34backleft",
+            "back",
+            "34backright",
+            "right",
+            "34right",
+        ],
+    );
+    rejects(
+        Rule::profile,
+        &["Front", "34", "frontal", "3/4left", "34 left"],
+    );
 }
 
 #[test]
 fn name_excludes_keywords() {
-    accepts(Rule::name, &["A", "Bob", "alice_2", "Zoé", "Front", "frontman", "onion", "B2"]);
-    rejects(Rule::name, &["front", "on", "and", "MS", "x", "to", "2B", "_a", "a-b"]);
+    accepts(
+        Rule::name,
+        &[
+            "A", "Bob", "alice_2", "Zoé", "Front", "frontman", "onion", "B2",
+        ],
+    );
+    rejects(
+        Rule::name,
+        &["front", "on", "and", "MS", "x", "to", "2B", "_a", "a-b"],
+    );
 }
 
 #[test]
 fn quantity_and_count() {
-    accepts(Rule::quantity, &["4s", "1.80m", "84deg", "-3s", ".5m", "4", "2.", "4cm"]);
+    accepts(
+        Rule::quantity,
+        &["4s", "1.80m", "84deg", "-3s", ".5m", "4", "2.", "4cm"],
+    );
     rejects(Rule::quantity, &["4 s", "s", "--4s", "1e3m"]);
     accepts(Rule::count, &["2", "0.5", "-1"]);
 }
@@ -62,13 +91,23 @@ fn stage() {
 
 #[test]
 fn lens() {
-    accepts(Rule::lens, &["lens 84deg", "lens 84deg 4:3", "lens 92deg 16:9"]);
+    accepts(
+        Rule::lens,
+        &["lens 84deg", "lens 84deg 4:3", "lens 92deg 16:9"],
+    );
     rejects(Rule::lens, &["lens", "lens 4:3", "lens 84deg 4/3"]);
 }
 
 #[test]
 fn drone() {
-    accepts(Rule::drone, &["drone ardrone2", "drone ardrone2-outdoor", "drone \"profiles/mine.toml\""]);
+    accepts(
+        Rule::drone,
+        &[
+            "drone ardrone2",
+            "drone ardrone2-outdoor",
+            "drone \"profiles/mine.toml\"",
+        ],
+    );
     rejects(Rule::drone, &["drone", "drone \"unterminated"]);
 }
 
@@ -82,16 +121,30 @@ fn actor_decl() {
             "actor C height 1.7m at (1, 1)",
         ],
     );
-    rejects(Rule::actor_decl, &["actor front height 1.8m", "actor", "actor A tall 1.8m"]);
+    rejects(
+        Rule::actor_decl,
+        &["actor front height 1.8m", "actor", "actor A tall 1.8m"],
+    );
 }
 
 #[test]
 fn blocking() {
     accepts(
         Rule::blocking,
-        &["at 6s A walks to (1, 1.5) over 4s", "at 12s B turns to 90deg over 1s", "at 6s A walks to (1, 1)"],
+        &[
+            "at 6s A walks to (1, 1.5) over 4s",
+            "at 12s B turns to 90deg over 1s",
+            "at 6s A walks to (1, 1)",
+        ],
     );
-    rejects(Rule::blocking, &["at 6s A walk to (1, 1) over 4s", "at 6s A runs to (1, 1)", "at A walks to (1,1)"]);
+    rejects(
+        Rule::blocking,
+        &[
+            "at 6s A walk to (1, 1) over 4s",
+            "at 6s A runs to (1, 1)",
+            "at A walks to (1,1)",
+        ],
+    );
 }
 
 #[test]
@@ -102,23 +155,48 @@ fn duration() {
 
 #[test]
 fn camera_angle() {
-    accepts(Rule::camera_angle, &["high angle", "low angle", "eye level", "high   angle"]);
+    accepts(
+        Rule::camera_angle,
+        &["high angle", "low angle", "eye level", "high   angle"],
+    );
     rejects(Rule::camera_angle, &["high", "angle high", "eye-level"]);
 }
 
 #[test]
 fn screen() {
-    accepts(Rule::screen, &["screen left", "screen center", "screen centre", "screen right", "screen (0.2, -0.1)"]);
+    accepts(
+        Rule::screen,
+        &[
+            "screen left",
+            "screen center",
+            "screen centre",
+            "screen right",
+            "screen (0.2, -0.1)",
+        ],
+    );
     rejects(Rule::screen, &["screen", "screen top", "left"]);
 }
 
 #[test]
 fn framing_and_composition() {
-    accepts(Rule::framing, &["MS on A", "MS A", "MS on A front", "MS on A and B", "CU on A 34left screen left and B screen right"]);
+    accepts(
+        Rule::framing,
+        &[
+            "MS on A",
+            "MS A",
+            "MS on A front",
+            "MS on A and B",
+            "CU on A 34left screen left and B screen right",
+        ],
+    );
     rejects(Rule::framing, &["MS on", "on A", "MS on A and"]);
     accepts(
         Rule::composition,
-        &["high angle MS on A and B", "MS B 34backright MLS A 34left screen right", "ELS on A"],
+        &[
+            "high angle MS on A and B",
+            "MS B 34backright MLS A 34left screen right",
+            "ELS on A",
+        ],
     );
 }
 
@@ -126,9 +204,19 @@ fn framing_and_composition() {
 fn transition() {
     accepts(
         Rule::transition,
-        &["cut to", "dissolve to", "then dolly to", "then follow A to", "then as A sits down pan to", "then as \"A sits\" crane to"],
+        &[
+            "cut to",
+            "dissolve to",
+            "then dolly to",
+            "then follow A to",
+            "then as A sits down pan to",
+            "then as \"A sits\" crane to",
+        ],
     );
-    rejects(Rule::transition, &["cut", "then to", "then zoom to", "then follow to"]);
+    rejects(
+        Rule::transition,
+        &["cut", "then to", "then zoom to", "then follow to"],
+    );
 }
 
 #[test]
@@ -154,7 +242,14 @@ fn shots() {
             "MS on A front",
         ],
     );
-    rejects(Rule::shot, &["cut to for 4s", "then hold to for 4s", "MS on A front for 4s extra"]);
+    rejects(
+        Rule::shot,
+        &[
+            "cut to for 4s",
+            "then hold to for 4s",
+            "MS on A front for 4s extra",
+        ],
+    );
 }
 
 #[test]
@@ -171,7 +266,14 @@ fn path_shot() {
             "cut to path orbit center (1, 1) radius 1m altitude 2m for 10s",
         ],
     );
-    rejects(Rule::path_shot, &["path circle radius 1m for 2s", "path waypoints file.csv for 3s", "path square side for 2s"]);
+    rejects(
+        Rule::path_shot,
+        &[
+            "path circle radius 1m for 2s",
+            "path waypoints file.csv for 3s",
+            "path square side for 2s",
+        ],
+    );
 }
 
 #[test]
@@ -184,8 +286,17 @@ fn timed_entry_and_timecode() {
             "3 01:03 --> 01:60 then hold",
         ],
     );
-    rejects(Rule::timed_entry, &["12 00:01:03 -> 00:01:09 MS Bob", "00:01:03 --> 00:01:09 MS Bob"]);
-    accepts(Rule::timecode, &["00:01:03", "1:02:03", "01:60", "00:00:01,500"]);
+    rejects(
+        Rule::timed_entry,
+        &[
+            "12 00:01:03 -> 00:01:09 MS Bob",
+            "00:01:03 --> 00:01:09 MS Bob",
+        ],
+    );
+    accepts(
+        Rule::timecode,
+        &["00:01:03", "1:02:03", "01:60", "00:00:01,500"],
+    );
     rejects(Rule::timecode, &["1", "00-01-03", ":01:02"]);
 }
 
@@ -193,7 +304,13 @@ fn timed_entry_and_timecode() {
 fn line_and_comment() {
     accepts(
         Rule::line,
-        &["", "# just a comment", "MS on A front for 4s # trailing", "   stage 8m x 6m x 3m   ", "\tMS on A for 4s"],
+        &[
+            "",
+            "# just a comment",
+            "MS on A front for 4s # trailing",
+            "   stage 8m x 6m x 3m   ",
+            "\tMS on A for 4s",
+        ],
     );
     rejects(Rule::line, &["MS on A front for 4s extra", "# ok\nMS on A"]);
     accepts(Rule::comment, &["#", "# anything: MS on A for 4s"]);
