@@ -363,13 +363,18 @@ impl<'o, 'a> Resolver<'o, 'a> {
             format!("unknown actor `{}`", name.text),
         )
         .with_label("not declared");
-        d.help = Some(match did_you_mean(name.text, declared.keys().copied()) {
-            Some(s) => s,
-            None => format!(
-                "declare it before the shots: `actor {} height 1.75m at (0, 0) facing 0deg`",
-                name.text
-            ),
-        });
+        // Candidates in declaration order, so that the suggestion is the same on every run.
+        let mut names: Vec<(&str, Span)> = declared.iter().map(|(n, s)| (*n, *s)).collect();
+        names.sort_by_key(|(_, s)| s.start);
+        d.help = Some(
+            match did_you_mean(name.text, names.iter().map(|(n, _)| *n)) {
+                Some(s) => s,
+                None => format!(
+                    "declare it before the shots: `actor {} height 1.75m at (0, 0) facing 0deg`",
+                    name.text
+                ),
+            },
+        );
         self.err(d);
         false
     }
