@@ -11,7 +11,7 @@ use crate::diag::{Code, Diagnostic};
 use crate::parser::Rule;
 use crate::span::Span;
 use crate::suggest::{did_you_mean, or_list};
-use crate::vocab::{is_keyword, KEYWORDS};
+use crate::vocab::{is_keyword, KEYWORDS, MOVE_NAMES, PROFILE_NAMES, SIZE_NAMES};
 
 /// What the grammar expected, in words, with the vocabulary a misspelling is matched against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -164,33 +164,25 @@ impl Expect {
         }
     }
 
-    /// Words a misspelling of this expectation is compared with.
-    fn words(self) -> &'static [&'static str] {
-        match self {
-            Expect::LineStart => &[
-                "stage", "lens", "drone", "actor", "at", "cut", "dissolve", "then", "path", "high",
-                "low", "eye", "ECU", "BCU", "CU", "MCU", "MS", "MLS", "FS", "LS", "ELS",
-            ],
-            Expect::Size => &["ECU", "BCU", "CU", "MCU", "MS", "MLS", "FS", "LS", "ELS"],
-            Expect::Profile => &[
-                "front",
-                "34left",
-                "left",
-                "34backleft",
-                "back",
-                "34backright",
-                "right",
-                "34right",
-            ],
+    /// Words a misspelling of this expectation is compared with (two lists, to share the
+    /// vocabulary's own tables).
+    fn words(self) -> [&'static [&'static str]; 2] {
+        const STATEMENT_STARTS: &[&str] = &[
+            "stage", "lens", "drone", "actor", "at", "cut", "dissolve", "then", "path", "high",
+            "low", "eye",
+        ];
+        const ANGLE_STARTS: &[&str] = &["high", "low", "eye"];
+        let one: &'static [&'static str] = match self {
+            Expect::LineStart => return [STATEMENT_STARTS, SIZE_NAMES],
+            Expect::Composition => return [ANGLE_STARTS, SIZE_NAMES],
+            Expect::Size => SIZE_NAMES,
+            Expect::Profile => PROFILE_NAMES,
             Expect::CameraAngle => &["high", "low", "eye", "angle", "level"],
             Expect::Screen => &["screen"],
             Expect::ScreenThird => &["left", "center", "right"],
             Expect::And => &["and"],
-            Expect::Composition => &[
-                "ECU", "BCU", "CU", "MCU", "MS", "MLS", "FS", "LS", "ELS", "high", "low", "eye",
-            ],
             Expect::Transition => &["cut", "dissolve", "then"],
-            Expect::Move => &["hold", "pan", "dolly", "crane", "track", "follow"],
+            Expect::Move => MOVE_NAMES,
             Expect::To => &["to"],
             Expect::Duration => &["for", "over"],
             Expect::X => &["x"],
@@ -212,7 +204,8 @@ impl Expect {
             Expect::At => &["at"],
             Expect::Event => &["as"],
             _ => &[],
-        }
+        };
+        [one, &[]]
     }
 }
 
@@ -337,7 +330,7 @@ pub fn diagnostic(err: &pest::error::Error<Rule>, line: &str, offset: usize) -> 
     if let Found::Word(w) = found {
         let words: Vec<&str> = expected
             .iter()
-            .flat_map(|e| e.words().iter().copied())
+            .flat_map(|e| e.words().into_iter().flatten().copied())
             .collect();
         let same_case_folded = words.iter().find(|c| c.eq_ignore_ascii_case(w) && **c != w);
         help = match same_case_folded {

@@ -22,6 +22,22 @@ pub enum Size {
     ELS,
 }
 
+/// The size codes in `Size::ALL` order.
+pub const SIZE_NAMES: &[&str] = &["ECU", "BCU", "CU", "MCU", "MS", "MLS", "FS", "LS", "ELS"];
+/// The profile words in `Profile::ALL` order.
+pub const PROFILE_NAMES: &[&str] = &[
+    "front",
+    "34left",
+    "left",
+    "34backleft",
+    "back",
+    "34backright",
+    "right",
+    "34right",
+];
+/// The camera moves in `MoveKind::ALL` order.
+pub const MOVE_NAMES: &[&str] = &["hold", "pan", "dolly", "crane", "track", "follow"];
+
 impl Size {
     pub const ALL: [Size; 9] = [
         Size::ECU,
@@ -36,17 +52,7 @@ impl Size {
     ];
 
     pub fn as_str(self) -> &'static str {
-        match self {
-            Size::ECU => "ECU",
-            Size::BCU => "BCU",
-            Size::CU => "CU",
-            Size::MCU => "MCU",
-            Size::MS => "MS",
-            Size::MLS => "MLS",
-            Size::FS => "FS",
-            Size::LS => "LS",
-            Size::ELS => "ELS",
-        }
+        SIZE_NAMES[self as usize]
     }
 
     pub fn parse(s: &str) -> Option<Size> {
@@ -85,16 +91,7 @@ impl Profile {
     ];
 
     pub fn as_str(self) -> &'static str {
-        match self {
-            Profile::Front => "front",
-            Profile::ThreeQuarterLeft => "34left",
-            Profile::Left => "left",
-            Profile::ThreeQuarterBackLeft => "34backleft",
-            Profile::Back => "back",
-            Profile::ThreeQuarterBackRight => "34backright",
-            Profile::Right => "right",
-            Profile::ThreeQuarterRight => "34right",
-        }
+        PROFILE_NAMES[self as usize]
     }
 
     pub fn parse(s: &str) -> Option<Profile> {
@@ -197,14 +194,7 @@ impl MoveKind {
     ];
 
     pub fn as_str(self) -> &'static str {
-        match self {
-            MoveKind::Hold => "hold",
-            MoveKind::Pan => "pan",
-            MoveKind::Dolly => "dolly",
-            MoveKind::Crane => "crane",
-            MoveKind::Track => "track",
-            MoveKind::Follow => "follow",
-        }
+        MOVE_NAMES[self as usize]
     }
 
     pub fn parse(s: &str) -> Option<MoveKind> {
@@ -322,6 +312,22 @@ mod tests {
         for w in Profile::ALL.windows(2) {
             let d = wrap_angle_rad(w[1].azimuth_rad() - w[0].azimuth_rad());
             assert!((d - FRAC_PI_4).abs() < 1e-12, "{:?} → {:?}", w[0], w[1]);
+        }
+    }
+
+    #[test]
+    fn name_tables_follow_the_enums() {
+        for (i, z) in Size::ALL.iter().enumerate() {
+            assert_eq!(*z as usize, i);
+            assert_eq!(Size::parse(SIZE_NAMES[i]), Some(*z));
+        }
+        for (i, p) in Profile::ALL.iter().enumerate() {
+            assert_eq!(*p as usize, i);
+            assert_eq!(Profile::parse(PROFILE_NAMES[i]), Some(*p));
+        }
+        for (i, m) in MoveKind::ALL.iter().enumerate() {
+            assert_eq!(*m as usize, i);
+            assert_eq!(MoveKind::parse(MOVE_NAMES[i]), Some(*m));
         }
     }
 
