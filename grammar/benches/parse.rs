@@ -56,7 +56,12 @@ fn bench(c: &mut Criterion) {
     // Outside the timed loops: make sure we measure the success path.
     let checked = check(&src, &Options::default());
     if checked.has_errors() {
-        let shown: Vec<String> = checked.diagnostics.iter().take(5).map(|d| format!("{d:?}")).collect();
+        let shown: Vec<String> = checked
+            .diagnostics
+            .iter()
+            .take(5)
+            .map(|d| format!("{d:?}"))
+            .collect();
         panic!("generated script has errors:\n{}", shown.join("\n"));
     }
     let n = checked.script.expect("script").timeline.len();
@@ -66,7 +71,9 @@ fn bench(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("psl_10k_shots");
     g.throughput(Throughput::Bytes(src.len() as u64));
-    g.bench_function("check", |b| b.iter(|| check(black_box(&src), &Options::default())));
+    g.bench_function("check", |b| {
+        b.iter(|| check(black_box(&src), &Options::default()))
+    });
     g.bench_function("format", |b| b.iter(|| format(black_box(&src))));
     g.finish();
 }
