@@ -9,7 +9,10 @@ use dronecine_grammar::{Checked, Options};
 /// compiler, relative files resolved against the script's folder.
 pub fn check_path(path: &Path) -> (String, Checked) {
     let src = std::fs::read_to_string(path).expect("test script is UTF-8");
-    let base = path.parent().expect("script has a folder").to_path_buf();
+    // Relative to the workspace (the tests' working folder), so that messages naming files
+    // read the same on every machine.
+    let rel = path.strip_prefix(workspace()).unwrap_or(path);
+    let base = rel.parent().expect("script has a folder").to_path_buf();
     let opts = Options {
         known_drones: dronecine_compiler::profiles::BUILTIN_NAMES,
         base_dir: Some(&base),
