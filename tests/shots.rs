@@ -4,7 +4,7 @@
 mod common;
 
 use dronecine_grammar::script::*;
-use dronecine_grammar::vocab::{CameraAngle, MoveKind, Profile, Size};
+use dronecine_grammar::vocab::{MoveKind, Profile, Size};
 
 fn script(name: &str) -> Script {
     let path = common::workspace().join("shots").join(name);
@@ -170,7 +170,6 @@ fn the_long_scene_uses_most_of_the_language() {
     assert!(cut && dissolve && pinned && ots && two && orbit && waypoints && screen);
     assert!(moves.len() >= 4, "moves used: {moves:?}");
     assert_eq!(angles.len(), 3, "all three camera angles: {angles:?}");
-    let _ = CameraAngle::High;
 }
 
 #[test]

@@ -859,7 +859,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         moves.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
         let mut last_end: HashMap<&str, (f64, Span)> = HashMap::new();
         let mut overlapping = Vec::new();
-        for (i, m) in moves.iter().enumerate() {
+        for m in &moves {
             if let Some(&(end, span)) = last_end.get(m.actor.as_str()) {
                 if m.start_s < end - EPS_S {
                     overlapping.push(
@@ -880,7 +880,6 @@ impl<'o, 'a> Resolver<'o, 'a> {
                             fmt_num(end)
                         )),
                     );
-                    let _ = i;
                     continue;
                 }
             }
@@ -1431,12 +1430,11 @@ impl<'o, 'a> Resolver<'o, 'a> {
             false
         };
         let length = |this: &mut Self, key: &str, what: &str, positive: bool| -> Option<f64> {
-            let Some((span, PathValue::Side(q) | PathValue::Altitude(q) | PathValue::Radius(q))) =
+            let Some((_, PathValue::Side(q) | PathValue::Altitude(q) | PathValue::Radius(q))) =
                 given.get(key).copied()
             else {
                 return None;
             };
-            let _ = span;
             let v = this.quantity(q, Dim::Length, what, false)?;
             if positive {
                 this.range(v, q.span, what, 0.0, true, 1000.0, "m")
