@@ -88,16 +88,12 @@ fn the_corpus_is_large_enough() {
 #[test]
 fn all_mistakes_of_a_file_come_out_in_one_run() {
     let path = common::workspace().join("tests/bad/several-shots.psl");
-    let (_, checked) = common::check_path(&path);
+    let (src, checked) = common::check_path(&path);
+    let index = dronecine_grammar::LineIndex::new(&src);
     let lines: BTreeSet<usize> = checked
         .diagnostics
         .iter()
-        .map(|d| {
-            let (src, _) = common::check_path(&path);
-            dronecine_grammar::LineIndex::new(&src)
-                .line_col(&src, d.span.start)
-                .0
-        })
+        .map(|d| index.line_col(&src, d.span.start).0)
         .collect();
     assert_eq!(
         lines,

@@ -14,7 +14,7 @@ use crate::ast::{self, DurationKeyword, PathValue, Quantity, ShotBody, Statement
 use crate::diag::{Code, Diagnostic};
 use crate::script::*;
 use crate::span::Span;
-use crate::suggest::did_you_mean;
+use crate::suggest::{did_you_mean, shorten};
 use crate::vocab::{wrap_angle_rad, CameraAngle, MoveKind};
 
 /// What the semantic pass needs from outside the script.
@@ -1757,12 +1757,4 @@ fn event_text(e: &ast::Event<'_>) -> String {
 
 fn quantity_text(q: &Quantity<'_>) -> String {
     format!("{}{}", q.number, q.unit.map(|u| u.text).unwrap_or("s"))
-}
-
-fn shorten(s: &str) -> String {
-    if s.chars().count() > 40 {
-        format!("{}…", s.chars().take(37).collect::<String>())
-    } else {
-        s.to_string()
-    }
 }

@@ -37,6 +37,15 @@ pub fn closest<'c>(word: &str, candidates: impl IntoIterator<Item = &'c str>) ->
     best
 }
 
+/// A word cut to 40 characters for a message ("…" marks the cut).
+pub fn shorten(w: &str) -> String {
+    if w.chars().count() > 40 {
+        format!("{}…", w.chars().take(37).collect::<String>())
+    } else {
+        w.to_string()
+    }
+}
+
 /// "`a`", "`a` or `b`", "`a`, `b` or `c`".
 pub fn or_list(words: &[&str]) -> String {
     let quoted: Vec<String> = words.iter().map(|w| format!("`{w}`")).collect();

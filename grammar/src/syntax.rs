@@ -10,7 +10,7 @@ use pest::error::{ErrorVariant, InputLocation};
 use crate::diag::{Code, Diagnostic};
 use crate::parser::Rule;
 use crate::span::Span;
-use crate::suggest::{did_you_mean, or_list};
+use crate::suggest::{did_you_mean, or_list, shorten};
 use crate::vocab::{is_keyword, KEYWORDS, MOVE_NAMES, PROFILE_NAMES, SIZE_NAMES};
 
 /// What the grammar expected, in words, with the vocabulary a misspelling is matched against.
@@ -432,14 +432,5 @@ fn token_at(line: &str, pos: usize) -> (Found<'_>, usize) {
         (Found::Word(&rest[..len]), len)
     } else {
         (Found::Char(c), c.len_utf8())
-    }
-}
-
-fn shorten(w: &str) -> String {
-    if w.chars().count() > 40 {
-        let head: String = w.chars().take(37).collect();
-        format!("{head}…")
-    } else {
-        w.to_string()
     }
 }
