@@ -65,7 +65,7 @@ pub fn check_file(path: &std::path::Path) -> FileResult {
         Ok(src) => {
             let base = files::base_dir(path);
             let opts = Options {
-                known_drones: dronecine_compiler::profiles::BUILTIN_NAMES,
+                known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
                 base_dir: Some(&base),
             };
             let checked = dronecine_grammar::check(src, &opts);

@@ -73,6 +73,19 @@ codes! {
     BadAspect => "psl::bad_aspect": "A lens aspect ratio is not two positive numbers.",
     InvalidUtf8 => "psl::invalid_utf8": "The file is not UTF-8 text.",
     Internal => "psl::internal": "The parser met a case it does not handle; please report it.",
+    ProfileSyntax => "profile::syntax": "A drone profile is not valid TOML.",
+    ProfileBadValue => "profile::bad_value": "A drone profile value has the wrong type or lies outside its range.",
+    ProfileUnknownKey => "profile::unknown_key": "A drone profile has a key dronecine does not know.",
+    ProfileMissingKey => "profile::missing_key": "A drone profile lacks a required key.",
+    ProfileNotFound => "profile::not_found": "The drone profile file cannot be read.",
+    NoScene => "compile::no_scene": "The script is a film annotation without a scene set-up; it cannot be flown.",
+    TooClose => "compile::too_close": "A framing puts the camera inside an actor's safety distance.",
+    Infeasible => "compile::infeasible": "The reference exceeds a limit of the drone profile (speed, acceleration, tilt, vertical speed, yaw rate).",
+    LeavesStage => "compile::leaves_stage": "The reference leaves the stage volume.",
+    CutTooShort => "compile::cut_too_short": "A cut to a pinned shot leaves too little time for the drone to fly to its first framing.",
+    Reposition => "compile::reposition": "A cut needs a repositioning flight, inserted before the shot.",
+    AngleNotRendered => "compile::angle_not_rendered": "The drone has no gimbal; the camera angle comes from altitude alone or not at all.",
+    Unframeable => "compile::unframeable": "No roll-free camera orientation puts the actors at the requested screen positions.",
 }
 
 impl fmt::Display for Code {
@@ -364,7 +377,10 @@ mod tests {
     fn codes_are_unique_and_namespaced() {
         let mut seen = std::collections::HashSet::new();
         for c in Code::ALL {
-            assert!(c.as_str().starts_with("psl::"), "{c}");
+            let namespaced = ["psl::", "profile::", "compile::"]
+                .iter()
+                .any(|ns| c.as_str().starts_with(ns));
+            assert!(namespaced, "{c}");
             assert!(seen.insert(c.as_str()), "duplicate code {c}");
             assert!(!c.explain().is_empty());
         }

@@ -14,7 +14,7 @@ pub fn check_path(path: &Path) -> (String, Checked) {
     let rel = path.strip_prefix(workspace()).unwrap_or(path);
     let base = rel.parent().expect("script has a folder").to_path_buf();
     let opts = Options {
-        known_drones: dronecine_compiler::profiles::BUILTIN_NAMES,
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
         base_dir: Some(&base),
     };
     let checked = dronecine_grammar::check(&src, &opts);

@@ -1,0 +1,232 @@
+//! The camera conventions (camera-math.md, preamble and §4): lens, pose, projection and the
+//! roll-free orientation that puts a target at a screen point.
+//!
+//! This module is the one source of truth for the camera frame: world z up; heading ψ
+//! counter-clockwise from +x; camera pitch τ up positive; no roll. Screen (x, y) in [−1, 1]²,
+//! x right, y up. A point at camera-frame coordinates (right r, forward f, up u) projects to
+//! `(r·Sx/f, u·Sy/f)` with `Sx = 1/tan(fovX/2)`, `Sy = 1/tan(fovY/2)`.
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+pub type Vec3 = Vector3<f64>;
+
+/// A pinhole lens: horizontal field of view and frame aspect (width over height).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Lens {
+    pub fov_x_rad: f64,
+    pub aspect: f64,
+}
+
+impl Lens {
+    /// `Sx = 1/tan(fovX/2)`.
+    pub fn sx(&self) -> f64 {
+        1.0 / (self.fov_x_rad / 2.0).tan()
+    }
+
+    /// `Sy = 1/tan(fovY/2)` with `tan(fovY/2) = tan(fovX/2)/aspect`.
+    pub fn sy(&self) -> f64 {
+        self.sx() * self.aspect
+    }
+
+    pub fn fov_y_rad(&self) -> f64 {
+        2.0 * ((self.fov_x_rad / 2.0).tan() / self.aspect).atan()
+    }
+
+    /// The camera-frame ray (right, forward, up) through a screen point: `(x/Sx, 1, y/Sy)`.
+    pub fn ray(&self, screen: [f64; 2]) -> Vec3 {
+        Vec3::new(screen[0] / self.sx(), 1.0, screen[1] / self.sy())
+    }
+}
+
+/// Where a roll-free camera is and where it looks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraPose {
+    pub position_m: Vec3,
+    /// Counter-clockwise from +x.
+    pub heading_rad: f64,
+    /// Up positive.
+    pub pitch_rad: f64,
+}
+
+impl CameraPose {
+    pub fn forward(&self) -> Vec3 {
+        let (st, ct) = self.pitch_rad.sin_cos();
+        let (sp, cp) = self.heading_rad.sin_cos();
+        Vec3::new(ct * cp, ct * sp, st)
+    }
+
+    /// Horizontal: a roll-free camera's right never tilts.
+    pub fn right(&self) -> Vec3 {
+        let (sp, cp) = self.heading_rad.sin_cos();
+        Vec3::new(sp, -cp, 0.0)
+    }
+
+    pub fn up(&self) -> Vec3 {
+        self.right().cross(&self.forward())
+    }
+
+    /// Camera-frame coordinates (right, forward, up) of a world point.
+    pub fn to_camera(&self, point_m: &Vec3) -> Vec3 {
+        let d = point_m - self.position_m;
+        Vec3::new(
+            d.dot(&self.right()),
+            d.dot(&self.forward()),
+            d.dot(&self.up()),
+        )
+    }
+
+    /// Screen position of a world point, `None` when it is not in front of the camera.
+    /// Points outside the frame project outside [−1, 1]².
+    pub fn project(&self, lens: &Lens, point_m: &Vec3) -> Option<[f64; 2]> {
+        let c = self.to_camera(point_m);
+        if c.y <= 1e-9 {
+            return None;
+        }
+        Some([c.x * lens.sx() / c.y, c.z * lens.sy() / c.y])
+    }
+}
+
+/// The outcome of [`orient`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orientation {
+    pub heading_rad: f64,
+    pub pitch_rad: f64,
+    /// No roll-free orientation puts the target at the requested point (it is nearly
+    /// straight above or below): the pitch was clamped and the target lands elsewhere.
+    pub clamped: bool,
+}
+
+/// Heading and pitch that put `target_m`, seen from `position_m`, at `screen` (camera-math
+/// §4): `τ = asin(n·sin e / √(1 + y'²)) − atan(y')`, `ψ = b + atan2(x', cos τ − y'·sin τ)`.
+pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2]) -> Orientation {
+    let d = target_m - position_m;
+    let b = d.y.atan2(d.x);
+    let e = d.z.atan2(d.x.hypot(d.y));
+    let xp = screen[0] / lens.sx();
+    let yp = screen[1] / lens.sy();
+    let n = (1.0 + xp * xp + yp * yp).sqrt();
+    let arg = n * e.sin() / (1.0 + yp * yp).sqrt();
+    let clamped = !(-1.0..=1.0).contains(&arg);
+    let pitch = arg.clamp(-1.0, 1.0).asin() - yp.atan();
+    let heading = b + xp.atan2(pitch.cos() - yp * pitch.sin());
+    Orientation {
+        heading_rad: dronecine_grammar::vocab::wrap_angle_rad(heading),
+        pitch_rad: pitch,
+        clamped,
+    }
+}
+
+/// Heading only, for a camera whose pitch is fixed at `pitch_rad` (no gimbal): the target
+/// lands at the requested screen x; its screen y is whatever the altitude gives.
+pub fn orient_fixed_pitch(
+    lens: &Lens,
+    position_m: &Vec3,
+    target_m: &Vec3,
+    screen_x: f64,
+    pitch_rad: f64,
+) -> f64 {
+    // In the frame turned by the heading, the target's right and forward coordinates are
+    // (d·r, d·f); with pitch τ, forward f = cos τ·h + sin τ·dz where h is the horizontal
+    // component along the heading. Solve r·Sx = x·f for the heading.
+    let d = target_m - position_m;
+    let b = d.y.atan2(d.x);
+    let rho = d.x.hypot(d.y);
+    let xp = screen_x / lens.sx();
+    // Let δ = heading − bearing; r = ρ·sin δ, f = cos τ·ρ·cos δ + sin τ·dz.
+    // ρ sin δ = x' (cos τ ρ cos δ + sin τ dz)  →  ρ sin δ − x' cos τ ρ cos δ = x' sin τ dz.
+    let a = rho;
+    let c = -xp * pitch_rad.cos() * rho;
+    let rhs = xp * pitch_rad.sin() * d.z;
+    let amp = a.hypot(c);
+    if amp < 1e-12 {
+        return dronecine_grammar::vocab::wrap_angle_rad(b);
+    }
+    let phase = c.atan2(a);
+    let s = (rhs / amp).clamp(-1.0, 1.0);
+    let delta = s.asin() - phase;
+    dronecine_grammar::vocab::wrap_angle_rad(b + delta)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lens() -> Lens {
+        Lens {
+            fov_x_rad: 84f64.to_radians(),
+            aspect: 16.0 / 9.0,
+        }
+    }
+
+    #[test]
+    fn axes_are_right_handed_and_level() {
+        let pose = CameraPose {
+            position_m: Vec3::zeros(),
+            heading_rad: 0.7,
+            pitch_rad: -0.3,
+        };
+        let (r, f, u) = (pose.right(), pose.forward(), pose.up());
+        assert!((r.cross(&f) - u).norm() < 1e-12);
+        assert!(r.z.abs() < 1e-15, "no roll: right stays horizontal");
+        assert!(u.z > 0.0);
+        // Heading 0 looks along +x with +y on the left.
+        let level = CameraPose {
+            position_m: Vec3::zeros(),
+            heading_rad: 0.0,
+            pitch_rad: 0.0,
+        };
+        let p = level.project(&lens(), &Vec3::new(2.0, 0.5, 0.2)).unwrap();
+        assert!(p[0] < 0.0 && p[1] > 0.0, "{p:?}");
+    }
+
+    #[test]
+    fn orient_puts_the_target_where_asked() {
+        let lens = lens();
+        let c = Vec3::new(0.3, -2.0, 1.4);
+        for target in [
+            Vec3::new(0.0, 0.0, 1.5),
+            Vec3::new(-1.0, 1.0, 0.2),
+            Vec3::new(2.0, -1.0, 3.0),
+        ] {
+            for screen in [[0.0, 0.0], [-1.0 / 3.0, 0.2], [0.5, -0.4], [1.0 / 3.0, 0.6]] {
+                let o = orient(&lens, &c, &target, screen);
+                assert!(!o.clamped);
+                let pose = CameraPose {
+                    position_m: c,
+                    heading_rad: o.heading_rad,
+                    pitch_rad: o.pitch_rad,
+                };
+                let p = pose.project(&lens, &target).unwrap();
+                assert!(
+                    (p[0] - screen[0]).abs() < 1e-9 && (p[1] - screen[1]).abs() < 1e-9,
+                    "{target:?} {screen:?} → {p:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_pitch_heading_puts_the_target_at_x() {
+        let lens = lens();
+        let c = Vec3::new(1.0, 2.0, 1.0);
+        let target = Vec3::new(-1.0, 0.5, 1.6);
+        for x in [-0.5, -1.0 / 3.0, 0.0, 0.4] {
+            let heading = orient_fixed_pitch(&lens, &c, &target, x, 0.0);
+            let pose = CameraPose {
+                position_m: c,
+                heading_rad: heading,
+                pitch_rad: 0.0,
+            };
+            let p = pose.project(&lens, &target).unwrap();
+            assert!((p[0] - x).abs() < 1e-9, "{x} → {p:?}");
+        }
+    }
+
+    #[test]
+    fn lens_fov_y_follows_aspect() {
+        let l = lens();
+        assert!(((l.fov_y_rad() / 2.0).tan() - (l.fov_x_rad / 2.0).tan() / l.aspect).abs() < 1e-12);
+        assert!((l.sy() - 1.0 / (l.fov_y_rad() / 2.0).tan()).abs() < 1e-12);
+    }
+}
