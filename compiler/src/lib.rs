@@ -3,6 +3,9 @@
 //! Modules: `profile` (drone profiles), `camera` (lens, pose, projection, orientation: the
 //! camera conventions), `reference` (the output samples).
 
+pub mod blocking;
 pub mod camera;
+pub mod paths;
 pub mod profile;
 pub mod reference;
+pub mod steering;

@@ -1,0 +1,285 @@
+//! Steering behaviours (camera-math §5): the camera is a point mass pushed toward its manifold
+//! target, within the profile's limits, kept inside the stage and away from the actors.
+//!
+//! The state is position, velocity and acceleration; each tick chooses a jerk (bounded) and
+//! integrates it exactly, so velocity and acceleration are the derivatives of position by
+//! construction and the reference is C² with bounded jerk. The behaviour is arrival with
+//! feed-forward: `v_des = v_T + truncate(k_p·(p_T − p))` capped at the speed limit (the
+//! desired speed falls with the distance to the target, so the camera arrives without
+//! overshoot), `a_des = a_T + k_v·(v_des − v)` plus separation from the actors' safety
+//! cylinders and stage containment, capped at the acceleration limit. When the camera sits on
+//! a smooth, feasible target the feed-forward terms keep it there exactly.
+//!
+//! Heading is steered the same way one order down (rate and rate-of-rate limits), with the
+//! error wrapped to (−π, π] so the camera never turns the long way round.
+
+use dronecine_grammar::vocab::wrap_angle_rad;
+
+use crate::camera::Vec3;
+
+/// Limits of the reference, from the drone profile.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SteerLimits {
+    pub speed_h_mps: f64,
+    pub speed_v_mps: f64,
+    pub accel_h_mps2: f64,
+    pub accel_v_mps2: f64,
+    pub jerk_mps3: f64,
+    pub yaw_rate_radps: f64,
+    pub yaw_accel_radps2: f64,
+}
+
+/// Gains of the arrival behaviour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SteerGains {
+    /// Position error → desired velocity, 1/s.
+    pub k_p: f64,
+    /// Velocity error → desired acceleration, 1/s.
+    pub k_v: f64,
+    /// Heading error → desired yaw rate, 1/s.
+    pub k_heading: f64,
+    /// Yaw-rate error → yaw acceleration, 1/s.
+    pub k_heading_rate: f64,
+}
+
+impl Default for SteerGains {
+    fn default() -> SteerGains {
+        // Unsaturated, the loop is p̈ = k_v·(k_p·e − ṗ): ω² = k_p·k_v, ζ = √(k_v/k_p)/2 ≈ 1.2.
+        // Chosen by sweeping step responses under the ardrone2 limits (no overshoot from
+        // 0.3 m to 6 m steps with the jerk limit on).
+        SteerGains {
+            k_p: 1.0,
+            k_v: 6.0,
+            k_heading: 3.0,
+            k_heading_rate: 12.0,
+        }
+    }
+}
+
+/// Position, velocity and acceleration of the camera.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Kinematics {
+    pub p: Vec3,
+    pub v: Vec3,
+    pub a: Vec3,
+}
+
+/// Heading and its rate.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HeadingState {
+    pub heading_rad: f64,
+    pub rate_radps: f64,
+}
+
+/// Scale the horizontal part of `v` to at most `h` and the vertical part to at most `z`.
+pub fn truncate_hv(v: Vec3, h: f64, z: f64) -> Vec3 {
+    let n = v.x.hypot(v.y);
+    let s = if n > h && n > 0.0 { h / n } else { 1.0 };
+    Vec3::new(v.x * s, v.y * s, v.z.clamp(-z, z))
+}
+
+/// Scale a vector to at most `max` in length.
+pub fn truncate(v: Vec3, max: f64) -> Vec3 {
+    let n = v.norm();
+    if n > max && n > 0.0 {
+        v * (max / n)
+    } else {
+        v
+    }
+}
+
+/// One tick of the arrival behaviour toward `target` (its position, velocity and
+/// acceleration), with `extra` accelerations (separation, containment) added before the
+/// limits. Integrates the chosen jerk exactly over `dt_s`.
+pub fn step(
+    state: &Kinematics,
+    target: &Kinematics,
+    extra: Vec3,
+    limits: &SteerLimits,
+    gains: &SteerGains,
+    dt_s: f64,
+) -> Kinematics {
+    // Arrival: the closing speed falls linearly near the target and never exceeds what
+    // the camera can still brake from (√(2·a·d), with a margin for the jerk ramp).
+    let e = target.p - state.p;
+    let d = e.norm();
+    let brake = (2.0 * 0.4 * limits.accel_h_mps2.min(limits.accel_v_mps2) * d).sqrt();
+    let closing = truncate(gains.k_p * e, brake);
+    let v_des = target.v + closing;
+    let v_des = truncate_hv(v_des, limits.speed_h_mps, limits.speed_v_mps);
+    // The velocity the camera reaches if its acceleration is taken to zero at full jerk:
+    // steering on it instead of on v keeps a jerk-limited camera from overshooting.
+    let v_pred = state.v + state.a * (state.a.norm() / (2.0 * limits.jerk_mps3));
+    let a_des = target.a + gains.k_v * (v_des - v_pred) + extra;
+    let a_des = truncate_hv(a_des, limits.accel_h_mps2, limits.accel_v_mps2);
+    let jerk = truncate((a_des - state.a) / dt_s, limits.jerk_mps3);
+    let (dt2, dt3) = (dt_s * dt_s, dt_s * dt_s * dt_s);
+    Kinematics {
+        p: state.p + state.v * dt_s + state.a * (dt2 / 2.0) + jerk * (dt3 / 6.0),
+        v: state.v + state.a * dt_s + jerk * (dt2 / 2.0),
+        a: state.a + jerk * dt_s,
+    }
+}
+
+/// One tick of heading steering toward `target_rad` turning at `target_rate_radps`.
+pub fn step_heading(
+    state: &HeadingState,
+    target_rad: f64,
+    target_rate_radps: f64,
+    limits: &SteerLimits,
+    gains: &SteerGains,
+    dt_s: f64,
+) -> HeadingState {
+    let err = wrap_angle_rad(target_rad - state.heading_rad);
+    let rate_des = (target_rate_radps + gains.k_heading * err)
+        .clamp(-limits.yaw_rate_radps, limits.yaw_rate_radps);
+    let acc = (gains.k_heading_rate * (rate_des - state.rate_radps))
+        .clamp(-limits.yaw_accel_radps2, limits.yaw_accel_radps2);
+    HeadingState {
+        heading_rad: wrap_angle_rad(
+            state.heading_rad + state.rate_radps * dt_s + acc * dt_s * dt_s / 2.0,
+        ),
+        rate_radps: state.rate_radps + acc * dt_s,
+    }
+}
+
+/// Separation from actors (camera-math §5): a push away from each actor's body axis when
+/// the camera is closer than `radius_m` horizontally (and not above the actor's head),
+/// growing as `gain·(radius − d)/d` (m/s²; `gain` at d = radius/2).
+pub fn separation(p: &Vec3, axes: &[(Vec3, f64)], radius_m: f64, gain: f64) -> Vec3 {
+    let mut f = Vec3::zeros();
+    for (feet, height) in axes {
+        if p.z > feet.z + height + radius_m {
+            continue;
+        }
+        let d = Vec3::new(p.x - feet.x, p.y - feet.y, 0.0);
+        let n = d.norm();
+        if n < radius_m && n > 1e-6 {
+            f += d / n * (gain * (radius_m - n) / n);
+        }
+    }
+    f
+}
+
+/// Containment: a spring pushing back inside the box `[lo, hi]` when the camera is outside.
+pub fn containment(p: &Vec3, lo: &Vec3, hi: &Vec3, stiffness: f64) -> Vec3 {
+    let mut f = Vec3::zeros();
+    for i in 0..3 {
+        if p[i] < lo[i] {
+            f[i] = stiffness * (lo[i] - p[i]);
+        } else if p[i] > hi[i] {
+            f[i] = stiffness * (hi[i] - p[i]);
+        }
+    }
+    f
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limits() -> SteerLimits {
+        SteerLimits {
+            speed_h_mps: 1.8,
+            speed_v_mps: 0.7,
+            accel_h_mps2: 1.0,
+            accel_v_mps2: 1.0,
+            jerk_mps3: 2.0,
+            yaw_rate_radps: 1.5,
+            yaw_accel_radps2: 3.0,
+        }
+    }
+
+    #[test]
+    fn arrives_without_overshoot_and_within_limits() {
+        let lim = limits();
+        let gains = SteerGains::default();
+        let target = Kinematics {
+            p: Vec3::new(3.0, 0.0, 0.5),
+            ..Default::default()
+        };
+        let mut s = Kinematics::default();
+        let dt = 0.01;
+        let mut prev = s;
+        for k in 0..2000 {
+            s = step(&s, &target, Vec3::zeros(), &lim, &gains, dt);
+            assert!(
+                s.v.x.hypot(s.v.y) <= lim.speed_h_mps + 1e-9,
+                "tick {k}: {:?}",
+                s.v
+            );
+            assert!(s.a.x.hypot(s.a.y) <= lim.accel_h_mps2 + 1e-9);
+            assert!(((s.a - prev.a) / dt).norm() <= lim.jerk_mps3 + 1e-9);
+            assert!(
+                s.p.x <= 3.0 + 1e-3 && s.p.z <= 0.5 + 1e-3,
+                "overshoot {}",
+                s.p.x
+            );
+            // v and a are the derivatives of p: the exact integration makes the mean
+            // velocity over the tick equal to the position increment.
+            let mean_v = (s.p - prev.p) / dt;
+            assert!((mean_v - (prev.v + s.v) / 2.0).norm() < 1e-3);
+            prev = s;
+        }
+        assert!((s.p - target.p).norm() < 1e-3, "{:?}", s.p);
+    }
+
+    #[test]
+    fn a_tracked_smooth_target_is_held_exactly() {
+        let lim = limits();
+        let gains = SteerGains::default();
+        let dt = 0.01;
+        let w = 0.3;
+        let at = |t: f64| Kinematics {
+            p: Vec3::new((w * t).cos(), (w * t).sin(), 1.0),
+            v: Vec3::new(-w * (w * t).sin(), w * (w * t).cos(), 0.0),
+            a: Vec3::new(-w * w * (w * t).cos(), -w * w * (w * t).sin(), 0.0),
+        };
+        let mut s = at(0.0);
+        let mut worst: f64 = 0.0;
+        for k in 1..3000 {
+            s = step(&s, &at(k as f64 * dt - dt), Vec3::zeros(), &lim, &gains, dt);
+            worst = worst.max((s.p - at(k as f64 * dt).p).norm());
+        }
+        assert!(worst < 2e-3, "{worst}");
+    }
+
+    #[test]
+    fn heading_turns_the_short_way() {
+        let lim = limits();
+        let gains = SteerGains::default();
+        let mut h = HeadingState {
+            heading_rad: 170f64.to_radians(),
+            rate_radps: 0.0,
+        };
+        let target = (-170f64).to_radians();
+        for _ in 0..300 {
+            h = step_heading(&h, target, 0.0, &lim, &gains, 0.01);
+            assert!(
+                h.rate_radps >= -1e-9,
+                "turned the long way: {}",
+                h.rate_radps
+            );
+            assert!(h.rate_radps <= lim.yaw_rate_radps + 1e-9);
+        }
+        assert!(wrap_angle_rad(h.heading_rad - target).abs() < 1e-3);
+    }
+
+    #[test]
+    fn separation_pushes_away_and_containment_pushes_in() {
+        let axes = [(Vec3::new(0.0, 0.0, 0.0), 1.8)];
+        let f = separation(&Vec3::new(0.3, 0.0, 1.5), &axes, 0.5, 1.0);
+        assert!(f.x > 0.0 && f.y.abs() < 1e-12);
+        assert_eq!(
+            separation(&Vec3::new(0.6, 0.0, 1.5), &axes, 0.5, 1.0),
+            Vec3::zeros()
+        );
+        let c = containment(
+            &Vec3::new(4.2, 0.0, -0.1),
+            &Vec3::new(-4.0, -3.0, 0.3),
+            &Vec3::new(4.0, 3.0, 2.7),
+            2.0,
+        );
+        assert!(c.x < 0.0 && c.z > 0.0 && c.y == 0.0);
+    }
+}
