@@ -4,5 +4,9 @@
 //! camera conventions), `reference` (the output samples).
 
 pub mod camera;
+pub mod framing;
 pub mod profile;
 pub mod reference;
+pub mod size;
+pub mod sphere;
+pub mod toric;
