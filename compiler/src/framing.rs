@@ -515,7 +515,7 @@ impl Pair {
         let screen_a = [xa, sa.screen_y.unwrap_or(0.0)];
         let screen_b = [xb, sb.screen_y.unwrap_or(0.0)];
         let alpha = toric::alpha_from_screens(lens, screen_a, screen_b);
-        if !(alpha > 1e-9) {
+        if alpha.is_nan() || alpha <= 1e-9 {
             return Err(FramingError::ScreensCoincide);
         }
         Ok(Pair {
@@ -596,6 +596,49 @@ impl Pair {
         )
     }
 
+    /// Refine θ so the sized actor's distance uses the camera's actual elevation seen from
+    /// that actor (the exact variant of §1 depends on it; φ turns about AB, so the elevation
+    /// is not φ): a few fixed-point steps, each keeping the root nearest the previous θ.
+    fn refine_theta(&self, lens: &Lens, theta: f64, phi: f64, sized: Primary) -> f64 {
+        if self.level {
+            return theta;
+        }
+        let (m, band, screen) = match sized {
+            Primary::A => (self.ma, self.band_a, self.screen_a),
+            Primary::B => (self.mb, self.band_b, self.screen_b),
+        };
+        let mut theta = theta;
+        for _ in 0..6 {
+            let v = Toric {
+                alpha_rad: self.alpha,
+                theta_rad: theta,
+                phi_rad: phi,
+            };
+            let Ok(c) = toric::position(&self.ma, &self.mb, &v) else {
+                break;
+            };
+            let to_c = c - m;
+            let elevation = to_c.z.atan2(to_c.xy().norm());
+            let Some(d) =
+                band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, elevation, false)
+            else {
+                break;
+            };
+            let roots = match sized {
+                Primary::A => toric::theta_for_distance_to_a(self.alpha, self.ab(), d),
+                Primary::B => toric::theta_for_distance_to_b(self.alpha, self.ab(), d),
+            };
+            match roots
+                .into_iter()
+                .min_by(|x, y| (x - theta).abs().total_cmp(&(y - theta).abs()))
+            {
+                Some(t) => theta = t,
+                None => break,
+            }
+        }
+        theta
+    }
+
     /// φ on the side of the screen order, at the requested elevation.
     fn side_phi(&self) -> f64 {
         if self.a_left() {
@@ -653,6 +696,7 @@ fn solve_together(
         .into_iter()
         .min_by(|x, y| (x.0 - symmetric).abs().total_cmp(&(y.0 - symmetric).abs()))
         .ok_or(FramingError::SizeUnreachable { size: size_ })?;
+    let theta = pair.refine_theta(lens, theta, phi, primary);
     Ok(pair.visual(
         Toric {
             alpha_rad: alpha,
@@ -696,8 +740,8 @@ fn solve_over_shoulder(
     };
     let Some((origin, u)) = target else {
         // No profile: the side of the screen order, the root nearer the foreground actor.
-        let theta = *thetas.last().expect("non-empty");
         let phi = pair.side_phi();
+        let theta = pair.refine_theta(lens, thetas[thetas.len() - 1], phi, Primary::B);
         return Ok(pair.visual(
             Toric {
                 alpha_rad: alpha,
@@ -743,6 +787,7 @@ fn solve_over_shoulder(
     let (theta, phi, _) = best_in(lo, hi);
     let phi = wrap_angle_rad(phi);
     pair.agree_with_side(phi)?;
+    let theta = pair.refine_theta(lens, theta, phi, Primary::B);
     Ok(pair.visual(
         Toric {
             alpha_rad: alpha,
@@ -795,6 +840,41 @@ fn aim(
     }
 }
 
+/// The world point a visual aims exactly from `c`, and its screen point: one actor, the band's
+/// bisector point at [`size::band_aim_screen`] (the band centre at its screen point for a
+/// fixed-pitch camera); two actors, the primary's band centre; a blend, the two ends' targets
+/// interpolated (point and screen), which keeps the orientation continuous along the move
+/// (and exact for an actor that is the aimed one at both ends).
+fn aim_target(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    c: &Vec3,
+) -> (Vec3, [f64; 2]) {
+    match v {
+        Visual::One(o) => {
+            let p = &actors[o.actor];
+            if fixed_pitch(gimbal) {
+                (band_centre(p, o.band_m), o.screen)
+            } else {
+                let q = size::bisector_point(
+                    c,
+                    &band_point(p, o.band_m[1]),
+                    &band_point(p, o.band_m[0]),
+                );
+                (q, size::band_aim_screen(lens, o.screen))
+            }
+        }
+        Visual::Two(t) => primary_target(t, actors),
+        Visual::Blend { from, to, s } => {
+            let (p0, s0) = aim_target(from, actors, lens, gimbal, c);
+            let (p1, s1) = aim_target(to, actors, lens, gimbal, c);
+            (p0 + (p1 - p0) * *s, lerp2(s0, s1, *s))
+        }
+    }
+}
+
 /// Heading and pitch for a visual seen from `c`.
 fn orient_visual(
     v: &Visual,
@@ -803,33 +883,8 @@ fn orient_visual(
     gimbal: &Gimbal,
     c: &Vec3,
 ) -> (f64, f64, Flags) {
-    match v {
-        Visual::One(o) => {
-            let p = &actors[o.actor];
-            if fixed_pitch(gimbal) {
-                aim(lens, gimbal, c, &band_centre(p, o.band_m), o.screen)
-            } else {
-                let q = size::bisector_point(
-                    c,
-                    &band_point(p, o.band_m[1]),
-                    &band_point(p, o.band_m[0]),
-                );
-                aim(lens, gimbal, c, &q, size::band_aim_screen(lens, o.screen))
-            }
-        }
-        Visual::Two(t) => {
-            let (target, screen) = primary_target(t, actors);
-            aim(lens, gimbal, c, &target, screen)
-        }
-        Visual::Blend { from, to, s } => match resolve_toric_blend(from, to, *s, actors, lens) {
-            Some(t) => orient_visual(&Visual::Two(t), actors, lens, gimbal, c),
-            None => {
-                let (h0, p0, f0) = orient_visual(from, actors, lens, gimbal, c);
-                let (h1, p1, f1) = orient_visual(to, actors, lens, gimbal, c);
-                (lerp_angle(h0, h1, *s), lerp(p0, p1, *s), f0.union(f1))
-            }
-        },
-    }
+    let (target, screen) = aim_target(v, actors, lens, gimbal, c);
+    aim(lens, gimbal, c, &target, screen)
 }
 
 fn primary_target(t: &TwoVisual, actors: &[ActorPose]) -> (Vec3, [f64; 2]) {
@@ -856,12 +911,31 @@ pub fn place(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> 
         Visual::One(o) => place_one(o, actors, lens, gimbal),
         Visual::Two(t) => place_two(t, actors, lens, gimbal),
         Visual::Blend { from, to, s } => {
-            if let Some(t) = resolve_toric_blend(from, to, *s, actors, lens) {
-                return place_two(&t, actors, lens, gimbal);
-            }
-            // Cylindrical blend about the actors involved.
             let p0 = place(from, actors, lens, gimbal);
             let p1 = place(to, actors, lens, gimbal);
+            if let Some(mut c) = toric_blend_position(from, to, *s, actors) {
+                if fixed_pitch(gimbal) {
+                    // Level camera: blend the ends' altitude corrections (place_two).
+                    let correction = |p: &Placement, v: &Visual| match v {
+                        Visual::Two(t) => toric::position(
+                            &band_centre(&actors[t.a], t.band_a_m),
+                            &band_centre(&actors[t.b], t.band_b_m),
+                            &t.toric,
+                        )
+                        .map_or(0.0, |c| p.position_m.z - c.z),
+                        _ => 0.0,
+                    };
+                    c.z += lerp(correction(&p0, from), correction(&p1, to), *s);
+                }
+                let (heading_rad, pitch_rad, f) = orient_visual(v, actors, lens, gimbal, &c);
+                return Placement {
+                    position_m: c,
+                    heading_rad,
+                    pitch_rad,
+                    flags: f.union(p0.flags).union(p1.flags),
+                };
+            }
+            // Cylindrical blend about the actors involved.
             let points: Vec<Vec3> = aim_points(v, actors).into_iter().map(|(_, p)| p).collect();
             let centre = points.iter().sum::<Vec3>() / points.len().max(1) as f64;
             let cyl = |p: &Vec3| {
@@ -996,15 +1070,12 @@ pub fn swap_pair(t: &TwoVisual) -> TwoVisual {
     }
 }
 
-/// A blend of two two-actor visuals of the same pair, evaluated as the §3 toric interpolation
-/// against the current poses and put back on the torus of the interpolated α.
-fn resolve_toric_blend(
-    from: &Visual,
-    to: &Visual,
-    s: f64,
-    actors: &[ActorPose],
-    _lens: &Lens,
-) -> Option<TwoVisual> {
+/// The position of a blend of two two-actor visuals of the same pair (in either order): the
+/// §3 toric interpolation against the current poses, about the aim points of the interpolated
+/// bands (the midpoint of the two candidates is used as is: it is near, not on, the torus of
+/// the interpolated α, and never collapses onto an actor the way a projection onto the torus
+/// does when the move crosses the line of action). `None` for any other blend.
+fn toric_blend_position(from: &Visual, to: &Visual, s: f64, actors: &[ActorPose]) -> Option<Vec3> {
     let (Visual::Two(t0), Visual::Two(t1)) = (from, to) else {
         return None;
     };
@@ -1015,14 +1086,11 @@ fn resolve_toric_blend(
     } else {
         return None;
     };
-    let band_a = lerp2(t0.band_a_m, t1.band_a_m, s);
-    let band_b = lerp2(t0.band_b_m, t1.band_b_m, s);
-    let ma = band_centre(&actors[t0.a], band_a);
-    let mb = band_centre(&actors[t0.b], band_b);
+    let ma = band_centre(&actors[t0.a], lerp2(t0.band_a_m, t1.band_a_m, s));
+    let mb = band_centre(&actors[t0.b], lerp2(t0.band_b_m, t1.band_b_m, s));
     let c0 = toric::position(&ma, &mb, &t0.toric).ok()?;
     let c1 = toric::position(&ma, &mb, &t1.toric).ok()?;
-    let alpha = lerp(t0.toric.alpha_rad, t1.toric.alpha_rad, s);
-    let c = toric::interpolate(
+    Some(toric::interpolate(
         &ma,
         &mb,
         &c0,
@@ -1030,29 +1098,7 @@ fn resolve_toric_blend(
         t0.toric.alpha_rad,
         t1.toric.alpha_rad,
         s,
-    );
-    let back = toric::inverse(&ma, &mb, &c).ok()?;
-    let max_theta = 2.0 * (PI - alpha);
-    let toric = Toric {
-        alpha_rad: alpha,
-        theta_rad: back
-            .theta_rad
-            .clamp(1e-6 * max_theta, (1.0 - 1e-6) * max_theta),
-        phi_rad: back.phi_rad,
-    };
-    let dominant = if s < 0.5 { t0 } else { &t1 };
-    Some(TwoVisual {
-        a: t0.a,
-        b: t0.b,
-        toric,
-        screen_a: lerp2(t0.screen_a, t1.screen_a, s),
-        screen_b: lerp2(t0.screen_b, t1.screen_b, s),
-        band_a_m: band_a,
-        band_b_m: band_b,
-        primary: dominant.primary,
-        elevation_rad: lerp(t0.elevation_rad, t1.elevation_rad, s),
-        over_shoulder: dominant.over_shoulder,
-    })
+    ))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1063,14 +1109,17 @@ fn resolve_toric_blend(
 /// - Same single actor: linear in distance, band, elevation and screen, azimuth the short way
 ///   round (wrapped).
 /// - Otherwise a [`Visual::Blend`], evaluated by [`place`] against the current poses:
-///   - two visuals of the same pair (in either order): the §3 toric interpolation (per-actor
-///     yaw/elevation/distance, pulled onto the torus of the linearly interpolated α, midpoint
-///     of the two candidates), put back on that torus (θ clamped inside its range); screens
-///     and bands linear; the primary actor is that of the nearer end;
+///   - two visuals of the same pair (in either order): the position is the §3 toric
+///     interpolation (per-actor yaw/elevation/distance, pulled toward the torus of the linearly
+///     interpolated α, midpoint of the two candidates), about the aim points of the linearly
+///     interpolated bands;
 ///   - anything else (different actors, one ↔ two actors): both ends are placed and the
 ///     position is interpolated in cylindrical coordinates (radius, angle the short way,
-///     height) about the centroid of the aim points of every actor involved; the heading and
-///     pitch blend those that each end's aim would give from that position.
+///     height) about the centroid of the aim points of every actor involved.
+///
+///   In both cases the camera aims the interpolation of the two ends' aimed points at the
+///   interpolation of their screen points (continuous; exact for an actor aimed at both ends),
+///   and the flags are those of both ends plus the blend's own.
 pub fn interpolate(a: &Visual, b: &Visual, s: f64) -> Visual {
     let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
     if s == 0.0 {
@@ -1136,9 +1185,9 @@ pub fn aim_points(v: &Visual, actors: &[ActorPose]) -> Vec<(usize, Vec3)> {
 ///
 /// One actor: the band's bisector point seen from the camera and [`size::band_aim_screen`]
 /// (for a fixed-pitch camera the band centre at the requested screen point: both land
-/// exactly). Two actors: the band centres at their screen points. Blend: the toric blend's
-/// targets; otherwise actors at both ends interpolated (point and screen), an actor at one end
-/// only listed while that end dominates (s < 0.5 for `from`).
+/// exactly). Two actors: the band centres at their screen points. Blend: actors at both ends
+/// interpolated (point and screen), an actor at one end only listed while that end dominates
+/// (s < 0.5 for `from`).
 pub fn screen_targets(
     v: &Visual,
     actors: &[ActorPose],
@@ -1183,9 +1232,6 @@ pub fn screen_targets(
             },
         ],
         Visual::Blend { from, to, s } => {
-            if let Some(t) = resolve_toric_blend(from, to, *s, actors, lens) {
-                return screen_targets(&Visual::Two(t), actors, lens, gimbal, camera_m);
-            }
             let t0 = screen_targets(from, actors, lens, gimbal, camera_m);
             let t1 = screen_targets(to, actors, lens, gimbal, camera_m);
             let mut out = Vec::new();

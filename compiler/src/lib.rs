@@ -1,7 +1,9 @@
 //! The compiler: from a resolved PSL `Script` to the timed 6D reference a drone flies.
 //!
 //! Modules: `profile` (drone profiles), `camera` (lens, pose, projection, orientation: the
-//! camera conventions), `reference` (the output samples).
+//! camera conventions), `reference` (the output samples), `size` (shot size → band →
+//! distance), `sphere` and `toric` (the one- and two-actor manifolds), `framing` (composition →
+//! visual parameters → camera placement).
 
 pub mod camera;
 pub mod framing;

@@ -84,6 +84,11 @@ pub fn frame(a_m: &Vec3, b_m: &Vec3) -> Result<Frame, ToricError> {
     })
 }
 
+/// Positive and finite (false for NaN).
+fn positive(x: f64) -> bool {
+    x > 0.0 && x.is_finite()
+}
+
 fn check_alpha(alpha_rad: f64) -> Result<(), ToricError> {
     if alpha_rad > 0.0 && alpha_rad < PI {
         Ok(())
@@ -146,7 +151,7 @@ fn keep_valid(alpha_rad: f64, mut thetas: Vec<f64>) -> Vec<f64> {
 /// θ = π − 2α ± 2β' with β' = arccos(d/2r), kept in (0, 2(π − α)). Empty when no point of the
 /// torus is that far from A (d above 2r when α < π/2, above |AB| otherwise).
 pub fn theta_for_distance_to_a(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Vec<f64> {
-    if check_alpha(alpha_rad).is_err() || !(distance_m > 0.0) || !(ab_m > 0.0) {
+    if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(ab_m) {
         return Vec::new();
     }
     let ratio = distance_m / (2.0 * radius_m(ab_m, alpha_rad));
@@ -166,7 +171,7 @@ pub fn theta_for_distance_to_a(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Ve
 /// Every θ at which the camera is `distance_m` from B: `sin(θ/2) = d/(2r)`, θ = π ∓ 2β',
 /// kept in (0, 2(π − α)).
 pub fn theta_for_distance_to_b(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Vec<f64> {
-    if check_alpha(alpha_rad).is_err() || !(distance_m > 0.0) || !(ab_m > 0.0) {
+    if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(ab_m) {
         return Vec::new();
     }
     let ratio = distance_m / (2.0 * radius_m(ab_m, alpha_rad));
@@ -199,13 +204,19 @@ pub fn vantage_position(a_m: &Vec3, b_m: &Vec3, alpha_rad: f64, u: &Vec3) -> Opt
     Some(a_m + u.normalize() * d)
 }
 
+/// Width of the band of directions, next to the edge of the torus (∠(XY, u) → π − α, where
+/// the toric distance falls to 0), over which [`interpolate`] fades the pull toward the toric
+/// distance out, so that the interpolated position stays continuous.
+pub const PULL_FADE_RAD: f64 = 0.2;
+
 /// Interpolation between two toric viewpoints `c0` (angle `alpha0_rad`) and `c1`
 /// (`alpha1_rad`) of the same actors A and B at parameter `s` ∈ [0, 1] (§3, Lino & Christie
 /// 2015): for each actor X, the yaw of C − X is interpolated the short way round, its
-/// elevation and length linearly; α is linear in s; the length is then replaced by the toric
-/// distance for the current α along that direction (the full pull; the linear length is kept
-/// where the direction leaves the torus, ∠(XY, u) ≥ π − α); the result is the midpoint of the
-/// two candidates, from A and from B. The endpoints are `c0` and `c1` exactly when they lie on
+/// elevation and length linearly; α is linear in s; the length is then pulled toward the toric
+/// distance for the current α along that direction (fully, except within [`PULL_FADE_RAD`] of
+/// the edge of the torus, where the pull fades linearly to none so the path stays continuous;
+/// the linear length beyond the edge); the result is the midpoint of the two candidates, from
+/// A and from B. The endpoints are `c0` and `c1` exactly when they lie on
 /// their tori.
 pub fn interpolate(
     a_m: &Vec3,
@@ -228,7 +239,14 @@ pub fn interpolate(
         let el = el0 + (el1 - el0) * s;
         let u = Vec3::new(el.cos() * yaw.cos(), el.cos() * yaw.sin(), el.sin());
         let linear = v0.norm() + (v1.norm() - v0.norm()) * s;
-        let d = toric_distance_m(x, y, alpha, &u).unwrap_or(linear);
+        let d = match toric_distance_m(x, y, alpha, &u) {
+            Some(toric) => {
+                let margin = PI - alpha - (y - x).angle(&u);
+                let w = (margin / PULL_FADE_RAD).clamp(0.0, 1.0);
+                linear + (toric - linear) * w
+            }
+            None => linear,
+        };
         x + u * d
     };
     (candidate(a_m, b_m) + candidate(b_m, a_m)) / 2.0
