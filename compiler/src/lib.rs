@@ -1,11 +1,17 @@
 //! The compiler: from a resolved PSL `Script` to the timed 6D reference a drone flies.
 //!
 //! Modules: `profile` (drone profiles), `camera` (lens, pose, projection, orientation: the
-//! camera conventions), `reference` (the output samples).
+//! camera conventions), `reference` (the output samples), `size` (shot size → band →
+//! distance), `sphere` and `toric` (the one- and two-actor manifolds), `framing` (composition →
+//! visual parameters → camera placement).
 
 pub mod blocking;
 pub mod camera;
+pub mod framing;
 pub mod paths;
 pub mod profile;
 pub mod reference;
+pub mod size;
+pub mod sphere;
 pub mod steering;
+pub mod toric;

@@ -1,0 +1,1325 @@
+//! From a PSL composition to a camera placement: the public API the timeline calls every tick.
+//!
+//! - [`solve`] turns a [`Composition`] and the actors' current poses into a [`Visual`]: the
+//!   composition's visual parameters expressed relative to the actors (sphere coordinates
+//!   about one actor, toric coordinates about a pair), so that holding a `Visual` while the
+//!   actors move keeps the framing, and a transition interpolates parameters, not positions.
+//! - [`place`] turns a `Visual` and the actors' poses into a camera position, heading and
+//!   pitch, with [`Flags`] for what the drone cannot render.
+//! - [`interpolate`] blends two `Visual`s for a camera move.
+//! - [`screen_targets`] gives each framed actor's world point and requested screen point (the
+//!   framing-error metric); [`body_axis_distances_m`] the camera's distance to each actor's
+//!   body axis (safety); [`velocity_mps`] the feed-forward camera velocity of a held `Visual`.
+//!
+//! Conventions (camera-math §1–§4):
+//! - **Aim points.** Each framed actor has a band (its size, §1) `[bottom, top]` above the
+//!   feet; the band centre M is the aim point of the sphere and torus. A requested screen point
+//!   `(x, y)` means: the band spans the frame height with its centre at `(x, y)` (default
+//!   `y = 0`: the band fills the frame; its ends land at `y ± 1`).
+//! - **One actor** (`MS on A 34left screen right`): `C = M + d·û(h + θ, φ)`, θ the profile
+//!   azimuth (default front), φ the camera-angle elevation ([`sphere::elevation_rad`]), d the
+//!   exact distance of §1 (the band subtends the angle between the rays through `(x, y ± 1)`).
+//!   The camera aims the band's *bisector point* Q (the point of the band seen halfway between
+//!   its ends, [`size::bisector_point`]) at [`size::band_aim_screen`]; Q lands there exactly,
+//!   and for `x = 0` the band's top and bottom land exactly on `y ± 1` whatever the elevation.
+//!   (Q = M for a level camera with `y = 0`.) Off-centre (`x ≠ 0`) with a pitched camera a
+//!   vertical band is seen slightly slanted: its ends land within about 0.02 of `(x, y ± 1)`.
+//! - **Fixed-pitch camera** (`Gimbal::None`): the camera is level; it stays on the sphere's
+//!   vertical half-plane θ at horizontal distance `d = h·Sy·√(1 + x'²)` (h the half band,
+//!   `x' = x/Sx`) and at the altitude `M_z − y·h` that puts M at `y`: the band then spans
+//!   `[y − 1, y + 1]` exactly at any `x`. A non-zero elevation cannot be rendered:
+//!   [`Flags::angle_not_rendered`].
+//! - **Two actors in one framing** (`MS on A and B`): A at x = −1/3, B at +1/3 unless screen
+//!   positions say otherwise; α from the two screen points; φ = elevation on the φ = 0 side
+//!   (A left) or π − elevation on the far side (A right); θ so that the *nearer* actor has its
+//!   size (§3 distance constraints, both actors tried, the root nearest the symmetric
+//!   θ = π − α kept). If the first subject has a profile, the vantage formula gives (θ, φ)
+//!   instead and the size is not kept. Primary actor (aimed exactly) = the sized actor, or the
+//!   first subject when a profile was used.
+//! - **Over the shoulder** (two framings, foreground then background): toric pair (A =
+//!   foreground, B = background); θ ∈ the two roots of the background distance constraint, so
+//!   the background actor's size is exact; φ (and the root) minimise the angle between C − A
+//!   and the foreground's profile direction (or, without one, C − B and the background's
+//!   profile direction; without either, φ = elevation on the side of the screen order and the
+//!   root nearer the foreground actor). Screens are exact up to the roll-free error below; the
+//!   profile holds as well as the torus allows. Primary = background actor.
+//! - **Two-actor orientation** (no roll, §4): the primary's aim point lands exactly at its
+//!   screen point (heading and pitch from [`orient`]); the other actor lands exactly too when
+//!   both aim points are at the camera's height (equal heights and φ = 0 or π, e.g. eye-level
+//!   two-shots of equal-height actors, any θ); otherwise its error is that of §4 (≈ 0.28 in
+//!   screen y at φ = 20°, θ = (π − α)/2 with a 43° lens). Default screen y's are 0.
+//! - **Default screens** follow the side: when no screen x is given and the profile puts the
+//!   camera across the line of action, the defaults swap (A right, B left) so a roll-free
+//!   camera can show them; explicit screens that a roll-free camera cannot show from the
+//!   profile's side are an error ([`FramingError::ScreenSideConflict`]).
+//!
+//! Holding a two-actor `Visual` keeps (α, θ, φ): as the actors move apart the distances scale.
+//! Re-solve each tick to keep the size exact; interpolate from the held `Visual` to a re-solved
+//! one to change it smoothly.
+
+use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
+use crate::profile::Gimbal;
+use crate::reference::ActorPose;
+use crate::toric::Toric;
+use crate::{size, sphere, toric};
+use dronecine_grammar::script::{Composition, Subject};
+use dronecine_grammar::vocab::{wrap_angle_rad, Size};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// The visual parameters of a composition solved against actor poses.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Visual {
+    One(OneVisual),
+    Two(TwoVisual),
+    /// A camera move between two visuals that cannot be blended without the actors' poses
+    /// (different actors, one ↔ two actors, two-actor toric interpolation). [`place`]
+    /// evaluates it against the current poses (see [`interpolate`]).
+    Blend {
+        from: Box<Visual>,
+        to: Box<Visual>,
+        s: f64,
+    },
+}
+
+/// One actor on the sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OneVisual {
+    /// Index into the actors slice.
+    pub actor: usize,
+    /// From the band centre to the camera (horizontal for a fixed-pitch camera).
+    pub distance_m: f64,
+    /// θ, relative to the actor's facing, counter-clockwise (psl.md §3), in (−π, π].
+    pub azimuth_rad: f64,
+    /// φ, the requested camera-angle elevation (not rendered by a fixed-pitch camera).
+    pub elevation_rad: f64,
+    /// Requested screen point of the band centre.
+    pub screen: [f64; 2],
+    /// Framed band `[bottom, top]` above the actor's feet.
+    pub band_m: [f64; 2],
+}
+
+/// Which actor of a pair the roll-free camera aims exactly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Primary {
+    A,
+    B,
+}
+
+/// Two actors on the torus: A and B are the toric pair (A the first subject, or the
+/// foreground actor of an over-the-shoulder composition).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TwoVisual {
+    pub a: usize,
+    pub b: usize,
+    /// (α, θ, φ) about the aim points (band centres) of A and B.
+    pub toric: Toric,
+    pub screen_a: [f64; 2],
+    pub screen_b: [f64; 2],
+    pub band_a_m: [f64; 2],
+    pub band_b_m: [f64; 2],
+    pub primary: Primary,
+    /// The requested camera-angle elevation (for the fixed-pitch flag).
+    pub elevation_rad: f64,
+    pub over_shoulder: bool,
+}
+
+/// What [`place`] could not render exactly.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Flags {
+    /// A non-level camera angle asked of a fixed-pitch camera: rendered level.
+    pub angle_not_rendered: bool,
+    /// The pitch left the gimbal's range and was clamped (the aim point lands off its y).
+    pub pitch_clamped: bool,
+    /// No roll-free orientation puts the aim point at its screen point (nearly straight above
+    /// or below): clamped by [`orient`].
+    pub orientation_clamped: bool,
+    /// The geometry is degenerate (actors coincide or are vertically aligned, or an actor
+    /// index is out of range): a fallback placement.
+    pub degenerate: bool,
+}
+
+impl Flags {
+    fn union(self, o: Flags) -> Flags {
+        Flags {
+            angle_not_rendered: self.angle_not_rendered || o.angle_not_rendered,
+            pitch_clamped: self.pitch_clamped || o.pitch_clamped,
+            orientation_clamped: self.orientation_clamped || o.orientation_clamped,
+            degenerate: self.degenerate || o.degenerate,
+        }
+    }
+
+    pub fn any(&self) -> bool {
+        self.angle_not_rendered || self.pitch_clamped || self.orientation_clamped || self.degenerate
+    }
+}
+
+/// A camera placement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub position_m: Vec3,
+    /// Counter-clockwise from +x, wrapped to (−π, π].
+    pub heading_rad: f64,
+    /// Up positive; 0 for a fixed-pitch camera.
+    pub pitch_rad: f64,
+    pub flags: Flags,
+}
+
+/// An actor's world point and where it should land on screen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenTarget {
+    pub actor: usize,
+    pub point_m: Vec3,
+    pub screen: [f64; 2],
+}
+
+/// Why a composition has no camera placement.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FramingError {
+    /// An actor name not in the names slice (or without a pose).
+    UnknownActor(String),
+    /// The same actor framed twice.
+    SameActor(String),
+    /// A shape of composition this module does not frame (no subject, three actors, …).
+    Unsupported { framings: usize, subjects: usize },
+    /// Field of view outside (0, π) or aspect not positive.
+    InvalidLens,
+    /// An actor pose with a non-positive height or non-finite values.
+    InvalidActor(usize),
+    /// A screen coordinate that is not finite.
+    InvalidScreen,
+    /// The two actors coincide or stand vertically aligned: no toric frame.
+    ActorsCoincide,
+    /// The two requested screen points coincide (α = 0).
+    ScreensCoincide,
+    /// The profile puts the camera on the side from which a roll-free camera shows the two
+    /// actors in the other order than the explicit screen positions ask.
+    ScreenSideConflict,
+    /// The profile's vantage direction cannot see both actors at the requested angle
+    /// (∠(AB, u) ≥ π − α).
+    ProfileUnreachable,
+    /// No point of the torus frames the sized actor at this size.
+    SizeUnreachable { size: Size },
+}
+
+impl std::fmt::Display for FramingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FramingError::UnknownActor(n) => write!(f, "unknown actor `{n}`"),
+            FramingError::SameActor(n) => write!(f, "actor `{n}` is framed twice"),
+            FramingError::Unsupported { framings, subjects } => write!(
+                f,
+                "cannot frame {subjects} subject(s) in {framings} framing(s): one actor, two \
+                 actors in one framing, or two framings of one actor each"
+            ),
+            FramingError::InvalidLens => f.write_str("invalid lens"),
+            FramingError::InvalidActor(i) => write!(f, "invalid pose for actor #{i}"),
+            FramingError::InvalidScreen => f.write_str("screen position is not finite"),
+            FramingError::ActorsCoincide => {
+                f.write_str("the two actors stand at the same place: no two-shot geometry")
+            }
+            FramingError::ScreensCoincide => {
+                f.write_str("the two actors are asked at the same screen position")
+            }
+            FramingError::ScreenSideConflict => f.write_str(
+                "the profile puts the camera on the side where the actors appear in the other \
+                 screen order",
+            ),
+            FramingError::ProfileUnreachable => {
+                f.write_str("no camera on this profile sees both actors at their screen positions")
+            }
+            FramingError::SizeUnreachable { size } => write!(
+                f,
+                "no camera position frames the nearer actor as {} with both actors at their \
+                 screen positions",
+                size.as_str()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for FramingError {}
+
+// ---------------------------------------------------------------------------------------------
+// Small geometry helpers.
+
+fn feet(p: &ActorPose) -> Vec3 {
+    Vec3::new(p.position_m[0], p.position_m[1], p.position_m[2])
+}
+
+fn band_point(p: &ActorPose, h_m: f64) -> Vec3 {
+    feet(p) + Vec3::new(0.0, 0.0, h_m)
+}
+
+fn band_centre(p: &ActorPose, band_m: [f64; 2]) -> Vec3 {
+    band_point(p, (band_m[0] + band_m[1]) / 2.0)
+}
+
+fn lerp(a: f64, b: f64, s: f64) -> f64 {
+    a + (b - a) * s
+}
+
+fn lerp2(a: [f64; 2], b: [f64; 2], s: f64) -> [f64; 2] {
+    [lerp(a[0], b[0], s), lerp(a[1], b[1], s)]
+}
+
+fn lerp_angle(a: f64, b: f64, s: f64) -> f64 {
+    wrap_angle_rad(a + wrap_angle_rad(b - a) * s)
+}
+
+fn fixed_pitch(gimbal: &Gimbal) -> bool {
+    matches!(gimbal, Gimbal::None)
+}
+
+/// Distance from the band centre that frames a band of half height `half_m` with its centre
+/// at `screen`: the exact variant of §1 for a gimbal camera at `elevation_rad`; for a
+/// fixed-pitch camera the horizontal distance `h·Sy·√(1 + x'²)`.
+fn band_distance_m(
+    lens: &Lens,
+    half_m: f64,
+    screen: [f64; 2],
+    elevation_rad: f64,
+    level: bool,
+) -> Option<f64> {
+    if level {
+        let xp = screen[0] / lens.sx();
+        return (half_m > 0.0).then(|| half_m * lens.sy() * (1.0 + xp * xp).sqrt());
+    }
+    size::exact_distance_m(
+        half_m,
+        elevation_rad.sin(),
+        size::band_angle_rad(lens, screen),
+    )
+}
+
+/// Minimise a 1-D function on [lo, hi]: dense sampling, then golden-section refinement.
+fn minimise(f: impl Fn(f64) -> f64, lo: f64, hi: f64) -> (f64, f64) {
+    let n = 96;
+    let step = (hi - lo) / n as f64;
+    let mut best = (lo, f(lo));
+    for i in 1..=n {
+        let x = lo + step * i as f64;
+        let v = f(x);
+        if v < best.1 {
+            best = (x, v);
+        }
+    }
+    let (mut a, mut b) = ((best.0 - step).max(lo), (best.0 + step).min(hi));
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..60 {
+        let c = b - g * (b - a);
+        let d = a + g * (b - a);
+        if f(c) < f(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let x = (a + b) / 2.0;
+    let v = f(x);
+    if v < best.1 {
+        (x, v)
+    } else {
+        best
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// solve
+
+fn check_lens(lens: &Lens) -> Result<(), FramingError> {
+    if lens.fov_x_rad > 0.0 && lens.fov_x_rad < PI && lens.aspect > 0.0 && lens.aspect.is_finite() {
+        Ok(())
+    } else {
+        Err(FramingError::InvalidLens)
+    }
+}
+
+fn lookup<S: AsRef<str>>(
+    name: &str,
+    names: &[S],
+    actors: &[ActorPose],
+) -> Result<usize, FramingError> {
+    let i = names
+        .iter()
+        .position(|n| n.as_ref() == name)
+        .filter(|i| *i < actors.len())
+        .ok_or_else(|| FramingError::UnknownActor(name.to_string()))?;
+    let p = &actors[i];
+    let finite = p.position_m.iter().all(|v| v.is_finite())
+        && p.velocity_mps.iter().all(|v| v.is_finite())
+        && p.facing_rad.is_finite()
+        && p.facing_rate_radps.is_finite();
+    if !(finite && p.height_m > 0.0 && p.height_m.is_finite()) {
+        return Err(FramingError::InvalidActor(i));
+    }
+    Ok(i)
+}
+
+fn check_screen(s: &Subject) -> Result<(), FramingError> {
+    if s.screen_x.is_some_and(|v| !v.is_finite()) || s.screen_y.is_some_and(|v| !v.is_finite()) {
+        return Err(FramingError::InvalidScreen);
+    }
+    Ok(())
+}
+
+/// Solve a composition against the actors' poses. `names[i]` names `actors[i]`.
+///
+/// Accepted shapes: one framing of one actor; one framing of two actors; two framings of one
+/// actor each (over the shoulder, foreground first). See the module documentation for the
+/// defaults and for what is exact.
+pub fn solve<S: AsRef<str>>(
+    comp: &Composition,
+    names: &[S],
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+) -> Result<Visual, FramingError> {
+    check_lens(lens)?;
+    let subjects: usize = comp.framings.iter().map(|f| f.subjects.len()).sum();
+    let unsupported = FramingError::Unsupported {
+        framings: comp.framings.len(),
+        subjects,
+    };
+    let elevation = sphere::elevation_rad(comp.camera_angle);
+    let level = fixed_pitch(gimbal);
+    match comp.framings.as_slice() {
+        [f] if f.subjects.len() == 1 => {
+            let s = &f.subjects[0];
+            check_screen(s)?;
+            let i = lookup(&s.actor, names, actors)?;
+            solve_one(i, s, f.size, &actors[i], elevation, level, lens).map(Visual::One)
+        }
+        [f] if f.subjects.len() == 2 => {
+            let (sa, sb) = (&f.subjects[0], &f.subjects[1]);
+            check_screen(sa)?;
+            check_screen(sb)?;
+            let (a, b) = (
+                lookup(&sa.actor, names, actors)?,
+                lookup(&sb.actor, names, actors)?,
+            );
+            if a == b {
+                return Err(FramingError::SameActor(sa.actor.clone()));
+            }
+            let pair = Pair::new(
+                a,
+                b,
+                sa,
+                sb,
+                (f.size, f.size),
+                actors,
+                elevation,
+                level,
+                lens,
+            )?;
+            solve_together(pair, sa, f.size, actors, lens).map(Visual::Two)
+        }
+        [fg, bg] if fg.subjects.len() == 1 && bg.subjects.len() == 1 => {
+            let (sa, sb) = (&fg.subjects[0], &bg.subjects[0]);
+            check_screen(sa)?;
+            check_screen(sb)?;
+            let (a, b) = (
+                lookup(&sa.actor, names, actors)?,
+                lookup(&sb.actor, names, actors)?,
+            );
+            if a == b {
+                return Err(FramingError::SameActor(sa.actor.clone()));
+            }
+            let pair = Pair::new(
+                a,
+                b,
+                sa,
+                sb,
+                (fg.size, bg.size),
+                actors,
+                elevation,
+                level,
+                lens,
+            )?;
+            solve_over_shoulder(pair, sa, sb, bg.size, actors, lens).map(Visual::Two)
+        }
+        _ => Err(unsupported),
+    }
+}
+
+fn solve_one(
+    actor: usize,
+    s: &Subject,
+    size_: Size,
+    pose: &ActorPose,
+    elevation: f64,
+    level: bool,
+    lens: &Lens,
+) -> Result<OneVisual, FramingError> {
+    let (bottom, top) = size::band(size_, pose.height_m);
+    let screen = [s.screen_x.unwrap_or(0.0), s.screen_y.unwrap_or(0.0)];
+    let e = if level { 0.0 } else { elevation };
+    let distance_m = band_distance_m(lens, (top - bottom) / 2.0, screen, e, level)
+        .ok_or(FramingError::InvalidActor(actor))?;
+    Ok(OneVisual {
+        actor,
+        distance_m,
+        azimuth_rad: s.profile.map_or(0.0, |p| p.azimuth_rad()),
+        elevation_rad: elevation,
+        screen,
+        band_m: [bottom, top],
+    })
+}
+
+/// The common set-up of a two-actor solve: bands, aim points, screens, α.
+struct Pair {
+    a: usize,
+    b: usize,
+    band_a: [f64; 2],
+    band_b: [f64; 2],
+    ma: Vec3,
+    mb: Vec3,
+    screen_a: [f64; 2],
+    screen_b: [f64; 2],
+    /// Some screen x was written: the screen order is fixed.
+    order_fixed: bool,
+    alpha: f64,
+    /// Elevation used for the geometry (0 for a fixed-pitch camera).
+    e: f64,
+    elevation: f64,
+    level: bool,
+}
+
+impl Pair {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        a: usize,
+        b: usize,
+        sa: &Subject,
+        sb: &Subject,
+        sizes: (Size, Size),
+        actors: &[ActorPose],
+        elevation: f64,
+        level: bool,
+        lens: &Lens,
+    ) -> Result<Pair, FramingError> {
+        let (pa, pb) = (&actors[a], &actors[b]);
+        let (ba, ta) = size::band(sizes.0, pa.height_m);
+        let (bb, tb) = size::band(sizes.1, pb.height_m);
+        let band_a = [ba, ta];
+        let band_b = [bb, tb];
+        let ma = band_centre(pa, band_a);
+        let mb = band_centre(pb, band_b);
+        toric::frame(&ma, &mb).map_err(|_| FramingError::ActorsCoincide)?;
+        let third = 1.0 / 3.0;
+        let (xa, xb) = match (sa.screen_x, sb.screen_x) {
+            (Some(xa), Some(xb)) => (xa, xb),
+            (Some(xa), None) => (xa, if xa > 0.0 { -third } else { third }),
+            (None, Some(xb)) => (if xb < 0.0 { third } else { -third }, xb),
+            (None, None) => (-third, third),
+        };
+        let screen_a = [xa, sa.screen_y.unwrap_or(0.0)];
+        let screen_b = [xb, sb.screen_y.unwrap_or(0.0)];
+        let alpha = toric::alpha_from_screens(lens, screen_a, screen_b);
+        if alpha.is_nan() || alpha <= 1e-9 {
+            return Err(FramingError::ScreensCoincide);
+        }
+        Ok(Pair {
+            a,
+            b,
+            band_a,
+            band_b,
+            ma,
+            mb,
+            screen_a,
+            screen_b,
+            order_fixed: sa.screen_x.is_some() || sb.screen_x.is_some(),
+            alpha,
+            e: if level { 0.0 } else { elevation },
+            elevation,
+            level,
+        })
+    }
+
+    fn a_left(&self) -> bool {
+        self.screen_a[0] <= self.screen_b[0]
+    }
+
+    /// Mirror the screen x's (α does not change).
+    fn mirror(&mut self) {
+        self.screen_a[0] = -self.screen_a[0];
+        self.screen_b[0] = -self.screen_b[0];
+    }
+
+    /// Make the screen order agree with the side φ: swap defaults, or fail on explicit ones.
+    fn agree_with_side(&mut self, phi: f64) -> Result<(), FramingError> {
+        let near_side = phi.cos() >= 0.0;
+        if near_side != self.a_left() {
+            if self.order_fixed {
+                return Err(FramingError::ScreenSideConflict);
+            }
+            self.mirror();
+        }
+        Ok(())
+    }
+
+    fn ab(&self) -> f64 {
+        (self.mb - self.ma).norm()
+    }
+
+    fn visual(&self, toric: Toric, primary: Primary, over_shoulder: bool) -> TwoVisual {
+        TwoVisual {
+            a: self.a,
+            b: self.b,
+            toric,
+            screen_a: self.screen_a,
+            screen_b: self.screen_b,
+            band_a_m: self.band_a,
+            band_b_m: self.band_b,
+            primary,
+            elevation_rad: self.elevation,
+            over_shoulder,
+        }
+    }
+
+    fn distance_a(&self, lens: &Lens) -> Option<f64> {
+        band_distance_m(
+            lens,
+            (self.band_a[1] - self.band_a[0]) / 2.0,
+            self.screen_a,
+            self.e,
+            self.level,
+        )
+    }
+
+    fn distance_b(&self, lens: &Lens) -> Option<f64> {
+        band_distance_m(
+            lens,
+            (self.band_b[1] - self.band_b[0]) / 2.0,
+            self.screen_b,
+            self.e,
+            self.level,
+        )
+    }
+
+    /// Refine θ so the sized actor's distance uses the camera's actual elevation seen from
+    /// that actor (the exact variant of §1 depends on it; φ turns about AB, so the elevation
+    /// is not φ): a few fixed-point steps, each keeping the root nearest the previous θ.
+    fn refine_theta(&self, lens: &Lens, theta: f64, phi: f64, sized: Primary) -> f64 {
+        if self.level {
+            return theta;
+        }
+        let (m, band, screen) = match sized {
+            Primary::A => (self.ma, self.band_a, self.screen_a),
+            Primary::B => (self.mb, self.band_b, self.screen_b),
+        };
+        let mut theta = theta;
+        for _ in 0..6 {
+            let v = Toric {
+                alpha_rad: self.alpha,
+                theta_rad: theta,
+                phi_rad: phi,
+            };
+            let Ok(c) = toric::position(&self.ma, &self.mb, &v) else {
+                break;
+            };
+            let to_c = c - m;
+            let elevation = to_c.z.atan2(to_c.xy().norm());
+            let Some(d) =
+                band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, elevation, false)
+            else {
+                break;
+            };
+            let roots = match sized {
+                Primary::A => toric::theta_for_distance_to_a(self.alpha, self.ab(), d),
+                Primary::B => toric::theta_for_distance_to_b(self.alpha, self.ab(), d),
+            };
+            match roots
+                .into_iter()
+                .min_by(|x, y| (x - theta).abs().total_cmp(&(y - theta).abs()))
+            {
+                Some(t) => theta = t,
+                None => break,
+            }
+        }
+        theta
+    }
+
+    /// φ on the side of the screen order, at the requested elevation.
+    fn side_phi(&self) -> f64 {
+        if self.a_left() {
+            self.e
+        } else {
+            wrap_angle_rad(PI - self.e)
+        }
+    }
+}
+
+fn solve_together(
+    mut pair: Pair,
+    sa: &Subject,
+    size_: Size,
+    actors: &[ActorPose],
+    lens: &Lens,
+) -> Result<TwoVisual, FramingError> {
+    if let Some(profile) = sa.profile {
+        // Vantage from A: (θ, φ) exact, the size follows.
+        let u = sphere::direction(actors[pair.a].facing_rad, profile.azimuth_rad(), pair.e);
+        let c = toric::vantage_position(&pair.ma, &pair.mb, pair.alpha, &u)
+            .ok_or(FramingError::ProfileUnreachable)?;
+        let t =
+            toric::inverse(&pair.ma, &pair.mb, &c).map_err(|_| FramingError::ProfileUnreachable)?;
+        pair.agree_with_side(t.phi_rad)?;
+        let toric = Toric {
+            alpha_rad: pair.alpha,
+            ..t
+        };
+        return Ok(pair.visual(toric, Primary::A, false));
+    }
+    let phi = pair.side_phi();
+    let ab = pair.ab();
+    let r = toric::radius_m(ab, pair.alpha);
+    let alpha = pair.alpha;
+    let dist_a = |th: f64| 2.0 * r * (alpha + th / 2.0).sin();
+    let dist_b = |th: f64| 2.0 * r * (th / 2.0).sin();
+    let mut candidates: Vec<(f64, Primary)> = Vec::new();
+    if let Some(d) = pair.distance_a(lens) {
+        for th in toric::theta_for_distance_to_a(alpha, ab, d) {
+            if dist_a(th) <= dist_b(th) + 1e-9 {
+                candidates.push((th, Primary::A));
+            }
+        }
+    }
+    if let Some(d) = pair.distance_b(lens) {
+        for th in toric::theta_for_distance_to_b(alpha, ab, d) {
+            if dist_b(th) <= dist_a(th) + 1e-9 {
+                candidates.push((th, Primary::B));
+            }
+        }
+    }
+    let symmetric = PI - alpha;
+    let (theta, primary) = candidates
+        .into_iter()
+        .min_by(|x, y| (x.0 - symmetric).abs().total_cmp(&(y.0 - symmetric).abs()))
+        .ok_or(FramingError::SizeUnreachable { size: size_ })?;
+    let theta = pair.refine_theta(lens, theta, phi, primary);
+    Ok(pair.visual(
+        Toric {
+            alpha_rad: alpha,
+            theta_rad: theta,
+            phi_rad: phi,
+        },
+        primary,
+        false,
+    ))
+}
+
+fn solve_over_shoulder(
+    mut pair: Pair,
+    sa: &Subject,
+    sb: &Subject,
+    bg_size: Size,
+    actors: &[ActorPose],
+    lens: &Lens,
+) -> Result<TwoVisual, FramingError> {
+    let ab = pair.ab();
+    let alpha = pair.alpha;
+    let d = pair
+        .distance_b(lens)
+        .ok_or(FramingError::SizeUnreachable { size: bg_size })?;
+    let thetas = toric::theta_for_distance_to_b(alpha, ab, d);
+    if thetas.is_empty() {
+        return Err(FramingError::SizeUnreachable { size: bg_size });
+    }
+    // The direction to match: the foreground's profile seen from A, else the background's seen
+    // from B.
+    let target = match (sa.profile, sb.profile) {
+        (Some(p), _) => Some((
+            pair.ma,
+            sphere::direction(actors[pair.a].facing_rad, p.azimuth_rad(), pair.e),
+        )),
+        (None, Some(p)) => Some((
+            pair.mb,
+            sphere::direction(actors[pair.b].facing_rad, p.azimuth_rad(), pair.e),
+        )),
+        (None, None) => None,
+    };
+    let Some((origin, u)) = target else {
+        // No profile: the side of the screen order, the root nearer the foreground actor.
+        let phi = pair.side_phi();
+        let theta = pair.refine_theta(lens, thetas[thetas.len() - 1], phi, Primary::B);
+        return Ok(pair.visual(
+            Toric {
+                alpha_rad: alpha,
+                theta_rad: theta,
+                phi_rad: phi,
+            },
+            Primary::B,
+            true,
+        ));
+    };
+    let (ma, mb) = (pair.ma, pair.mb);
+    let cost = |theta: f64, phi: f64| -> f64 {
+        match toric::position(
+            &ma,
+            &mb,
+            &Toric {
+                alpha_rad: alpha,
+                theta_rad: theta,
+                phi_rad: phi,
+            },
+        ) {
+            Ok(c) => (c - origin).angle(&u),
+            Err(_) => f64::INFINITY,
+        }
+    };
+    let best_in = |lo: f64, hi: f64| -> (f64, f64, f64) {
+        let mut best = (f64::NAN, f64::NAN, f64::INFINITY);
+        for &th in &thetas {
+            let (phi, v) = minimise(|phi| cost(th, phi), lo, hi);
+            if v < best.2 {
+                best = (th, phi, v);
+            }
+        }
+        best
+    };
+    let (lo, hi) = if !pair.order_fixed {
+        (-PI, PI)
+    } else if pair.a_left() {
+        (-FRAC_PI_2, FRAC_PI_2)
+    } else {
+        (FRAC_PI_2, 3.0 * FRAC_PI_2)
+    };
+    let (theta, phi, _) = best_in(lo, hi);
+    let phi = wrap_angle_rad(phi);
+    pair.agree_with_side(phi)?;
+    let theta = pair.refine_theta(lens, theta, phi, Primary::B);
+    Ok(pair.visual(
+        Toric {
+            alpha_rad: alpha,
+            theta_rad: theta,
+            phi_rad: phi,
+        },
+        Primary::B,
+        true,
+    ))
+}
+
+// ---------------------------------------------------------------------------------------------
+// place
+
+fn valid_indices(v: &Visual, n: usize) -> bool {
+    match v {
+        Visual::One(o) => o.actor < n,
+        Visual::Two(t) => t.a < n && t.b < n,
+        Visual::Blend { from, to, .. } => valid_indices(from, n) && valid_indices(to, n),
+    }
+}
+
+/// Aim `target` at `screen` from `c` with the camera the gimbal allows.
+fn aim(
+    lens: &Lens,
+    gimbal: &Gimbal,
+    c: &Vec3,
+    target: &Vec3,
+    screen: [f64; 2],
+) -> (f64, f64, Flags) {
+    let mut flags = Flags::default();
+    match gimbal {
+        Gimbal::None => (
+            orient_fixed_pitch(lens, c, target, screen[0], 0.0),
+            0.0,
+            flags,
+        ),
+        Gimbal::Pitch { min_rad, max_rad } => {
+            let o = orient(lens, c, target, screen);
+            flags.orientation_clamped = o.clamped;
+            let (lo, hi) = (min_rad.min(*max_rad), max_rad.max(*min_rad));
+            if o.pitch_rad < lo || o.pitch_rad > hi {
+                flags.pitch_clamped = true;
+                let p = o.pitch_rad.clamp(lo, hi);
+                (orient_fixed_pitch(lens, c, target, screen[0], p), p, flags)
+            } else {
+                (o.heading_rad, o.pitch_rad, flags)
+            }
+        }
+    }
+}
+
+/// The world point a visual aims exactly from `c`, and its screen point: one actor, the band's
+/// bisector point at [`size::band_aim_screen`] (the band centre at its screen point for a
+/// fixed-pitch camera); two actors, the primary's band centre; a blend, the two ends' targets
+/// interpolated (point and screen), which keeps the orientation continuous along the move
+/// (and exact for an actor that is the aimed one at both ends).
+fn aim_target(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    c: &Vec3,
+) -> (Vec3, [f64; 2]) {
+    match v {
+        Visual::One(o) => {
+            let p = &actors[o.actor];
+            if fixed_pitch(gimbal) {
+                (band_centre(p, o.band_m), o.screen)
+            } else {
+                let q = size::bisector_point(
+                    c,
+                    &band_point(p, o.band_m[1]),
+                    &band_point(p, o.band_m[0]),
+                );
+                (q, size::band_aim_screen(lens, o.screen))
+            }
+        }
+        Visual::Two(t) => primary_target(t, actors),
+        Visual::Blend { from, to, s } => {
+            let (p0, s0) = aim_target(from, actors, lens, gimbal, c);
+            let (p1, s1) = aim_target(to, actors, lens, gimbal, c);
+            (p0 + (p1 - p0) * *s, lerp2(s0, s1, *s))
+        }
+    }
+}
+
+/// Heading and pitch for a visual seen from `c`.
+fn orient_visual(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    c: &Vec3,
+) -> (f64, f64, Flags) {
+    let (target, screen) = aim_target(v, actors, lens, gimbal, c);
+    aim(lens, gimbal, c, &target, screen)
+}
+
+fn primary_target(t: &TwoVisual, actors: &[ActorPose]) -> (Vec3, [f64; 2]) {
+    match t.primary {
+        Primary::A => (band_centre(&actors[t.a], t.band_a_m), t.screen_a),
+        Primary::B => (band_centre(&actors[t.b], t.band_b_m), t.screen_b),
+    }
+}
+
+/// Place the camera for a visual against the actors' current poses.
+pub fn place(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Placement {
+    if !valid_indices(v, actors.len()) {
+        return Placement {
+            position_m: Vec3::zeros(),
+            heading_rad: 0.0,
+            pitch_rad: 0.0,
+            flags: Flags {
+                degenerate: true,
+                ..Flags::default()
+            },
+        };
+    }
+    match v {
+        Visual::One(o) => place_one(o, actors, lens, gimbal),
+        Visual::Two(t) => place_two(t, actors, lens, gimbal),
+        Visual::Blend { from, to, s } => {
+            let p0 = place(from, actors, lens, gimbal);
+            let p1 = place(to, actors, lens, gimbal);
+            if let Some(mut c) = toric_blend_position(from, to, *s, actors) {
+                if fixed_pitch(gimbal) {
+                    // Level camera: blend the ends' altitude corrections (place_two).
+                    let correction = |p: &Placement, v: &Visual| match v {
+                        Visual::Two(t) => toric::position(
+                            &band_centre(&actors[t.a], t.band_a_m),
+                            &band_centre(&actors[t.b], t.band_b_m),
+                            &t.toric,
+                        )
+                        .map_or(0.0, |c| p.position_m.z - c.z),
+                        _ => 0.0,
+                    };
+                    c.z += lerp(correction(&p0, from), correction(&p1, to), *s);
+                }
+                let (heading_rad, pitch_rad, f) = orient_visual(v, actors, lens, gimbal, &c);
+                return Placement {
+                    position_m: c,
+                    heading_rad,
+                    pitch_rad,
+                    flags: f.union(p0.flags).union(p1.flags),
+                };
+            }
+            // Cylindrical blend about the actors involved.
+            let points: Vec<Vec3> = aim_points(v, actors).into_iter().map(|(_, p)| p).collect();
+            let centre = points.iter().sum::<Vec3>() / points.len().max(1) as f64;
+            let cyl = |p: &Vec3| {
+                let d = p - centre;
+                (d.x.hypot(d.y), d.y.atan2(d.x), d.z)
+            };
+            let (r0, a0, z0) = cyl(&p0.position_m);
+            let (r1, a1, z1) = cyl(&p1.position_m);
+            let (r, a, z) = (lerp(r0, r1, *s), lerp_angle(a0, a1, *s), lerp(z0, z1, *s));
+            let c = centre + Vec3::new(r * a.cos(), r * a.sin(), z);
+            let (heading_rad, pitch_rad, f) = orient_visual(v, actors, lens, gimbal, &c);
+            Placement {
+                position_m: c,
+                heading_rad,
+                pitch_rad,
+                flags: f.union(p0.flags).union(p1.flags),
+            }
+        }
+    }
+}
+
+fn place_one(o: &OneVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Placement {
+    let p = &actors[o.actor];
+    let m = band_centre(p, o.band_m);
+    let mut flags = Flags::default();
+    let c = if fixed_pitch(gimbal) {
+        flags.angle_not_rendered = o.elevation_rad.abs() > 1e-9;
+        let horizontal = sphere::position(
+            &m,
+            p.facing_rad,
+            &sphere::Spherical {
+                distance_m: o.distance_m,
+                azimuth_rad: o.azimuth_rad,
+                elevation_rad: 0.0,
+            },
+        );
+        let xp = o.screen[0] / lens.sx();
+        let depth = o.distance_m / (1.0 + xp * xp).sqrt();
+        Vec3::new(
+            horizontal.x,
+            horizontal.y,
+            m.z - o.screen[1] * depth / lens.sy(),
+        )
+    } else {
+        sphere::position(
+            &m,
+            p.facing_rad,
+            &sphere::Spherical {
+                distance_m: o.distance_m,
+                azimuth_rad: o.azimuth_rad,
+                elevation_rad: o.elevation_rad,
+            },
+        )
+    };
+    let (heading_rad, pitch_rad, f) = orient_visual(&Visual::One(*o), actors, lens, gimbal, &c);
+    Placement {
+        position_m: c,
+        heading_rad,
+        pitch_rad,
+        flags: flags.union(f),
+    }
+}
+
+fn place_two(t: &TwoVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Placement {
+    let ma = band_centre(&actors[t.a], t.band_a_m);
+    let mb = band_centre(&actors[t.b], t.band_b_m);
+    let mut c = match toric::position(&ma, &mb, &t.toric) {
+        Ok(c) => c,
+        Err(_) => {
+            // Degenerate pair: frame the primary alone, from the front.
+            let (actor, band, screen) = match t.primary {
+                Primary::A => (t.a, t.band_a_m, t.screen_a),
+                Primary::B => (t.b, t.band_b_m, t.screen_b),
+            };
+            let level = fixed_pitch(gimbal);
+            let e = if level { 0.0 } else { t.elevation_rad };
+            let d =
+                band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, e, level).unwrap_or(1.0);
+            let one = OneVisual {
+                actor,
+                distance_m: d,
+                azimuth_rad: 0.0,
+                elevation_rad: t.elevation_rad,
+                screen,
+                band_m: band,
+            };
+            let mut p = place_one(&one, actors, lens, gimbal);
+            p.flags.degenerate = true;
+            return p;
+        }
+    };
+    let mut flags = Flags::default();
+    if fixed_pitch(gimbal) {
+        flags.angle_not_rendered = t.elevation_rad.abs() > 1e-9;
+        // Level camera: the altitude puts the primary's aim point at its screen y.
+        let (target, screen) = primary_target(t, actors);
+        let rho = (target - c).xy().norm();
+        let xp = screen[0] / lens.sx();
+        let depth = rho / (1.0 + xp * xp).sqrt();
+        c.z = target.z - screen[1] * depth / lens.sy();
+    }
+    let (heading_rad, pitch_rad, f) = orient_visual(&Visual::Two(*t), actors, lens, gimbal, &c);
+    Placement {
+        position_m: c,
+        heading_rad,
+        pitch_rad,
+        flags: flags.union(f),
+    }
+}
+
+/// Swap the roles of A and B in a two-actor visual (same camera position):
+/// θ' = 2(π − α) − θ, φ' = π − φ.
+pub fn swap_pair(t: &TwoVisual) -> TwoVisual {
+    TwoVisual {
+        a: t.b,
+        b: t.a,
+        toric: Toric {
+            alpha_rad: t.toric.alpha_rad,
+            theta_rad: 2.0 * (PI - t.toric.alpha_rad) - t.toric.theta_rad,
+            phi_rad: wrap_angle_rad(PI - t.toric.phi_rad),
+        },
+        screen_a: t.screen_b,
+        screen_b: t.screen_a,
+        band_a_m: t.band_b_m,
+        band_b_m: t.band_a_m,
+        primary: match t.primary {
+            Primary::A => Primary::B,
+            Primary::B => Primary::A,
+        },
+        elevation_rad: t.elevation_rad,
+        over_shoulder: t.over_shoulder,
+    }
+}
+
+/// The position of a blend of two two-actor visuals of the same pair (in either order): the
+/// §3 toric interpolation against the current poses, about the aim points of the interpolated
+/// bands (the midpoint of the two candidates is used as is: it is near, not on, the torus of
+/// the interpolated α, and never collapses onto an actor the way a projection onto the torus
+/// does when the move crosses the line of action). `None` for any other blend.
+fn toric_blend_position(from: &Visual, to: &Visual, s: f64, actors: &[ActorPose]) -> Option<Vec3> {
+    let (Visual::Two(t0), Visual::Two(t1)) = (from, to) else {
+        return None;
+    };
+    let t1 = if (t1.a, t1.b) == (t0.a, t0.b) {
+        *t1
+    } else if (t1.b, t1.a) == (t0.a, t0.b) {
+        swap_pair(t1)
+    } else {
+        return None;
+    };
+    let ma = band_centre(&actors[t0.a], lerp2(t0.band_a_m, t1.band_a_m, s));
+    let mb = band_centre(&actors[t0.b], lerp2(t0.band_b_m, t1.band_b_m, s));
+    let c0 = toric::position(&ma, &mb, &t0.toric).ok()?;
+    let c1 = toric::position(&ma, &mb, &t1.toric).ok()?;
+    Some(toric::interpolate(
+        &ma,
+        &mb,
+        &c0,
+        &c1,
+        t0.toric.alpha_rad,
+        t1.toric.alpha_rad,
+        s,
+    ))
+}
+
+// ---------------------------------------------------------------------------------------------
+// interpolate
+
+/// Blend two visuals at `s` ∈ [0, 1] (clamped; `s = 0` and `s = 1` return the inputs).
+///
+/// - Same single actor: linear in distance, band, elevation and screen, azimuth the short way
+///   round (wrapped).
+/// - Otherwise a [`Visual::Blend`], evaluated by [`place`] against the current poses:
+///   - two visuals of the same pair (in either order): the position is the §3 toric
+///     interpolation (per-actor yaw/elevation/distance, pulled toward the torus of the linearly
+///     interpolated α, midpoint of the two candidates), about the aim points of the linearly
+///     interpolated bands;
+///   - anything else (different actors, one ↔ two actors): both ends are placed and the
+///     position is interpolated in cylindrical coordinates (radius, angle the short way,
+///     height) about the centroid of the aim points of every actor involved.
+///
+///   In both cases the camera aims the interpolation of the two ends' aimed points at the
+///   interpolation of their screen points (continuous; exact for an actor aimed at both ends),
+///   and the flags are those of both ends plus the blend's own.
+pub fn interpolate(a: &Visual, b: &Visual, s: f64) -> Visual {
+    let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
+    if s == 0.0 {
+        return a.clone();
+    }
+    if s == 1.0 {
+        return b.clone();
+    }
+    match (a, b) {
+        (Visual::One(x), Visual::One(y)) if x.actor == y.actor => Visual::One(OneVisual {
+            actor: x.actor,
+            distance_m: lerp(x.distance_m, y.distance_m, s),
+            azimuth_rad: lerp_angle(x.azimuth_rad, y.azimuth_rad, s),
+            elevation_rad: lerp(x.elevation_rad, y.elevation_rad, s),
+            screen: lerp2(x.screen, y.screen, s),
+            band_m: lerp2(x.band_m, y.band_m, s),
+        }),
+        _ => Visual::Blend {
+            from: Box::new(a.clone()),
+            to: Box::new(b.clone()),
+            s,
+        },
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Metrics and safety
+
+/// The aim point (band centre) of every actor a visual frames, by actor index; for a blend,
+/// actors present at both ends have their points interpolated.
+pub fn aim_points(v: &Visual, actors: &[ActorPose]) -> Vec<(usize, Vec3)> {
+    if !valid_indices(v, actors.len()) {
+        return Vec::new();
+    }
+    match v {
+        Visual::One(o) => vec![(o.actor, band_centre(&actors[o.actor], o.band_m))],
+        Visual::Two(t) => vec![
+            (t.a, band_centre(&actors[t.a], t.band_a_m)),
+            (t.b, band_centre(&actors[t.b], t.band_b_m)),
+        ],
+        Visual::Blend { from, to, s } => {
+            let p0 = aim_points(from, actors);
+            let p1 = aim_points(to, actors);
+            let mut out: Vec<(usize, Vec3)> = Vec::new();
+            for (i, p) in &p0 {
+                match p1.iter().find(|(j, _)| j == i) {
+                    Some((_, q)) => out.push((*i, p + (q - p) * *s)),
+                    None => out.push((*i, *p)),
+                }
+            }
+            for (j, q) in &p1 {
+                if !out.iter().any(|(i, _)| i == j) {
+                    out.push((*j, *q));
+                }
+            }
+            out
+        }
+    }
+}
+
+/// Each framed actor's world point and requested screen point, for a camera at `camera_m`
+/// (the metric: project `point_m` through the placed camera and compare with `screen`).
+///
+/// One actor: the band's bisector point seen from the camera and [`size::band_aim_screen`]
+/// (for a fixed-pitch camera the band centre at the requested screen point: both land
+/// exactly). Two actors: the band centres at their screen points. Blend: actors at both ends
+/// interpolated (point and screen), an actor at one end only listed while that end dominates
+/// (s < 0.5 for `from`).
+pub fn screen_targets(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    camera_m: &Vec3,
+) -> Vec<ScreenTarget> {
+    if !valid_indices(v, actors.len()) {
+        return Vec::new();
+    }
+    match v {
+        Visual::One(o) => {
+            let p = &actors[o.actor];
+            if fixed_pitch(gimbal) {
+                vec![ScreenTarget {
+                    actor: o.actor,
+                    point_m: band_centre(p, o.band_m),
+                    screen: o.screen,
+                }]
+            } else {
+                vec![ScreenTarget {
+                    actor: o.actor,
+                    point_m: size::bisector_point(
+                        camera_m,
+                        &band_point(p, o.band_m[1]),
+                        &band_point(p, o.band_m[0]),
+                    ),
+                    screen: size::band_aim_screen(lens, o.screen),
+                }]
+            }
+        }
+        Visual::Two(t) => vec![
+            ScreenTarget {
+                actor: t.a,
+                point_m: band_centre(&actors[t.a], t.band_a_m),
+                screen: t.screen_a,
+            },
+            ScreenTarget {
+                actor: t.b,
+                point_m: band_centre(&actors[t.b], t.band_b_m),
+                screen: t.screen_b,
+            },
+        ],
+        Visual::Blend { from, to, s } => {
+            let t0 = screen_targets(from, actors, lens, gimbal, camera_m);
+            let t1 = screen_targets(to, actors, lens, gimbal, camera_m);
+            let mut out = Vec::new();
+            for x in &t0 {
+                match t1.iter().find(|y| y.actor == x.actor) {
+                    Some(y) => out.push(ScreenTarget {
+                        actor: x.actor,
+                        point_m: x.point_m + (y.point_m - x.point_m) * *s,
+                        screen: lerp2(x.screen, y.screen, *s),
+                    }),
+                    None if *s < 0.5 => out.push(*x),
+                    None => {}
+                }
+            }
+            if *s >= 0.5 {
+                for y in &t1 {
+                    if !t0.iter().any(|x| x.actor == y.actor) {
+                        out.push(*y);
+                    }
+                }
+            }
+            out
+        }
+    }
+}
+
+/// Distance from a point to an actor's body axis (the vertical segment feet → head).
+pub fn body_axis_distance_m(point_m: &Vec3, actor: &ActorPose) -> f64 {
+    let f = feet(actor);
+    let z = (point_m.z - f.z).clamp(0.0, actor.height_m.max(0.0));
+    (point_m - (f + Vec3::new(0.0, 0.0, z))).norm()
+}
+
+/// [`body_axis_distance_m`] for every actor, in the actors' order.
+pub fn body_axis_distances_m(point_m: &Vec3, actors: &[ActorPose]) -> Vec<f64> {
+    actors
+        .iter()
+        .map(|a| body_axis_distance_m(point_m, a))
+        .collect()
+}
+
+/// Feed-forward velocity of [`place`]'s position for a held visual while the actors move with
+/// their velocities and turn rates: the §2 formula (`Ṗ + d·∂û/∂θ·ḣ`) for one actor, the exact
+/// derivative of the placement (central difference of the smooth map, actors extrapolated
+/// ±1 ms) otherwise.
+pub fn velocity_mps(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Vec3 {
+    if !valid_indices(v, actors.len()) {
+        return Vec3::zeros();
+    }
+    if let Visual::One(o) = v {
+        let p = &actors[o.actor];
+        let e = if fixed_pitch(gimbal) {
+            0.0
+        } else {
+            o.elevation_rad
+        };
+        return sphere::velocity(
+            p.facing_rad,
+            &sphere::Spherical {
+                distance_m: o.distance_m,
+                azimuth_rad: o.azimuth_rad,
+                elevation_rad: e,
+            },
+            &sphere::Rates {
+                aim_velocity_mps: Vec3::from(p.velocity_mps),
+                facing_rate_radps: p.facing_rate_radps,
+                distance_rate_mps: 0.0,
+                azimuth_rate_radps: 0.0,
+                elevation_rate_radps: 0.0,
+            },
+        );
+    }
+    let dt = 1e-3;
+    let shifted = |k: f64| -> Vec<ActorPose> {
+        actors
+            .iter()
+            .map(|a| ActorPose {
+                position_m: [
+                    a.position_m[0] + a.velocity_mps[0] * k,
+                    a.position_m[1] + a.velocity_mps[1] * k,
+                    a.position_m[2] + a.velocity_mps[2] * k,
+                ],
+                facing_rad: wrap_angle_rad(a.facing_rad + a.facing_rate_radps * k),
+                ..*a
+            })
+            .collect()
+    };
+    let p1 = place(v, &shifted(dt), lens, gimbal).position_m;
+    let p0 = place(v, &shifted(-dt), lens, gimbal).position_m;
+    (p1 - p0) / (2.0 * dt)
+}
