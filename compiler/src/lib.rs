@@ -9,6 +9,7 @@ pub mod blocking;
 pub mod camera;
 pub mod framing;
 pub mod paths;
+pub mod preview;
 pub mod profile;
 pub mod reference;
 pub mod size;
