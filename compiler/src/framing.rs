@@ -875,8 +875,9 @@ fn aim_target(
     }
 }
 
-/// Heading and pitch for a visual seen from `c`.
-fn orient_visual(
+/// Heading and pitch for a visual seen from a camera at `c` (not necessarily where [`place`]
+/// puts it): the aimed point lands exactly where the visual asks.
+pub fn orient_visual(
     v: &Visual,
     actors: &[ActorPose],
     lens: &Lens,

@@ -7,6 +7,9 @@
 
 pub mod blocking;
 pub mod camera;
+pub mod compile;
+pub mod director;
+pub mod feasibility;
 pub mod framing;
 pub mod paths;
 pub mod preview;

@@ -1,0 +1,134 @@
+//! Batch compilation: the director driven by the script's own blocking, sample by sample,
+//! into any sink (MCAP, CSV, previews, tests).
+
+use dronecine_grammar::script::{Script, ShotContent};
+use dronecine_grammar::vocab::CameraAngle;
+use dronecine_grammar::{Code, Diagnostic, Span};
+
+use crate::blocking::Blocking;
+use crate::director::{Director, ShotTiming};
+use crate::profile::{Gimbal, Profile};
+use crate::reference::{ActorPose, Sample};
+
+/// Default sampling rate of the reference.
+pub const DEFAULT_RATE_HZ: f64 = 100.0;
+
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    pub rate_hz: f64,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            rate_hz: DEFAULT_RATE_HZ,
+        }
+    }
+}
+
+/// What a compilation produced besides the samples.
+#[derive(Clone, Debug)]
+pub struct Compiled {
+    pub timings: Vec<ShotTiming>,
+    /// Errors and warnings on the script, in source order.
+    pub diagnostics: Vec<Diagnostic>,
+    pub samples: usize,
+    pub duration_s: f64,
+}
+
+impl Compiled {
+    pub fn has_errors(&self) -> bool {
+        self.diagnostics.iter().any(Diagnostic::is_error)
+    }
+}
+
+/// Compile `script` for `profile`, handing every sample (and the actors' poses at its time)
+/// to `sink`. A sink error stops the compilation and is returned as is.
+pub fn compile<E>(
+    script: &Script,
+    profile: &Profile,
+    opts: &Options,
+    mut sink: impl FnMut(&Sample, &[ActorPose]) -> Result<(), E>,
+) -> Result<Compiled, E> {
+    let Some(scene) = &script.scene else {
+        let span = script.timeline.first().map(|s| s.span).unwrap_or_default();
+        return Ok(Compiled {
+            timings: Vec::new(),
+            diagnostics: vec![Diagnostic::error(
+                Code::NoScene,
+                span,
+                "this script is a film annotation: it has no stage, actors or drone to fly",
+            )
+            .with_label("subtitle-timed annotation")
+            .with_help(
+                "add a scene set-up (`stage 8m x 6m x 3m`, `actor A height 1.80m at (0, 0) \
+                 facing 0deg`) and write the shots with durations (`MS on A for 4s`)",
+            )],
+            samples: 0,
+            duration_s: 0.0,
+        });
+    };
+    let mut diagnostics = static_warnings(script, profile);
+    let blocking = Blocking::new(scene);
+    let mut director = Director::new(script, scene, profile);
+    let mut poses = blocking.poses(0.0);
+    let dt = 1.0 / opts.rate_hz;
+    let mut k: u64 = 0;
+    let mut last_t = 0.0;
+    // Guard against a timeline that never ends (it always does: every phase has an end).
+    let limit = ((script.duration_s * 4.0 + 3600.0) * opts.rate_hz) as u64;
+    loop {
+        let t = k as f64 * dt;
+        blocking.poses_into(t, &mut poses);
+        let sample = director.step(t, &poses);
+        if director.finished() || k > limit {
+            break;
+        }
+        sink(&sample, &poses)?;
+        last_t = t;
+        k += 1;
+    }
+    let (timings, mut flown) = director.finish();
+    diagnostics.append(&mut flown);
+    diagnostics.sort_by_key(|d| (d.span.start, d.span.end, d.code));
+    Ok(Compiled {
+        timings,
+        diagnostics,
+        samples: k as usize,
+        duration_s: last_t,
+    })
+}
+
+/// Warnings that need no flight: camera angles a drone without a gimbal cannot render.
+fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    if profile.camera.gimbal != Gimbal::None {
+        return out;
+    }
+    for shot in &script.timeline {
+        if let ShotContent::Composition(c) = &shot.content {
+            if c.camera_angle != CameraAngle::EyeLevel {
+                out.push(
+                    Diagnostic::warning(
+                        Code::AngleNotRendered,
+                        shot.span,
+                        format!(
+                            "{} has a fixed level camera: a {} cannot be rendered, the shot is \
+                             flown at eye level",
+                            profile.name,
+                            c.camera_angle.as_str()
+                        ),
+                    )
+                    .with_label("no gimbal to tilt the camera")
+                    .with_help(
+                        "remove the camera angle, or fly a drone profile with a pitch gimbal \
+                         (`drone \"profiles/mine.toml\"` with `gimbal = { pitch_min_deg = …, \
+                         pitch_max_deg = … }`)",
+                    ),
+                );
+            }
+        }
+    }
+    let _ = Span::default();
+    out
+}

@@ -1,0 +1,867 @@
+//! The director: the one evaluator of a script, stepped tick by tick.
+//!
+//! `Director::step(t_s, actors)` takes the time on the script's clock and the actors' poses
+//! at that time and returns the next reference sample. It knows nothing of where the poses
+//! come from: `compile` feeds it the script's blocking (batch), `shoot` feeds it live poses
+//! from motion capture (online). Same poses in, same samples out.
+//!
+//! Each tick:
+//! 1. advance the timeline: a shot ends → the next one starts, or, after a cut, a
+//!    repositioning flight is inserted (the drone cannot jump) and the shot starts when the
+//!    drone is in place — later than written unless the script pinned it, in which case a
+//!    flight that does not fit is an error;
+//! 2. evaluate the target: the composition solved against the live actors (a hold), the
+//!    interpolation of visual parameters between two compositions (a `then` move), a path,
+//!    or the repositioning trajectory;
+//! 3. steer the camera toward it (`steering`), kept inside the stage and out of the actors'
+//!    safety cylinders, and orient it so that the framing is true at the camera's actual
+//!    position;
+//! 4. check the sample against the profile (`feasibility`).
+
+use dronecine_grammar::script::{Composition, Scene, Script, Shot, ShotContent, Transition};
+use dronecine_grammar::vocab::Size;
+use dronecine_grammar::vocab::{wrap_angle_rad, MoveKind};
+use dronecine_grammar::{Code, Diagnostic, Span};
+
+use crate::blocking::min_jerk;
+use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
+use crate::feasibility::Monitor;
+use crate::framing::{self, FramingError};
+use crate::paths::PathPlan;
+use crate::profile::{Gimbal, Profile};
+use crate::reference::{ActorPose, Sample};
+use crate::steering::{self, HeadingState, Kinematics, SteerGains, SteerLimits};
+
+/// Time a repositioning flight leaves for the camera to settle on the first framing.
+const SETTLE_S: f64 = 0.5;
+
+/// Time step of the finite differences that give the target's velocity.
+const EPS_S: f64 = 1e-3;
+
+/// How a shot is flown.
+#[derive(Clone, Debug)]
+enum Plan {
+    Hold(Composition),
+    Move {
+        from: Composition,
+        to: Composition,
+    },
+    Path(PathPlan),
+    /// A path not planned yet (it is planned when the drone starts toward it).
+    PathPending,
+    /// Nothing to fly (the shot failed to solve); the camera holds where it is.
+    Nothing,
+}
+
+/// Where the timeline is.
+#[derive(Clone, Debug)]
+enum Phase {
+    NotStarted,
+    Shot {
+        index: usize,
+        start_s: f64,
+        end_s: f64,
+    },
+    Reposition {
+        to: usize,
+        start_s: f64,
+        end_s: f64,
+        /// Time the trajectory reaches the shot's first framing (≤ end).
+        arrive_s: f64,
+        from: Vec3,
+        from_heading_rad: f64,
+        pivot: Option<Vec3>,
+    },
+    Done,
+}
+
+/// When each shot was actually flown.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ShotTiming {
+    pub index: usize,
+    /// As written (back to back, or pinned).
+    pub script_start_s: f64,
+    pub start_s: f64,
+    pub end_s: f64,
+    /// The repositioning flight inserted before the shot, if any.
+    pub reposition: Option<(f64, f64)>,
+}
+
+/// The evaluator. See the module documentation.
+pub struct Director {
+    shots: Vec<Shot>,
+    plans: Vec<Plan>,
+    names: Vec<String>,
+    lens: Lens,
+    gimbal: Gimbal,
+    limits: SteerLimits,
+    gains: SteerGains,
+    stage_lo: Vec3,
+    stage_hi: Vec3,
+    safety_m: f64,
+    profile_name: String,
+    phase: Phase,
+    state: Kinematics,
+    heading: HeadingState,
+    pitch_rad: f64,
+    /// Last target velocity and heading target, for the acceleration and rate feed-forward.
+    last_target: Option<(f64, Vec3, f64)>,
+    last_t_s: f64,
+    /// The visual solved for the current tick (reused to orient the camera).
+    visual: Option<framing::Visual>,
+    timings: Vec<ShotTiming>,
+    diagnostics: Vec<Diagnostic>,
+    monitor: Monitor,
+    warned: Vec<bool>,
+    too_close: Vec<bool>,
+}
+
+impl Director {
+    /// A director for a script with a scene. Diagnostics found while planning are kept and
+    /// returned by [`Director::finish`].
+    pub fn new(script: &Script, scene: &Scene, profile: &Profile) -> Director {
+        let lens = match scene.lens {
+            Some(l) => Lens {
+                fov_x_rad: l.fov_x_rad,
+                aspect: l.aspect,
+            },
+            None => Lens {
+                fov_x_rad: profile.camera.fov_x_rad,
+                aspect: profile.camera.aspect,
+            },
+        };
+        let lim = &profile.limits;
+        let limits = SteerLimits {
+            // The reference leaves a 10% margin under every limit for the servo.
+            speed_h_mps: lim.speed_max_mps,
+            speed_v_mps: lim.vz_max_mps * 0.9,
+            accel_h_mps2: lim.accel_max_mps2,
+            accel_v_mps2: lim
+                .accel_max_mps2
+                .min(lim.vz_max_mps / profile.model.tau_vz_s),
+            jerk_mps3: lim.jerk_max_mps3,
+            yaw_rate_radps: lim.yaw_rate_max_radps * 0.9,
+            yaw_accel_radps2: lim.yaw_rate_max_radps * 2.0,
+        };
+        let mut plans = Vec::with_capacity(script.timeline.len());
+        let mut last_comp: Option<&Composition> = None;
+        for shot in &script.timeline {
+            let plan = match (&shot.content, &shot.transition) {
+                (ShotContent::Composition(c), Transition::Move { kind, .. })
+                    if *kind != MoveKind::Hold =>
+                {
+                    match last_comp {
+                        Some(from) => Plan::Move {
+                            from: from.clone(),
+                            to: c.clone(),
+                        },
+                        None => Plan::Hold(c.clone()),
+                    }
+                }
+                (ShotContent::Composition(c), _) => Plan::Hold(c.clone()),
+                (ShotContent::Path(_), _) => Plan::PathPending,
+            };
+            last_comp = match &shot.content {
+                ShotContent::Composition(c) => Some(c),
+                ShotContent::Path(_) => None,
+            };
+            plans.push(plan);
+        }
+        let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
+        let margin = profile.safety.stage_margin_m;
+        let stage_lo = Vec3::new(lo[0] + margin, lo[1] + margin, lo[2] + margin);
+        let stage_hi = Vec3::new(hi[0] - margin, hi[1] - margin, hi[2] - margin);
+        Director {
+            shots: script.timeline.clone(),
+            plans,
+            names: scene.actors.iter().map(|a| a.name.clone()).collect(),
+            lens,
+            gimbal: profile.camera.gimbal,
+            limits,
+            gains: SteerGains::default(),
+            stage_lo,
+            stage_hi,
+            safety_m: profile.safety.actor_distance_m,
+            profile_name: profile.name.clone(),
+            phase: Phase::NotStarted,
+            state: Kinematics::default(),
+            heading: HeadingState::default(),
+            pitch_rad: 0.0,
+            last_target: None,
+            last_t_s: 0.0,
+            visual: None,
+            timings: Vec::with_capacity(script.timeline.len()),
+            diagnostics: Vec::new(),
+            monitor: Monitor::new(profile, scene, script.timeline.len()),
+            warned: vec![false; script.timeline.len()],
+            too_close: vec![false; script.timeline.len()],
+        }
+    }
+
+    pub fn lens(&self) -> &Lens {
+        &self.lens
+    }
+
+    /// Whether the last shot has ended.
+    pub fn finished(&self) -> bool {
+        matches!(self.phase, Phase::Done)
+    }
+
+    /// The timeline as flown so far.
+    pub fn timings(&self) -> &[ShotTiming] {
+        &self.timings
+    }
+
+    /// Index of the shot being flown (or flown to), for the sample's `shot` field.
+    fn shot_index(&self) -> usize {
+        match self.phase {
+            Phase::Shot { index, .. } => index,
+            Phase::Reposition { to, .. } => to,
+            Phase::NotStarted => 0,
+            Phase::Done => self.shots.len().saturating_sub(1),
+        }
+    }
+
+    fn actor_index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// One tick: the sample at `t_s` given the actors' poses at `t_s` (one per actor of the
+    /// scene, in declaration order).
+    pub fn step(&mut self, t_s: f64, actors: &[ActorPose]) -> Sample {
+        let first = matches!(self.phase, Phase::NotStarted);
+        if first {
+            self.begin_shot(0, 0.0, actors);
+        }
+        let dt = if first { 0.0 } else { t_s - self.last_t_s };
+        let continuous = self.advance(t_s, actors);
+        if !continuous {
+            self.last_target = None;
+        }
+
+        // The target and its velocity (forward difference with the actors extrapolated).
+        self.visual = None;
+        let target = self.target(t_s, actors, true);
+        let ahead: Vec<ActorPose> = actors.iter().map(|a| extrapolate(a, EPS_S)).collect();
+        let target_ahead = self.target(t_s + EPS_S, &ahead, false);
+        let v_t = (target_ahead - target) / EPS_S;
+        let a_t = match self.last_target {
+            Some((t0, v0, _)) if t_s > t0 => (v_t - v0) / (t_s - t0),
+            _ => Vec3::zeros(),
+        };
+        let goal = Kinematics {
+            p: target,
+            v: v_t,
+            a: a_t,
+        };
+
+        if first || dt <= 0.0 {
+            // The first shot starts framed: on its target, moving with it.
+            self.state = Kinematics {
+                p: target,
+                v: v_t,
+                a: Vec3::zeros(),
+            };
+        } else {
+            let axes: Vec<(Vec3, f64)> = actors
+                .iter()
+                .map(|a| (Vec3::from(a.position_m), a.height_m))
+                .collect();
+            let extra = steering::separation(&self.state.p, &axes, self.safety_m, 3.0)
+                + steering::containment(&self.state.p, &self.stage_lo, &self.stage_hi, 4.0);
+            self.state = steering::step(&self.state, &goal, extra, &self.limits, &self.gains, dt);
+        }
+
+        // Orientation at the camera's actual position.
+        let (heading_target, pitch_target) = self.look(t_s, actors, &self.state.p.clone());
+        let heading_rate_target = match self.last_target {
+            Some((t0, _, h0)) if t_s > t0 => wrap_angle_rad(heading_target - h0) / (t_s - t0),
+            _ => 0.0,
+        };
+        if first || dt <= 0.0 {
+            self.heading = HeadingState {
+                heading_rad: heading_target,
+                rate_radps: 0.0,
+            };
+        } else {
+            self.heading = steering::step_heading(
+                &self.heading,
+                heading_target,
+                heading_rate_target,
+                &self.limits,
+                &self.gains,
+                dt,
+            );
+        }
+        self.pitch_rad = pitch_target;
+        self.last_target = Some((t_s, v_t, heading_target));
+        self.last_t_s = t_s;
+
+        let sample = Sample {
+            t_s,
+            position_m: self.state.p.into(),
+            velocity_mps: self.state.v.into(),
+            acceleration_mps2: self.state.a.into(),
+            heading_rad: self.heading.heading_rad,
+            heading_rate_radps: self.heading.rate_radps,
+            camera_pitch_rad: self.pitch_rad,
+            shot: self.shot_index(),
+        };
+        let in_shot = matches!(self.phase, Phase::Shot { .. });
+        self.monitor.record(&sample, &goal, actors, in_shot);
+        sample
+    }
+
+    /// Advance the phase to `t_s`. Returns false when the target jumps (a new segment that
+    /// does not continue the previous one), so the feed-forward history is dropped.
+    fn advance(&mut self, t_s: f64, actors: &[ActorPose]) -> bool {
+        let mut continuous = true;
+        loop {
+            match self.phase.clone() {
+                Phase::Shot { index, end_s, .. } if t_s >= end_s - 1e-9 => {
+                    if let Some(last) = self.timings.last_mut() {
+                        last.end_s = end_s;
+                    }
+                    let next = index + 1;
+                    if next >= self.shots.len() {
+                        if t_s > end_s + 1e-9 {
+                            self.phase = Phase::Done;
+                        } else {
+                            // The last sample sits exactly on the end.
+                            return continuous;
+                        }
+                        return continuous;
+                    }
+                    let is_move = matches!(self.shots[next].transition, Transition::Move { .. });
+                    if is_move && !self.shots[next].pinned {
+                        self.begin_shot(next, end_s, actors);
+                    } else {
+                        self.begin_reposition(next, end_s, actors);
+                        continuous = false;
+                    }
+                }
+                Phase::Reposition { to, end_s, .. } if t_s >= end_s - 1e-9 => {
+                    self.begin_shot(to, end_s, actors);
+                    continuous = false;
+                }
+                _ => return continuous,
+            }
+        }
+    }
+
+    fn begin_shot(&mut self, index: usize, start_s: f64, actors: &[ActorPose]) {
+        let shot = &self.shots[index];
+        let duration = shot.end_s - shot.start_s;
+        if matches!(self.plans[index], Plan::PathPending) {
+            if let ShotContent::Path(path) = &shot.content {
+                let from = if matches!(self.phase, Phase::NotStarted) {
+                    Vec3::zeros()
+                } else {
+                    self.state.p
+                };
+                let plan = PathPlan::new(
+                    &path.shape,
+                    duration,
+                    self.limits.accel_h_mps2,
+                    from,
+                    |n| self.names.iter().position(|x| x == n),
+                    actors,
+                );
+                self.plans[index] = Plan::Path(plan);
+            }
+        }
+        let reposition = match self.phase {
+            Phase::Reposition { start_s, end_s, .. } => Some((start_s, end_s)),
+            _ => None,
+        };
+        self.timings.push(ShotTiming {
+            index,
+            script_start_s: shot.start_s,
+            start_s,
+            end_s: start_s + duration,
+            reposition,
+        });
+        self.phase = Phase::Shot {
+            index,
+            start_s,
+            end_s: start_s + duration,
+        };
+    }
+
+    /// Plan the flight from where the camera is to shot `to`'s first framing.
+    fn begin_reposition(&mut self, to: usize, now_s: f64, actors: &[ActorPose]) {
+        // Where the shot starts: its framing (or path start) with the actors as they are now.
+        let (goal, goal_heading) = {
+            if matches!(self.plans[to], Plan::PathPending) {
+                self.begin_shot_plan_only(to, actors);
+            }
+            let p = self.shot_target(to, 0.0, actors, false);
+            let (h, _) = self.look_for(to, 0.0, actors, &p, false);
+            (p, h)
+        };
+        let from = self.state.p;
+        let pivot = self.pivot(to, actors);
+        let path_len = arc_length(&from, &goal, pivot.as_ref());
+        let dz = (goal.z - from.z).abs();
+        let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();
+        let speed = self.state.v.norm();
+        let needed = if path_len < 0.03 && dh < 0.05 && speed < 0.05 {
+            0.0
+        } else {
+            // A min-jerk flight peaks at 1.875·L/T in speed and 5.77·L/T² in acceleration;
+            // keep both under 80% of the limits, plus the time to stop from the current speed
+            // and half a second to settle.
+            let m = 0.8;
+            let t_speed = 1.875 * path_len / (m * self.limits.speed_h_mps);
+            let t_accel = (5.77 * path_len / (m * self.limits.accel_h_mps2)).sqrt();
+            let t_vz = 1.875 * dz / (m * self.limits.speed_v_mps);
+            let t_yaw = 1.875 * dh / (m * self.limits.yaw_rate_radps);
+            let t_stop = speed / self.limits.accel_h_mps2;
+            let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(0.5);
+            // The flight curves round the pivot: measure its peaks (centripetal acceleration
+            // included) and stretch it until they fit.
+            let t_fly = fit_duration(&from, &goal, pivot.as_ref(), t0, &self.limits);
+            t_fly + t_stop + SETTLE_S
+        };
+        let shot = &self.shots[to];
+        let written = if shot.pinned { shot.start_s } else { now_s };
+        let arrive = now_s + needed;
+        let end = if shot.pinned {
+            if arrive > written + 1e-6 {
+                let late = arrive - written;
+                self.diagnostics.push(
+                    Diagnostic::error(
+                        Code::CutTooShort,
+                        shot.span,
+                        format!(
+                            "the drone needs {needed:.1} s to fly to this shot's first framing \
+                             ({path_len:.1} m), but the shot is pinned to start at {:.1} s, \
+                             {:.1} s after the previous shot ends",
+                            written,
+                            (written - now_s).max(0.0)
+                        ),
+                    )
+                    .with_label(format!("{late:.1} s too early for {}", self.profile_name))
+                    .with_help(format!(
+                        "pin the shot at `at {}s` or later, or shorten the shot before it by \
+                         {late:.1} s",
+                        round_up(arrive, 1)
+                    )),
+                );
+                arrive
+            } else {
+                written
+            }
+        } else {
+            arrive
+        };
+        if end <= now_s + 1e-9 {
+            self.begin_shot(to, now_s, actors);
+            return;
+        }
+        if !shot.pinned && needed > 0.0 {
+            self.diagnostics.push(
+                Diagnostic::warning(
+                    Code::Reposition,
+                    shot.span,
+                    format!(
+                        "a {needed:.1} s repositioning flight ({path_len:.1} m) is inserted before \
+                         this shot: it starts at {end:.1} s instead of {:.1} s",
+                        shot.start_s
+                    ),
+                )
+                .with_label("the drone flies here first")
+                .with_help(
+                    "a single drone cannot jump between framings; pin the shot (`at Ns cut to \
+                     …`) or leave a gap to keep it on the script's clock",
+                ),
+            );
+        }
+        self.phase = Phase::Reposition {
+            to,
+            start_s: now_s,
+            end_s: end,
+            arrive_s: (arrive - SETTLE_S).max(now_s).min(end),
+            from,
+            from_heading_rad: self.heading.heading_rad,
+            pivot,
+        };
+    }
+
+    fn begin_shot_plan_only(&mut self, index: usize, actors: &[ActorPose]) {
+        let shot = &self.shots[index];
+        if let ShotContent::Path(path) = &shot.content {
+            let plan = PathPlan::new(
+                &path.shape,
+                shot.end_s - shot.start_s,
+                self.limits.accel_h_mps2,
+                self.state.p,
+                |n| self.names.iter().position(|x| x == n),
+                actors,
+            );
+            self.plans[index] = Plan::Path(plan);
+        }
+    }
+
+    /// The point repositioning flights turn around: the actors the next shot frames (or all
+    /// actors).
+    fn pivot(&self, to: usize, actors: &[ActorPose]) -> Option<Vec3> {
+        let idx: Vec<usize> = match &self.shots[to].content {
+            ShotContent::Composition(c) => c.actors().filter_map(|n| self.actor_index(n)).collect(),
+            ShotContent::Path(_) => (0..actors.len()).collect(),
+        };
+        if idx.is_empty() {
+            return None;
+        }
+        let mut c = Vec3::zeros();
+        for &i in &idx {
+            c += Vec3::from(actors[i].position_m);
+        }
+        Some(c / idx.len() as f64)
+    }
+
+    /// The camera target at `t_s`.
+    fn target(&mut self, t_s: f64, actors: &[ActorPose], keep: bool) -> Vec3 {
+        match self.phase.clone() {
+            Phase::Shot { index, start_s, .. } => {
+                self.shot_target(index, t_s - start_s, actors, keep)
+            }
+            Phase::Reposition {
+                to,
+                start_s,
+                arrive_s,
+                from,
+                pivot,
+                ..
+            } => {
+                let goal = self.shot_target(to, 0.0, actors, false);
+                let u = if arrive_s > start_s {
+                    (t_s - start_s) / (arrive_s - start_s)
+                } else {
+                    1.0
+                };
+                let (s, _, _) = min_jerk(u);
+                interpolate_around(&from, &goal, pivot.as_ref(), s)
+            }
+            Phase::NotStarted | Phase::Done => self.state.p,
+        }
+    }
+
+    /// The visual parameters of shot `index` at `into_s` seconds into it (None for paths).
+    fn shot_visual(
+        &self,
+        index: usize,
+        into_s: f64,
+        actors: &[ActorPose],
+    ) -> Option<Result<framing::Visual, FramingError>> {
+        let duration = self.shots[index].end_s - self.shots[index].start_s;
+        match &self.plans[index] {
+            Plan::Hold(c) => Some(framing::solve(
+                c,
+                &self.names,
+                actors,
+                &self.lens,
+                &self.gimbal,
+            )),
+            Plan::Move { from, to } => {
+                let (s, _, _) = min_jerk(into_s / duration);
+                let a = framing::solve(from, &self.names, actors, &self.lens, &self.gimbal);
+                let b = framing::solve(to, &self.names, actors, &self.lens, &self.gimbal);
+                Some(match (a, b) {
+                    (Ok(a), Ok(b)) => Ok(framing::interpolate(&a, &b, s)),
+                    (Err(e), _) | (_, Err(e)) => Err(e),
+                })
+            }
+            _ => None,
+        }
+    }
+
+    /// The target of shot `index` at `into_s` seconds into it. With `keep`, the solved visual
+    /// is kept for orienting the camera this tick, and the framing is checked against the
+    /// actors' safety distance.
+    fn shot_target(&mut self, index: usize, into_s: f64, actors: &[ActorPose], keep: bool) -> Vec3 {
+        match self.shot_visual(index, into_s, actors) {
+            Some(Ok(v)) => {
+                let p = framing::place(&v, actors, &self.lens, &self.gimbal).position_m;
+                if keep {
+                    self.check_clearance(index, &p, actors);
+                    self.visual = Some(v);
+                }
+                p
+            }
+            Some(Err(e)) => self.fail(index, e),
+            None => match &self.plans[index] {
+                Plan::Path(plan) => plan.at(into_s, actors).p,
+                _ => self.state.p,
+            },
+        }
+    }
+
+    /// A framing whose camera position is inside an actor's safety distance: an error on the
+    /// shot (once), with the size to use instead.
+    fn check_clearance(&mut self, index: usize, p: &Vec3, actors: &[ActorPose]) {
+        if self.too_close[index] {
+            return;
+        }
+        for (i, a) in actors.iter().enumerate() {
+            let d = framing::body_axis_distance_m(p, a);
+            if d < self.safety_m - 0.01 {
+                self.too_close[index] = true;
+                let name = self.names.get(i).map(String::as_str).unwrap_or("an actor");
+                self.diagnostics.push(
+                    Diagnostic::error(
+                        Code::TooClose,
+                        self.shots[index].span,
+                        format!(
+                            "this framing puts the camera {d:.2} m from {name}; {} keeps {:.2} m \
+                             from actors",
+                            self.profile_name, self.safety_m
+                        ),
+                    )
+                    .with_label(format!("too close to {name}"))
+                    .with_help(
+                        "use a wider size (MS → MLS → FS), a longer lens (`lens …`), or move the \
+                         actors apart",
+                    ),
+                );
+                return;
+            }
+        }
+    }
+
+    /// Record a framing failure once per shot and hold position.
+    fn fail(&mut self, index: usize, e: framing::FramingError) -> Vec3 {
+        if !self.warned[index] {
+            self.warned[index] = true;
+            self.diagnostics
+                .push(framing_diagnostic(&e, self.shots[index].span));
+        }
+        self.plans[index] = Plan::Nothing;
+        self.state.p
+    }
+
+    /// Heading and pitch that frame the current shot from `position`.
+    fn look(&mut self, t_s: f64, actors: &[ActorPose], position: &Vec3) -> (f64, f64) {
+        match self.phase.clone() {
+            Phase::Shot { index, start_s, .. } => {
+                self.look_for(index, t_s - start_s, actors, position, true)
+            }
+            Phase::Reposition {
+                to,
+                start_s,
+                arrive_s,
+                from_heading_rad,
+                ..
+            } => {
+                let (h1, p1) = self.look_for(to, 0.0, actors, position, false);
+                let u = if arrive_s > start_s {
+                    (t_s - start_s) / (arrive_s - start_s)
+                } else {
+                    1.0
+                };
+                let (s, _, _) = min_jerk(u);
+                (
+                    wrap_angle_rad(from_heading_rad + s * wrap_angle_rad(h1 - from_heading_rad)),
+                    p1 * s,
+                )
+            }
+            _ => (self.heading.heading_rad, self.pitch_rad),
+        }
+    }
+
+    fn look_for(
+        &mut self,
+        index: usize,
+        into_s: f64,
+        actors: &[ActorPose],
+        position: &Vec3,
+        cached: bool,
+    ) -> (f64, f64) {
+        let duration = self.shots[index].end_s - self.shots[index].start_s;
+        let visual = match &self.plans[index] {
+            Plan::Hold(_) | Plan::Move { .. } => match (cached, self.visual.clone()) {
+                (true, Some(v)) => Some(v),
+                _ => self.shot_visual(index, into_s, actors).and_then(Result::ok),
+            },
+            Plan::Path(plan) => {
+                let looking_at = match &self.shots[index].content {
+                    ShotContent::Path(p) => p.looking_at.clone(),
+                    _ => None,
+                };
+                return match looking_at.and_then(|n| self.actor_index(&n)) {
+                    Some(i) => {
+                        let aim = look_at_point(&actors[i]);
+                        self.orient_to(position, &aim, [0.0, 0.0])
+                    }
+                    None => {
+                        // Along the path: the target's direction of travel.
+                        let a = plan.at(into_s, actors);
+                        let v = if a.v.x.hypot(a.v.y) > 1e-3 {
+                            a.v
+                        } else {
+                            plan.at((into_s + 0.5).min(duration), actors).p - a.p
+                        };
+                        if v.x.hypot(v.y) > 1e-6 {
+                            (v.y.atan2(v.x), 0.0)
+                        } else {
+                            (self.heading.heading_rad, 0.0)
+                        }
+                    }
+                };
+            }
+            Plan::PathPending | Plan::Nothing => None,
+        };
+        match visual {
+            Some(v) => {
+                let (h, p, _) =
+                    framing::orient_visual(&v, actors, &self.lens, &self.gimbal, position);
+                (h, p)
+            }
+            None => (self.heading.heading_rad, self.pitch_rad),
+        }
+    }
+
+    fn orient_to(&self, position: &Vec3, aim: &Vec3, screen: [f64; 2]) -> (f64, f64) {
+        match self.gimbal {
+            Gimbal::None => (
+                orient_fixed_pitch(&self.lens, position, aim, screen[0], 0.0),
+                0.0,
+            ),
+            Gimbal::Pitch { min_rad, max_rad } => {
+                let o = orient(&self.lens, position, aim, screen);
+                (o.heading_rad, o.pitch_rad.clamp(min_rad, max_rad))
+            }
+        }
+    }
+
+    /// Diagnostics from planning and flying (repositions, cuts that do not fit, framings
+    /// that cannot be solved, limits exceeded), in source order.
+    pub fn finish(mut self) -> (Vec<ShotTiming>, Vec<Diagnostic>) {
+        let shots = std::mem::take(&mut self.shots);
+        let mut diags = std::mem::take(&mut self.diagnostics);
+        diags.extend(self.monitor.diagnostics(&shots, &self.timings));
+        diags.sort_by_key(|d| (d.span.start, d.span.end, d.code));
+        // The monitor's closeness report repeats a framing already reported as too close.
+        diags.dedup_by(|b, a| {
+            a.code == Code::TooClose && b.code == Code::TooClose && a.span == b.span
+        });
+        (self.timings, diags)
+    }
+}
+
+/// An actor moved on by its velocity and turn rate over `dt_s`.
+pub fn extrapolate(a: &ActorPose, dt_s: f64) -> ActorPose {
+    ActorPose {
+        position_m: [
+            a.position_m[0] + a.velocity_mps[0] * dt_s,
+            a.position_m[1] + a.velocity_mps[1] * dt_s,
+            a.position_m[2] + a.velocity_mps[2] * dt_s,
+        ],
+        facing_rad: wrap_angle_rad(a.facing_rad + a.facing_rate_radps * dt_s),
+        ..*a
+    }
+}
+
+/// Cylindrical coordinates (radius, angle, height) of `p` about the vertical through `c`.
+fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
+    let d = p - c;
+    (d.x.hypot(d.y), d.y.atan2(d.x), p.z)
+}
+
+/// The point a fraction `s` of the way from `a` to `b`: around the pivot's vertical in
+/// cylindrical coordinates (so the flight keeps its distance from the actors it turns
+/// around), or in a straight line when there is no pivot or either end is on it.
+pub fn interpolate_around(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>, s: f64) -> Vec3 {
+    if let Some(c) = pivot {
+        let (ra, ta, za) = cylindrical(a, c);
+        let (rb, tb, zb) = cylindrical(b, c);
+        if ra > 0.2 && rb > 0.2 {
+            let r = ra + (rb - ra) * s;
+            let t = ta + wrap_angle_rad(tb - ta) * s;
+            return Vec3::new(c.x + r * t.cos(), c.y + r * t.sin(), za + (zb - za) * s);
+        }
+    }
+    a + (b - a) * s
+}
+
+/// Length of the flight `interpolate_around` makes (sampled).
+fn arc_length(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>) -> f64 {
+    let mut len = 0.0;
+    let mut prev = *a;
+    for k in 1..=32 {
+        let p = interpolate_around(a, b, pivot, k as f64 / 32.0);
+        len += (p - prev).norm();
+        prev = p;
+    }
+    len
+}
+
+/// The shortest duration, from `t0` up, for which the minimum-jerk flight from `a` to `b`
+/// (around `pivot`) keeps its speed and acceleration under 80% of the limits.
+fn fit_duration(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>, t0: f64, limits: &SteerLimits) -> f64 {
+    let mut t = t0;
+    for _ in 0..4 {
+        let n = 64;
+        let h = t / n as f64;
+        let at = |k: i64| {
+            let u = (k as f64 * h / t).clamp(0.0, 1.0);
+            interpolate_around(a, b, pivot, min_jerk(u).0)
+        };
+        let (mut v_max, mut a_max, mut vz_max): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        for k in 0..=n {
+            let (p0, p1, p2) = (at(k - 1), at(k), at(k + 1));
+            let v = (p2 - p0) / (2.0 * h);
+            let acc = (p2 - 2.0 * p1 + p0) / (h * h);
+            v_max = v_max.max(v.x.hypot(v.y));
+            vz_max = vz_max.max(v.z.abs());
+            a_max = a_max.max(acc.x.hypot(acc.y));
+        }
+        let scale = (v_max / (0.8 * limits.speed_h_mps))
+            .max(vz_max / (0.8 * limits.speed_v_mps))
+            .max((a_max / (0.8 * limits.accel_h_mps2)).sqrt());
+        if scale <= 1.0 {
+            break;
+        }
+        t *= scale * 1.02;
+    }
+    t
+}
+
+fn round_up(x: f64, decimals: i32) -> f64 {
+    let m = 10f64.powi(decimals);
+    (x * m).ceil() / m
+}
+
+/// The point `looking at A` aims at: the centre of A's medium-shot band.
+pub fn look_at_point(actor: &ActorPose) -> Vec3 {
+    let (bottom, top) = crate::size::band(Size::MS, actor.height_m);
+    Vec3::new(
+        actor.position_m[0],
+        actor.position_m[1],
+        actor.position_m[2] + (bottom + top) / 2.0,
+    )
+}
+
+/// A composition that cannot be framed, on its shot's line.
+fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
+    let help = match e {
+        FramingError::SizeUnreachable { .. } => {
+            "use a wider size, move the actors apart, or put them closer together on screen"
+        }
+        FramingError::ProfileUnreachable | FramingError::ScreenSideConflict => {
+            "drop the profile angle, or swap the actors' screen positions"
+        }
+        FramingError::ScreensCoincide => "give the two actors different screen positions",
+        FramingError::ActorsCoincide => {
+            "the two actors stand at the same place here: frame one of them, or change the blocking"
+        }
+        _ => "frame one actor, two actors in one framing, or two framings of one actor each",
+    };
+    Diagnostic::error(
+        Code::Unframeable,
+        span,
+        format!("this composition cannot be framed: {e}"),
+    )
+    .with_label("no camera position gives this framing")
+    .with_help(help)
+}

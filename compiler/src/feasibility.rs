@@ -1,0 +1,319 @@
+//! Feasibility: every sample checked against the drone profile, the stage and the actors.
+//!
+//! The monitor watches two things per shot. What the script *asks* (the target's speed and
+//! acceleration, before steering caps them): if a shot asks more than the drone flies, the
+//! error says by how much and how long the shot must be. And what the reference *is* (speed,
+//! tilt that the servo model needs for it, vertical speed, yaw rate, distance from the
+//! actors, inside the stage, how far it lags its target). Violations become one diagnostic
+//! per shot and kind, on the shot's line, with the numbers and a concrete fix.
+
+use dronecine_grammar::script::{Scene, Shot, ShotContent, Transition};
+use dronecine_grammar::vocab::MoveKind;
+use dronecine_grammar::{Code, Diagnostic};
+
+use crate::camera::Vec3;
+use crate::director::ShotTiming;
+use crate::profile::Profile;
+use crate::reference::{ActorPose, Sample};
+use crate::steering::Kinematics;
+
+/// How far the reference may lag its target during a shot before the framing is lost.
+pub const TRACKING_TOLERANCE_M: f64 = 0.10;
+/// Tolerance on the limits (numerical noise of the steering integration).
+const SLACK: f64 = 1.005;
+
+#[derive(Clone, Copy, Debug, Default)]
+struct Peak {
+    value: f64,
+    t_s: f64,
+}
+
+impl Peak {
+    fn see(&mut self, value: f64, t_s: f64) {
+        if value > self.value {
+            *self = Peak { value, t_s };
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+struct ShotStats {
+    demand_speed: Peak,
+    demand_accel: Peak,
+    speed: Peak,
+    tilt: Peak,
+    vz: Peak,
+    yaw_rate: Peak,
+    lag: Peak,
+    /// Deepest intrusion into an actor's safety distance, and whose.
+    intrusion: Peak,
+    intruded: Option<usize>,
+    outside: Peak,
+    outside_at: [f64; 3],
+}
+
+/// Per-shot peaks of everything checked.
+pub struct Monitor {
+    stats: Vec<ShotStats>,
+    speed_max: f64,
+    accel_max: f64,
+    tilt_max: f64,
+    vz_max: f64,
+    yaw_max: f64,
+    gain: f64,
+    tau: f64,
+    safety_m: f64,
+    lo: Vec3,
+    hi: Vec3,
+    profile: String,
+    names: Vec<String>,
+}
+
+impl Monitor {
+    pub fn new(profile: &Profile, scene: &Scene, shots: usize) -> Monitor {
+        let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
+        let m = &profile.model;
+        Monitor {
+            stats: vec![ShotStats::default(); shots],
+            speed_max: profile.limits.speed_max_mps,
+            accel_max: profile.limits.accel_max_mps2,
+            tilt_max: profile.limits.tilt_max_rad,
+            vz_max: profile.limits.vz_max_mps,
+            yaw_max: profile.limits.yaw_rate_max_radps,
+            gain: m.gain_roll_mps_per_rad.min(m.gain_pitch_mps_per_rad),
+            tau: m.tau_roll_s.max(m.tau_pitch_s),
+            safety_m: profile.safety.actor_distance_m,
+            lo: Vec3::from(lo),
+            hi: Vec3::from(hi),
+            profile: profile.name.clone(),
+            names: scene.actors.iter().map(|a| a.name.clone()).collect(),
+        }
+    }
+
+    /// Tilt the servo model needs to fly `v` with acceleration `a` (per horizontal axis
+    /// `v̇ = (K·tilt − v)/τ`).
+    pub fn tilt_needed_rad(&self, v: &Vec3, a: &Vec3) -> f64 {
+        let x = self.tau * a.x + v.x;
+        let y = self.tau * a.y + v.y;
+        x.hypot(y) / self.gain
+    }
+
+    pub fn record(&mut self, s: &Sample, goal: &Kinematics, actors: &[ActorPose], in_shot: bool) {
+        let Some(st) = self.stats.get_mut(s.shot) else {
+            return;
+        };
+        let t = s.t_s;
+        let p = Vec3::from(s.position_m);
+        let v = Vec3::from(s.velocity_mps);
+        let a = Vec3::from(s.acceleration_mps2);
+        if in_shot {
+            st.demand_speed.see(goal.v.x.hypot(goal.v.y), t);
+            st.demand_accel.see(goal.a.x.hypot(goal.a.y), t);
+            st.lag.see((goal.p - p).norm(), t);
+        }
+        st.speed.see(v.x.hypot(v.y), t);
+        let x = self.tau * a.x + v.x;
+        let y = self.tau * a.y + v.y;
+        st.tilt.see(x.hypot(y) / self.gain, t);
+        st.vz.see(v.z.abs(), t);
+        st.yaw_rate.see(s.heading_rate_radps.abs(), t);
+        for (i, actor) in actors.iter().enumerate() {
+            if p.z > actor.position_m[2] + actor.height_m + self.safety_m {
+                continue;
+            }
+            let d = (p.x - actor.position_m[0]).hypot(p.y - actor.position_m[1]);
+            let intrusion = self.safety_m - d;
+            if intrusion > st.intrusion.value {
+                st.intrusion = Peak {
+                    value: intrusion,
+                    t_s: t,
+                };
+                st.intruded = Some(i);
+            }
+        }
+        let mut out: f64 = 0.0;
+        for i in 0..3 {
+            out = out.max(self.lo[i] - p[i]).max(p[i] - self.hi[i]);
+        }
+        if out > st.outside.value {
+            st.outside = Peak { value: out, t_s: t };
+            st.outside_at = s.position_m;
+        }
+    }
+
+    /// The diagnostics of everything that exceeded a limit.
+    pub fn diagnostics(&self, shots: &[Shot], timings: &[ShotTiming]) -> Vec<Diagnostic> {
+        let mut out = Vec::new();
+        for (i, (st, shot)) in self.stats.iter().zip(shots).enumerate() {
+            let duration = shot.end_s - shot.start_s;
+            let retimeable = matches!(shot.content, ShotContent::Path(_))
+                || matches!(&shot.transition, Transition::Move { kind, .. } if *kind != MoveKind::Hold);
+            let at = |t: f64| {
+                let start = timings
+                    .iter()
+                    .find(|x| x.index == i)
+                    .map(|x| x.start_s)
+                    .unwrap_or(shot.start_s);
+                format!("{:.1} s into the shot", (t - start).max(0.0))
+            };
+            let mut demand_reported = false;
+            if st.demand_speed.value > self.speed_max * SLACK {
+                demand_reported = true;
+                let need = st.demand_speed.value;
+                let help = if retimeable {
+                    format!(
+                        "make it at least {:.1} s",
+                        round_up_1(duration * need / self.speed_max)
+                    )
+                } else {
+                    "the framing follows the actors: slow their movement (a longer `over`) or \
+                     use a wider size"
+                        .to_string()
+                };
+                out.push(
+                    Diagnostic::error(
+                        Code::Infeasible,
+                        shot.span,
+                        format!(
+                            "this shot needs {need:.2} m/s ({}); {} flies {:.2} m/s",
+                            at(st.demand_speed.t_s),
+                            self.profile,
+                            self.speed_max
+                        ),
+                    )
+                    .with_label("too fast for the drone")
+                    .with_help(help),
+                );
+            }
+            if !demand_reported && st.demand_accel.value > self.accel_max * SLACK {
+                demand_reported = true;
+                let need = st.demand_accel.value;
+                let help = if retimeable {
+                    format!(
+                        "make it at least {:.1} s",
+                        round_up_1(duration * (need / self.accel_max).sqrt())
+                    )
+                } else {
+                    "the framing follows the actors: make their movements smoother (a longer \
+                     `over`) or use a wider size"
+                        .to_string()
+                };
+                out.push(
+                    Diagnostic::error(
+                        Code::Infeasible,
+                        shot.span,
+                        format!(
+                            "this shot needs {need:.2} m/s² ({}); {} accelerates at most {:.2} m/s²",
+                            at(st.demand_accel.t_s),
+                            self.profile,
+                            self.accel_max
+                        ),
+                    )
+                    .with_label("too abrupt for the drone")
+                    .with_help(help),
+                );
+            }
+            if !demand_reported && st.lag.value > TRACKING_TOLERANCE_M {
+                demand_reported = true;
+                out.push(
+                    Diagnostic::error(
+                        Code::Infeasible,
+                        shot.span,
+                        format!(
+                            "the drone falls {:.2} m behind the framing ({}) within {}'s limits",
+                            st.lag.value,
+                            at(st.lag.t_s),
+                            self.profile
+                        ),
+                    )
+                    .with_label("the framing is lost here")
+                    .with_help(if retimeable {
+                        format!(
+                            "make it longer (at least {:.1} s)",
+                            round_up_1(duration * 1.5)
+                        )
+                    } else {
+                        "slow the actors' movements or use a wider size".to_string()
+                    }),
+                );
+            }
+            let checks = [
+                (st.tilt, self.tilt_max, "tilt", "rad"),
+                (st.vz, self.vz_max, "vertical speed", "m/s"),
+                (st.yaw_rate, self.yaw_max, "yaw rate", "rad/s"),
+                (st.speed, self.speed_max, "speed", "m/s"),
+            ];
+            if !demand_reported {
+                for (peak, max, what, unit) in checks {
+                    if peak.value > max * SLACK {
+                        out.push(
+                            Diagnostic::error(
+                                Code::Infeasible,
+                                shot.span,
+                                format!(
+                                    "the reference needs a {what} of {:.2} {unit} ({}); {} allows {:.2} {unit}",
+                                    peak.value,
+                                    at(peak.t_s),
+                                    self.profile,
+                                    max
+                                ),
+                            )
+                            .with_label(format!("{what} over the limit"))
+                            .with_help(format!(
+                                "make the shot at least {:.1} s long",
+                                round_up_1(duration * peak.value / max)
+                            )),
+                        );
+                        break;
+                    }
+                }
+            }
+            if st.intrusion.value > 0.02 {
+                let who = st
+                    .intruded
+                    .and_then(|i| self.names.get(i))
+                    .map(String::as_str)
+                    .unwrap_or("an actor");
+                out.push(
+                    Diagnostic::error(
+                        Code::TooClose,
+                        shot.span,
+                        format!(
+                            "the camera comes within {:.2} m of {who} ({}); {} keeps {:.2} m from actors",
+                            self.safety_m - st.intrusion.value,
+                            at(st.intrusion.t_s),
+                            self.profile,
+                            self.safety_m
+                        ),
+                    )
+                    .with_label(format!("too close to {who}"))
+                    .with_help("use a wider size, a longer lens (`lens …`), or move the path away from the actors"),
+                );
+            }
+            if st.outside.value > 0.02 {
+                let p = st.outside_at;
+                out.push(
+                    Diagnostic::error(
+                        Code::LeavesStage,
+                        shot.span,
+                        format!(
+                            "the camera leaves the stage by {:.2} m at ({:.2}, {:.2}, {:.2}) ({})",
+                            st.outside.value,
+                            p[0],
+                            p[1],
+                            p[2],
+                            at(st.outside.t_s)
+                        ),
+                    )
+                    .with_label("outside the flight volume")
+                    .with_help("make the stage larger, or move the path or the framing inside it (a tighter size brings the camera closer)"),
+                );
+            }
+        }
+        out
+    }
+}
+
+fn round_up_1(x: f64) -> f64 {
+    (x * 10.0).ceil() / 10.0
+}
