@@ -4,5 +4,6 @@
 //! camera conventions), `reference` (the output samples).
 
 pub mod camera;
+pub mod output;
 pub mod profile;
 pub mod reference;
