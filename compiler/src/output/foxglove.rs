@@ -1,0 +1,704 @@
+//! Foxglove's well-known schemas, JSON-encoded, so that the MCAP file plays in Foxglove's 3D
+//! panel: the JSON schemas themselves and the messages the writer publishes.
+//!
+//! Frames: `world` (the stage: origin at the centre of the floor, z up); `drone` (at the
+//! reference position, turned by the heading: x forward, y left, z up); `camera` (the
+//! camera's *optical* frame as Foxglove expects it for a `CameraCalibration`: z forward,
+//! x right, y down, pitched by the camera pitch); `actor/NAME` (at the actor's feet, turned
+//! by the facing). Entities that ride a moving frame are `frame_locked`, so an actor or the
+//! drone moves by its transform alone and its entity is published once.
+//!
+//! Topics (each topic's latest message is self-contained, so seeking in Foxglove, which
+//! back-fills the latest message of every topic, shows the whole scene):
+//! `/tf` (`foxglove.FrameTransforms`, every frame at each tick), `/scene/stage`,
+//! `/scene/drone`, `/scene/actors`, `/scene/path` (`foxglove.SceneUpdate`) and
+//! `/camera_calibration` (`foxglove.CameraCalibration`).
+
+use serde_json::{json, Value};
+
+use super::json;
+use crate::camera::Lens;
+use dronecine_grammar::script::Stage;
+
+pub const SCENE_UPDATE: &str = "foxglove.SceneUpdate";
+pub const FRAME_TRANSFORMS: &str = "foxglove.FrameTransforms";
+pub const CAMERA_CALIBRATION: &str = "foxglove.CameraCalibration";
+
+pub const WORLD: &str = "world";
+pub const DRONE: &str = "drone";
+pub const CAMERA: &str = "camera";
+
+/// The frame an actor's entity rides.
+pub fn actor_frame(name: &str) -> String {
+    format!("actor/{name}")
+}
+
+/// Image size the camera calibration declares (the frustum's shape only depends on the
+/// field of view and the aspect; the width just has to be plausible).
+const IMAGE_WIDTH_PX: u32 = 1920;
+
+// ---------------------------------------------------------------------------------------
+// JSON schemas
+// ---------------------------------------------------------------------------------------
+
+fn time(title: &str, description: &str) -> Value {
+    json!({
+        "type": "object",
+        "title": title,
+        "description": description,
+        "properties": {
+            "sec": { "type": "integer", "minimum": 0 },
+            "nsec": { "type": "integer", "minimum": 0, "maximum": 999_999_999 }
+        }
+    })
+}
+
+fn numbers(title: &str, description: &str, keys: &[&str]) -> Value {
+    let props: serde_json::Map<String, Value> = keys
+        .iter()
+        .map(|k| (k.to_string(), json!({ "type": "number" })))
+        .collect();
+    json!({ "type": "object", "title": title, "description": description, "properties": props })
+}
+
+fn vector3(description: &str) -> Value {
+    numbers("foxglove.Vector3", description, &["x", "y", "z"])
+}
+
+fn point3(description: &str) -> Value {
+    numbers("foxglove.Point3", description, &["x", "y", "z"])
+}
+
+fn quaternion(description: &str) -> Value {
+    numbers("foxglove.Quaternion", description, &["x", "y", "z", "w"])
+}
+
+fn color(description: &str) -> Value {
+    numbers("foxglove.Color", description, &["r", "g", "b", "a"])
+}
+
+fn pose(description: &str) -> Value {
+    json!({
+        "type": "object",
+        "title": "foxglove.Pose",
+        "description": description,
+        "properties": {
+            "position": vector3("Position"),
+            "orientation": quaternion("Orientation")
+        }
+    })
+}
+
+fn array(items: Value, description: &str) -> Value {
+    json!({ "type": "array", "items": items, "description": description })
+}
+
+fn object(title: &str, description: &str, properties: Value) -> Value {
+    json!({ "type": "object", "title": title, "description": description, "properties": properties })
+}
+
+fn number(description: &str) -> Value {
+    json!({ "type": "number", "description": description })
+}
+
+fn boolean(description: &str) -> Value {
+    json!({ "type": "boolean", "description": description })
+}
+
+fn string(description: &str) -> Value {
+    json!({ "type": "string", "description": description })
+}
+
+fn integer_array(description: &str) -> Value {
+    array(json!({ "type": "integer", "minimum": 0 }), description)
+}
+
+fn scene_entity() -> Value {
+    let arrow = object(
+        "foxglove.ArrowPrimitive",
+        "An arrow",
+        json!({
+            "pose": pose("Tail position; identity orientation points along +x"),
+            "shaft_length": number("Shaft length"),
+            "shaft_diameter": number("Shaft diameter"),
+            "head_length": number("Head length"),
+            "head_diameter": number("Head diameter"),
+            "color": color("Colour")
+        }),
+    );
+    let cube = object(
+        "foxglove.CubePrimitive",
+        "A box",
+        json!({ "pose": pose("Centre and orientation"), "size": vector3("Size along each axis"), "color": color("Colour") }),
+    );
+    let sphere = object(
+        "foxglove.SpherePrimitive",
+        "A sphere or ellipsoid",
+        json!({ "pose": pose("Centre and orientation"), "size": vector3("Diameter along each axis"), "color": color("Colour") }),
+    );
+    let cylinder = object(
+        "foxglove.CylinderPrimitive",
+        "A cylinder, cone or truncated cone along z",
+        json!({
+            "pose": pose("Centre and orientation"),
+            "size": vector3("Bounding box size"),
+            "bottom_scale": number("Bottom face scale (0 = point)"),
+            "top_scale": number("Top face scale (0 = point)"),
+            "color": color("Colour")
+        }),
+    );
+    let line_type = json!({
+        "title": "foxglove.LineType",
+        "description": "How points are joined",
+        "oneOf": [
+            { "title": "LINE_STRIP", "const": 0, "description": "Each point joined to the next" },
+            { "title": "LINE_LOOP", "const": 1, "description": "A strip, last point joined to the first" },
+            { "title": "LINE_LIST", "const": 2, "description": "Each pair of points is a segment" }
+        ]
+    });
+    let line = object(
+        "foxglove.LinePrimitive",
+        "A line strip, loop or list",
+        json!({
+            "type": line_type,
+            "pose": pose("Origin of the points"),
+            "thickness": number("Width (pixels if scale_invariant, else metres)"),
+            "scale_invariant": boolean("Whether thickness is in pixels"),
+            "points": array(point3("A point"), "Points"),
+            "color": color("Colour of the whole line (when colors is empty)"),
+            "colors": array(color("A point's colour"), "Per-point colours"),
+            "indices": integer_array("Indices into points (empty: all, in order)")
+        }),
+    );
+    let triangles = object(
+        "foxglove.TriangleListPrimitive",
+        "A set of triangles",
+        json!({
+            "pose": pose("Origin of the points"),
+            "points": array(point3("A vertex"), "Vertices, three per triangle"),
+            "color": color("Colour of the whole list"),
+            "colors": array(color("A vertex colour"), "Per-vertex colours"),
+            "indices": integer_array("Indices into points")
+        }),
+    );
+    let text = object(
+        "foxglove.TextPrimitive",
+        "A text label",
+        json!({
+            "pose": pose("Position and orientation"),
+            "billboard": boolean("Whether the text faces the camera"),
+            "font_size": number("Font size (pixels if scale_invariant, else metres)"),
+            "scale_invariant": boolean("Whether font_size is in pixels"),
+            "color": color("Colour"),
+            "text": string("The text")
+        }),
+    );
+    let model = object(
+        "foxglove.ModelPrimitive",
+        "A 3D model",
+        json!({
+            "pose": pose("Origin and orientation"),
+            "scale": vector3("Scale along each axis"),
+            "color": color("Colour override"),
+            "override_color": boolean("Whether to use the colour"),
+            "url": string("URL of the model"),
+            "media_type": string("Media type of data"),
+            "data": { "type": "string", "contentEncoding": "base64", "description": "Embedded model" }
+        }),
+    );
+    let key_value = object(
+        "foxglove.KeyValuePair",
+        "A key and its value",
+        json!({ "key": string("Key"), "value": string("Value") }),
+    );
+    object(
+        "foxglove.SceneEntity",
+        "A visual element of the 3D scene, made of primitives sharing a frame",
+        json!({
+            "timestamp": time("time", "Timestamp of the entity"),
+            "frame_id": string("Frame of reference"),
+            "id": string("Identifier; replaces an earlier entity with the same id on the topic"),
+            "lifetime": {
+                "type": "object",
+                "title": "duration",
+                "description": "How long the entity lives (0: until replaced or deleted)",
+                "properties": {
+                    "sec": { "type": "integer" },
+                    "nsec": { "type": "integer", "minimum": 0, "maximum": 999_999_999 }
+                }
+            },
+            "frame_locked": boolean("Whether the entity follows its frame as that frame moves"),
+            "metadata": array(key_value, "User metadata"),
+            "arrows": array(arrow, "Arrows"),
+            "cubes": array(cube, "Boxes"),
+            "spheres": array(sphere, "Spheres"),
+            "cylinders": array(cylinder, "Cylinders"),
+            "lines": array(line, "Lines"),
+            "triangles": array(triangles, "Triangles"),
+            "texts": array(text, "Texts"),
+            "models": array(model, "Models")
+        }),
+    )
+}
+
+/// The JSON schema of `foxglove.SceneUpdate`.
+pub fn scene_update_schema() -> String {
+    let deletion = object(
+        "foxglove.SceneEntityDeletion",
+        "Removes earlier entities",
+        json!({
+            "timestamp": time("time", "Only entities older than this are deleted"),
+            "type": {
+                "title": "foxglove.SceneEntityDeletionType",
+                "description": "What to delete",
+                "oneOf": [
+                    { "title": "MATCHING_ID", "const": 0, "description": "The entity with the given id" },
+                    { "title": "ALL", "const": 1, "description": "Every entity on the topic" }
+                ]
+            },
+            "id": string("Entity id (MATCHING_ID)")
+        }),
+    );
+    let mut schema = object(
+        SCENE_UPDATE,
+        "An update to the entities of a 3D scene",
+        json!({
+            "deletions": array(deletion, "Entities to delete"),
+            "entities": array(scene_entity(), "Entities to add or replace")
+        }),
+    );
+    schema["$schema"] = json!("https://json-schema.org/draft/2020-12/schema");
+    schema.to_string()
+}
+
+fn frame_transform() -> Value {
+    object(
+        "foxglove.FrameTransform",
+        "Pose of a child frame in its parent frame",
+        json!({
+            "timestamp": time("time", "Timestamp of the transform"),
+            "parent_frame_id": string("Parent frame"),
+            "child_frame_id": string("Child frame"),
+            "translation": vector3("Child origin in the parent frame"),
+            "rotation": quaternion("Child orientation in the parent frame")
+        }),
+    )
+}
+
+/// The JSON schema of `foxglove.FrameTransforms`.
+pub fn frame_transforms_schema() -> String {
+    let mut schema = object(
+        FRAME_TRANSFORMS,
+        "A list of frame transforms",
+        json!({ "transforms": array(frame_transform(), "Transforms") }),
+    );
+    schema["$schema"] = json!("https://json-schema.org/draft/2020-12/schema");
+    schema.to_string()
+}
+
+/// The JSON schema of `foxglove.CameraCalibration`.
+pub fn camera_calibration_schema() -> String {
+    let fixed = |n: usize, description: &str| json!({ "type": "array", "items": { "type": "number" }, "minItems": n, "maxItems": n, "description": description });
+    let mut schema = object(
+        CAMERA_CALIBRATION,
+        "Pinhole camera intrinsics",
+        json!({
+            "timestamp": time("time", "Timestamp of the calibration"),
+            "frame_id": string("Optical frame: x right, y down, z forward"),
+            "width": { "type": "integer", "minimum": 0, "description": "Image width (px)" },
+            "height": { "type": "integer", "minimum": 0, "description": "Image height (px)" },
+            "distortion_model": string("Distortion model name"),
+            "D": array(json!({ "type": "number" }), "Distortion parameters"),
+            "K": fixed(9, "Intrinsic matrix, 3×3 row-major"),
+            "R": fixed(9, "Rectification matrix, 3×3 row-major"),
+            "P": fixed(12, "Projection matrix, 3×4 row-major")
+        }),
+    );
+    schema["$schema"] = json!("https://json-schema.org/draft/2020-12/schema");
+    schema.to_string()
+}
+
+// ---------------------------------------------------------------------------------------
+// Geometry
+// ---------------------------------------------------------------------------------------
+
+/// A quaternion `[x, y, z, w]`.
+pub type Quat = [f64; 4];
+
+/// Rotation by `angle_rad` about +z.
+pub fn yaw(angle_rad: f64) -> Quat {
+    let (s, c) = (angle_rad / 2.0).sin_cos();
+    [0.0, 0.0, s, c]
+}
+
+/// Hamilton product `a·b` (apply `b`, then `a`).
+pub fn mul(a: Quat, b: Quat) -> Quat {
+    let [ax, ay, az, aw] = a;
+    let [bx, by, bz, bw] = b;
+    [
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ]
+}
+
+/// The camera's optical frame (x right, y down, z forward) in the drone frame (x forward,
+/// y left, z up) for a camera pitched up by `pitch_rad`.
+pub fn camera_in_drone(pitch_rad: f64) -> Quat {
+    // Pitch up = rotation by −τ about +y (left).
+    let (s, c) = (-pitch_rad / 2.0).sin_cos();
+    let pitch = [0.0, s, 0.0, c];
+    // Optical axes in a level forward-left-up frame: x = −y, y = −z, z = +x.
+    const OPTICAL: Quat = [-0.5, 0.5, -0.5, 0.5];
+    mul(pitch, OPTICAL)
+}
+
+// ---------------------------------------------------------------------------------------
+// Messages
+// ---------------------------------------------------------------------------------------
+
+/// Millimetres are plenty for the 3D view.
+const POS_DECIMALS: u32 = 3;
+const POS_SCALE: f64 = 1e3;
+/// Quaternion components to 1e-6 (≈ 2e-6 rad).
+const ROT_DECIMALS: u32 = 6;
+
+fn time_value(ns: u64) -> Value {
+    json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
+}
+
+fn xyz(v: [f64; 3]) -> Value {
+    let r = |x: f64| (x * POS_SCALE).round() / POS_SCALE;
+    json!({ "x": r(v[0]), "y": r(v[1]), "z": r(v[2]) })
+}
+
+fn rgba(c: [f64; 4]) -> Value {
+    json!({ "r": c[0], "g": c[1], "b": c[2], "a": c[3] })
+}
+
+fn pose_value(position: [f64; 3], q: Quat) -> Value {
+    json!({ "position": xyz(position), "orientation": { "x": q[0], "y": q[1], "z": q[2], "w": q[3] } })
+}
+
+const IDENTITY: Quat = [0.0, 0.0, 0.0, 1.0];
+
+/// Distinct, readable colours for actors and shots.
+const PALETTE: [[f64; 4]; 6] = [
+    [0.90, 0.33, 0.25, 1.0],
+    [0.25, 0.55, 0.90, 1.0],
+    [0.30, 0.75, 0.35, 1.0],
+    [0.95, 0.70, 0.20, 1.0],
+    [0.65, 0.40, 0.85, 1.0],
+    [0.20, 0.80, 0.80, 1.0],
+];
+
+fn entity(ns: u64, frame_id: &str, id: &str, frame_locked: bool) -> Value {
+    json!({
+        "timestamp": time_value(ns),
+        "frame_id": frame_id,
+        "id": id,
+        "lifetime": { "sec": 0, "nsec": 0 },
+        "frame_locked": frame_locked,
+        "metadata": [],
+        "arrows": [], "cubes": [], "spheres": [], "cylinders": [],
+        "lines": [], "triangles": [], "texts": [], "models": []
+    })
+}
+
+fn scene_update(entities: Vec<Value>) -> Vec<u8> {
+    json!({ "deletions": [], "entities": entities })
+        .to_string()
+        .into_bytes()
+}
+
+/// The stage: its twelve edges and a translucent floor.
+pub fn stage_scene(ns: u64, stage: &Stage) -> Vec<u8> {
+    let (lo, hi) = (stage.min_m(), stage.max_m());
+    let corner = |i: usize| {
+        [
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        ]
+    };
+    let mut points = Vec::with_capacity(24);
+    for a in 0..8usize {
+        for bit in [1usize, 2, 4] {
+            if a & bit == 0 {
+                points.push(xyz(corner(a)));
+                points.push(xyz(corner(a | bit)));
+            }
+        }
+    }
+    let mut e = entity(ns, WORLD, "stage", false);
+    e["lines"] = json!([{
+        "type": 2,
+        "pose": pose_value([0.0; 3], IDENTITY),
+        "thickness": 2.0,
+        "scale_invariant": true,
+        "points": points,
+        "color": rgba([0.8, 0.8, 0.8, 1.0]),
+        "colors": [],
+        "indices": []
+    }]);
+    e["cubes"] = json!([{
+        "pose": pose_value([0.0, 0.0, -0.005], IDENTITY),
+        "size": xyz([stage.size_m[0], stage.size_m[1], 0.01]),
+        "color": rgba([0.5, 0.5, 0.5, 0.25])
+    }]);
+    scene_update(vec![e])
+}
+
+/// The drone: a flat body and an arrow along its heading (in the `drone` frame).
+pub fn drone_scene(ns: u64) -> Vec<u8> {
+    let mut e = entity(ns, DRONE, "drone", true);
+    e["cubes"] = json!([{
+        "pose": pose_value([0.0; 3], IDENTITY),
+        "size": xyz([0.35, 0.35, 0.08]),
+        "color": rgba([0.15, 0.15, 0.15, 0.9])
+    }]);
+    e["arrows"] = json!([{
+        "pose": pose_value([0.0; 3], IDENTITY),
+        "shaft_length": 0.3, "shaft_diameter": 0.03,
+        "head_length": 0.1, "head_diameter": 0.08,
+        "color": rgba([1.0, 1.0, 1.0, 1.0])
+    }]);
+    scene_update(vec![e])
+}
+
+/// Every actor (in its own frame, feet at the origin, facing +x): a body, a head, an arrow
+/// for the facing and the name above the head.
+pub fn actors_scene(ns: u64, names: &[String], heights_m: &[f64]) -> Vec<u8> {
+    let entities = names
+        .iter()
+        .zip(heights_m)
+        .enumerate()
+        .map(|(i, (name, &h))| {
+            let h = if h.is_finite() && h > 0.1 { h } else { 0.1 };
+            let head = (h / 8.0).clamp(0.05, 0.25);
+            let body = h - head;
+            let c = PALETTE[i % PALETTE.len()];
+            let mut e = entity(ns, &actor_frame(name), &format!("actor/{name}"), true);
+            e["cylinders"] = json!([{
+                "pose": pose_value([0.0, 0.0, body / 2.0], IDENTITY),
+                "size": xyz([0.4, 0.4, body]),
+                "bottom_scale": 1.0, "top_scale": 1.0,
+                "color": rgba([c[0], c[1], c[2], 0.8])
+            }]);
+            e["spheres"] = json!([{
+                "pose": pose_value([0.0, 0.0, h - head / 2.0], IDENTITY),
+                "size": xyz([head; 3]),
+                "color": rgba([0.95, 0.85, 0.75, 1.0])
+            }]);
+            e["arrows"] = json!([{
+                "pose": pose_value([0.0, 0.0, 0.75 * h], IDENTITY),
+                "shaft_length": 0.4, "shaft_diameter": 0.04,
+                "head_length": 0.15, "head_diameter": 0.1,
+                "color": rgba(c)
+            }]);
+            e["texts"] = json!([{
+                "pose": pose_value([0.0, 0.0, h + 0.2], IDENTITY),
+                "billboard": true, "font_size": 14.0, "scale_invariant": true,
+                "color": rgba([1.0, 1.0, 1.0, 1.0]),
+                "text": name
+            }]);
+            e
+        })
+        .collect();
+    scene_update(entities)
+}
+
+/// The whole path: one line strip per shot, in alternating colours.
+pub fn path_scene(ns: u64, segments: &[(usize, Vec<[f64; 3]>)]) -> Vec<u8> {
+    let lines: Vec<Value> = segments
+        .iter()
+        .filter(|(_, points)| points.len() >= 2)
+        .map(|(shot, points)| {
+            json!({
+                "type": 0,
+                "pose": pose_value([0.0; 3], IDENTITY),
+                "thickness": 3.0,
+                "scale_invariant": true,
+                "points": points.iter().map(|&p| xyz(p)).collect::<Vec<_>>(),
+                "color": rgba(PALETTE[shot % PALETTE.len()]),
+                "colors": [],
+                "indices": []
+            })
+        })
+        .collect();
+    let mut e = entity(ns, WORLD, "path", false);
+    e["lines"] = Value::Array(lines);
+    scene_update(vec![e])
+}
+
+/// A pinhole calibration whose frustum has exactly the lens's horizontal and vertical
+/// fields of view.
+pub fn camera_calibration(ns: u64, lens: &Lens) -> Vec<u8> {
+    let w = IMAGE_WIDTH_PX;
+    let aspect = if lens.aspect.is_finite() && lens.aspect > 0.0 {
+        lens.aspect
+    } else {
+        16.0 / 9.0
+    };
+    let h = ((w as f64 / aspect).round() as u32).max(1);
+    let (wf, hf) = (w as f64, h as f64);
+    // fx = (w/2)·Sx, fy = (h/2)·Sy with Sy = Sx·aspect: the rounded height keeps fovY exact.
+    let sx = lens.sx();
+    let fx = wf / 2.0 * sx;
+    let fy = hf / 2.0 * sx * aspect;
+    let (cx, cy) = (wf / 2.0, hf / 2.0);
+    json!({
+        "timestamp": time_value(ns),
+        "frame_id": CAMERA,
+        "width": w,
+        "height": h,
+        "distortion_model": "plumb_bob",
+        "D": [0.0, 0.0, 0.0, 0.0, 0.0],
+        "K": [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0],
+        "R": [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        "P": [fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0]
+    })
+    .to_string()
+    .into_bytes()
+}
+
+/// Appends one `FrameTransform` object; `stamp` is the tick's `{"sec":…,"nsec":…}` and the
+/// frame names are quoted JSON strings.
+fn transform(out: &mut Vec<u8>, stamp: &[u8], parent: &[u8], child: &[u8], t: [f64; 3], q: Quat) {
+    out.extend_from_slice(b"{\"timestamp\":");
+    out.extend_from_slice(stamp);
+    out.extend_from_slice(b",\"parent_frame_id\":");
+    out.extend_from_slice(parent);
+    out.extend_from_slice(b",\"child_frame_id\":");
+    out.extend_from_slice(child);
+    out.extend_from_slice(b",\"translation\":{\"x\":");
+    json::fixed(out, t[0], POS_DECIMALS);
+    out.extend_from_slice(b",\"y\":");
+    json::fixed(out, t[1], POS_DECIMALS);
+    out.extend_from_slice(b",\"z\":");
+    json::fixed(out, t[2], POS_DECIMALS);
+    out.extend_from_slice(b"},\"rotation\":{\"x\":");
+    json::fixed(out, q[0], ROT_DECIMALS);
+    out.extend_from_slice(b",\"y\":");
+    json::fixed(out, q[1], ROT_DECIMALS);
+    out.extend_from_slice(b",\"z\":");
+    json::fixed(out, q[2], ROT_DECIMALS);
+    out.extend_from_slice(b",\"w\":");
+    json::fixed(out, q[3], ROT_DECIMALS);
+    out.extend_from_slice(b"}}");
+}
+
+/// Pre-quoted frame names for the per-tick transforms.
+pub struct Frames {
+    world: Vec<u8>,
+    drone: Vec<u8>,
+    camera: Vec<u8>,
+    actors: Vec<Vec<u8>>,
+}
+
+impl Frames {
+    pub fn new(actor_names: &[String]) -> Self {
+        let quote = |s: &str| {
+            let mut v = Vec::new();
+            json::string(&mut v, s);
+            v
+        };
+        Self {
+            world: quote(WORLD),
+            drone: quote(DRONE),
+            camera: quote(CAMERA),
+            actors: actor_names.iter().map(|n| quote(&actor_frame(n))).collect(),
+        }
+    }
+
+    /// A `FrameTransforms` message: world→drone, drone→camera, world→each actor.
+    /// `actors` yields (feet position, facing) in the order of the names given to `new`.
+    pub fn message(
+        &self,
+        out: &mut Vec<u8>,
+        ns: u64,
+        position_m: [f64; 3],
+        heading_rad: f64,
+        pitch_rad: f64,
+        actors: impl Iterator<Item = ([f64; 3], f64)>,
+    ) {
+        let mut stamp = Vec::with_capacity(40);
+        stamp.extend_from_slice(b"{\"sec\":");
+        json::u64(&mut stamp, ns / 1_000_000_000);
+        stamp.extend_from_slice(b",\"nsec\":");
+        json::u64(&mut stamp, ns % 1_000_000_000);
+        stamp.push(b'}');
+
+        out.extend_from_slice(b"{\"transforms\":[");
+        transform(
+            out,
+            &stamp,
+            &self.world,
+            &self.drone,
+            position_m,
+            yaw(heading_rad),
+        );
+        out.push(b',');
+        transform(
+            out,
+            &stamp,
+            &self.drone,
+            &self.camera,
+            [0.0; 3],
+            camera_in_drone(pitch_rad),
+        );
+        for (frame, (feet_m, facing_rad)) in self.actors.iter().zip(actors) {
+            out.push(b',');
+            transform(out, &stamp, &self.world, frame, feet_m, yaw(facing_rad));
+        }
+        out.extend_from_slice(b"]}");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{CameraPose, Vec3};
+
+    /// Rotates `v` by the unit quaternion `q`.
+    fn rotate(q: Quat, v: [f64; 3]) -> Vec3 {
+        let p = mul(mul(q, [v[0], v[1], v[2], 0.0]), [-q[0], -q[1], -q[2], q[3]]);
+        Vec3::new(p[0], p[1], p[2])
+    }
+
+    #[test]
+    fn optical_frame_matches_the_camera_conventions() {
+        for (heading, pitch) in [(0.0, 0.0), (0.7, -0.3), (-2.5, 0.4), (3.0, -1.2)] {
+            let pose = CameraPose {
+                position_m: Vec3::zeros(),
+                heading_rad: heading,
+                pitch_rad: pitch,
+            };
+            // world ← drone ← camera.
+            let q = mul(yaw(heading), camera_in_drone(pitch));
+            let z = rotate(q, [0.0, 0.0, 1.0]);
+            let x = rotate(q, [1.0, 0.0, 0.0]);
+            let y = rotate(q, [0.0, 1.0, 0.0]);
+            assert!((z - pose.forward()).norm() < 1e-12, "optical z is forward");
+            assert!((x - pose.right()).norm() < 1e-12, "optical x is right");
+            assert!((y + pose.up()).norm() < 1e-12, "optical y is down");
+        }
+    }
+
+    #[test]
+    fn calibration_frustum_has_the_lens_fields_of_view() {
+        let lens = Lens {
+            fov_x_rad: 84f64.to_radians(),
+            aspect: 4.0 / 3.0,
+        };
+        let v: Value = serde_json::from_slice(&camera_calibration(0, &lens)).unwrap();
+        let (w, h) = (v["width"].as_f64().unwrap(), v["height"].as_f64().unwrap());
+        let k: Vec<f64> = serde_json::from_value(v["K"].clone()).unwrap();
+        let fov_x = 2.0 * (w / 2.0 / k[0]).atan();
+        let fov_y = 2.0 * (h / 2.0 / k[4]).atan();
+        assert!((fov_x - lens.fov_x_rad).abs() < 1e-12);
+        assert!((fov_y - lens.fov_y_rad()).abs() < 1e-12);
+        assert_eq!(v["frame_id"], CAMERA);
+    }
+}

@@ -1,0 +1,240 @@
+//! Streaming writers for the compiled reference: an MCAP file that opens and plays in
+//! Foxglove ([`McapWriter`]) and a plain CSV table ([`CsvWriter`]).
+//!
+//! Both writers take samples one at a time and keep nothing per sample beyond the MCAP chunk
+//! buffer (about 1 MiB) and a decimated copy of the path (10 Hz by default) for the 3D
+//! view's line strip, so a one-hour reference costs a few megabytes of memory at most.
+//!
+//! Both write to a temporary file next to the destination (`.NAME.PID.tmp`) and rename it to
+//! the destination on `finish()`: a crash never leaves a file under the destination's name
+//! that looks complete, and dropping a writer without `finish()` removes the temporary file.
+//! The rename is not preceded by an `fsync` (the compile stays fast); a power cut right after
+//! `finish()` may lose the file, never leave a truncated one that claims to be whole (an MCAP
+//! file without its summary and closing magic is recognisably incomplete).
+//!
+//! Errors are `std::io::Error`s whose message names the destination path, so that the CLI
+//! can show them as they are. Non-finite numbers are written as `null` in JSON (valid JSON;
+//! the runtime's flight logs may contain them) and as `NaN`/`inf` in CSV.
+
+mod csv;
+mod foxglove;
+mod mcap;
+
+use std::fs::{File, OpenOptions};
+use std::io;
+use std::path::{Path, PathBuf};
+
+use dronecine_grammar::script::Stage;
+
+use crate::camera::Lens;
+
+pub use self::csv::{CsvWriter, CSV_COLUMNS};
+pub use self::mcap::{Compression, McapOptions, McapWriter};
+
+/// What the MCAP file records about the run besides the samples.
+#[derive(Clone, Copy, Debug)]
+pub struct RunInfo<'a> {
+    /// The script's file name (no directory): the attachment's name.
+    pub script_name: &'a str,
+    /// The script's text, attached verbatim; its sha256 goes in the metadata record.
+    pub script_text: &'a str,
+    /// The drone profile the reference was compiled for.
+    pub profile_name: &'a str,
+    /// Sample rate of the reference.
+    pub rate_hz: f64,
+    pub lens: Lens,
+    pub stage: Stage,
+    /// The actors, in the order of the `actors` slice given to every `write`.
+    pub actor_names: &'a [String],
+}
+
+/// A temporary file next to its destination, renamed onto the destination by [`commit`]
+/// and removed when dropped uncommitted.
+///
+/// [`commit`]: AtomicFile::commit
+#[derive(Debug)]
+pub(crate) struct AtomicFile {
+    dest: PathBuf,
+    temp: PathBuf,
+    committed: bool,
+}
+
+impl AtomicFile {
+    /// Creates (truncating) the temporary file for `dest`.
+    pub(crate) fn create(dest: &Path) -> io::Result<(Self, File)> {
+        let name = dest.file_name().ok_or_else(|| {
+            io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("cannot write {}: not a file name", dest.display()),
+            )
+        })?;
+        let mut temp_name = std::ffi::OsString::from(".");
+        temp_name.push(name);
+        temp_name.push(format!(".{}.tmp", std::process::id()));
+        let temp = dest.with_file_name(temp_name);
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&temp)
+            .map_err(|e| annotate(dest, e))?;
+        Ok((
+            Self {
+                dest: dest.to_path_buf(),
+                temp,
+                committed: false,
+            },
+            file,
+        ))
+    }
+
+    pub(crate) fn dest(&self) -> &Path {
+        &self.dest
+    }
+
+    /// Renames the temporary file onto the destination. The caller has flushed and closed
+    /// its handle.
+    pub(crate) fn commit(&mut self) -> io::Result<()> {
+        std::fs::rename(&self.temp, &self.dest).map_err(|e| annotate(&self.dest, e))?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.temp);
+        }
+    }
+}
+
+/// The same error, its message prefixed with the destination path.
+pub(crate) fn annotate(dest: &Path, e: io::Error) -> io::Error {
+    io::Error::new(e.kind(), format!("cannot write {}: {e}", dest.display()))
+}
+
+/// Nanoseconds from seconds: rounded, negative and non-finite times clamp to 0.
+pub(crate) fn ns_from_s(t_s: f64) -> u64 {
+    if t_s.is_finite() && t_s > 0.0 {
+        // `as` saturates at u64::MAX.
+        (t_s * 1e9).round() as u64
+    } else {
+        0
+    }
+}
+
+/// Hand-written JSON: appends to a byte buffer without intermediate allocations.
+pub(crate) mod json {
+    /// A number in its shortest round-trip form (`null` if not finite).
+    #[inline]
+    pub fn f64(out: &mut Vec<u8>, x: f64) {
+        if x.is_finite() {
+            let mut b = zmij::Buffer::new();
+            out.extend_from_slice(b.format_finite(x).as_bytes());
+        } else {
+            out.extend_from_slice(b"null");
+        }
+    }
+
+    /// A number rounded to `decimals` decimal places (for the visual topics, where
+    /// millimetres are plenty and short numbers keep the file small): fixed-point, integer
+    /// formatting, trailing zeros trimmed (`1.5`, `-0.002`, `3`).
+    #[inline]
+    pub fn fixed(out: &mut Vec<u8>, x: f64, decimals: u32) {
+        const POW10: [u64; 10] = [
+            1,
+            10,
+            100,
+            1_000,
+            10_000,
+            100_000,
+            1_000_000,
+            10_000_000,
+            100_000_000,
+            1_000_000_000,
+        ];
+        let d = decimals.min(9) as usize;
+        let scaled = (x * POW10[d] as f64).round();
+        // Beyond 2^53 the scaled value is no longer an exact integer: print it as it is.
+        if !scaled.is_finite() || scaled.abs() >= 9.0e15 {
+            f64(out, x);
+            return;
+        }
+        let n = scaled as i64;
+        if n < 0 {
+            out.push(b'-');
+        }
+        let n = n.unsigned_abs();
+        let (int, mut frac) = (n / POW10[d], n % POW10[d]);
+        let mut b = itoa::Buffer::new();
+        out.extend_from_slice(b.format(int).as_bytes());
+        if frac != 0 {
+            let mut digits = d;
+            while frac % 10 == 0 {
+                frac /= 10;
+                digits -= 1;
+            }
+            out.push(b'.');
+            let s = b.format(frac).as_bytes();
+            out.extend(std::iter::repeat_n(b'0', digits - s.len()));
+            out.extend_from_slice(s);
+        }
+    }
+
+    #[inline]
+    pub fn u64(out: &mut Vec<u8>, x: u64) {
+        let mut b = itoa::Buffer::new();
+        out.extend_from_slice(b.format(x).as_bytes());
+    }
+
+    /// `[x,y,z]`.
+    #[inline]
+    pub fn vec3(out: &mut Vec<u8>, v: &[f64; 3]) {
+        out.push(b'[');
+        f64(out, v[0]);
+        out.push(b',');
+        f64(out, v[1]);
+        out.push(b',');
+        f64(out, v[2]);
+        out.push(b']');
+    }
+
+    /// A JSON string literal (quotes included), escaped.
+    pub fn string(out: &mut Vec<u8>, s: &str) {
+        // serde_json cannot fail writing a str into a Vec.
+        let _ = serde_json::to_writer(&mut *out, s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::json;
+
+    #[test]
+    fn fixed_point_numbers_are_short_json_within_half_a_unit() {
+        let cases = [
+            (1.5, 3, "1.5"),
+            (-0.0021, 3, "-0.002"),
+            (3.0, 3, "3"),
+            (-0.0004, 3, "0"),
+            (0.6180339887, 6, "0.618034"),
+            (-12.3456789, 4, "-12.3457"),
+        ];
+        for (x, d, text) in cases {
+            let mut out = Vec::new();
+            json::fixed(&mut out, x, d);
+            assert_eq!(std::str::from_utf8(&out).unwrap(), text, "{x} to {d}");
+        }
+        for i in -2000..2000 {
+            let x = i as f64 * 0.01234567;
+            let mut out = Vec::new();
+            json::fixed(&mut out, x, 3);
+            let back: f64 = serde_json::from_slice(&out).unwrap();
+            assert!((back - x).abs() <= 0.0005 + 1e-12, "{x} → {back}");
+        }
+        let mut out = Vec::new();
+        json::fixed(&mut out, f64::NAN, 3);
+        assert_eq!(out, b"null");
+    }
+}

@@ -1,0 +1,473 @@
+//! The MCAP and CSV writers, read back: every channel, schema, message, the metadata record
+//! and the attachment are there and say what was written; the files appear atomically; bad
+//! paths are errors.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+use dronecine_compiler::camera::Lens;
+use dronecine_compiler::output::{CsvWriter, McapWriter, RunInfo, CSV_COLUMNS};
+use dronecine_compiler::reference::{ActorPose, Sample};
+use dronecine_grammar::script::Stage;
+use serde_json::Value;
+use sha2::{Digest, Sha256};
+
+const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+const RATE_HZ: f64 = 100.0;
+const SCRIPT: &str = "stage 8m x 6m x 3m\nactor A height 1.80m at (0, 0) facing 0deg\n";
+
+fn names() -> Vec<String> {
+    // A quote in a name exercises the JSON escaping.
+    vec!["A".to_string(), "Bo \"B\"".to_string()]
+}
+
+fn info(names: &[String]) -> RunInfo<'_> {
+    RunInfo {
+        script_name: "scene.psl",
+        script_text: SCRIPT,
+        profile_name: "ardrone2",
+        rate_hz: RATE_HZ,
+        lens: Lens {
+            fov_x_rad: 84f64.to_radians(),
+            aspect: 16.0 / 9.0,
+        },
+        stage: Stage {
+            size_m: [8.0, 6.0, 3.0],
+        },
+        actor_names: names,
+    }
+}
+
+/// 2.5 s at 100 Hz over two shots, with full-precision values (including tiny and negative
+/// ones) so that exact equality after reading back means the numbers round-trip.
+fn reference() -> Vec<(Sample, Vec<ActorPose>)> {
+    (0..250)
+        .map(|i| {
+            let t = i as f64 / RATE_HZ;
+            let sample = Sample {
+                t_s: t,
+                position_m: [t.sin() * 2.0, -1.0 / 3.0 + t, 1.5 + 1e-9 * t],
+                velocity_mps: [t.cos() * 2.0, 1.0, 1e-9],
+                acceleration_mps2: [-t.sin() * 2.0, 0.0, -1e-12],
+                heading_rad: (0.3 * t).sin() * 3.0,
+                heading_rate_radps: 0.9 * (0.3 * t).cos(),
+                camera_pitch_rad: -0.25 - 0.01 * t,
+                shot: if t < 1.2 { 0 } else { 1 },
+            };
+            let actors = vec![
+                ActorPose {
+                    position_m: [0.1 * t, 0.0, 0.0],
+                    velocity_mps: [0.1, 0.0, 0.0],
+                    facing_rad: 0.0,
+                    facing_rate_radps: 0.0,
+                    height_m: 1.8,
+                },
+                ActorPose {
+                    position_m: [2.5, -0.7 * t, 0.0],
+                    velocity_mps: [0.0, -0.7, 0.0],
+                    facing_rad: std::f64::consts::PI - 0.2 * t,
+                    facing_rate_radps: -0.2,
+                    height_m: 1.65,
+                },
+            ];
+            (sample, actors)
+        })
+        .collect()
+}
+
+fn write_mcap(path: &Path, reference: &[(Sample, Vec<ActorPose>)]) {
+    let names = names();
+    let mut w = McapWriter::create(path, &info(&names)).unwrap();
+    for (s, a) in reference {
+        w.write(s, a).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+fn ns(t_s: f64) -> u64 {
+    (t_s * 1e9).round() as u64
+}
+
+fn vec3(v: &Value) -> [f64; 3] {
+    let a: Vec<f64> = serde_json::from_value(v.clone()).unwrap();
+    [a[0], a[1], a[2]]
+}
+
+/// Every key of every object in `value` is a property of the matching (sub)schema, and
+/// every required property is present.
+fn check_keys(value: &Value, schema: &Value, at: &str) {
+    match value {
+        Value::Object(map) => {
+            let props = schema["properties"]
+                .as_object()
+                .unwrap_or_else(|| panic!("{at}: object without schema properties"));
+            for (k, v) in map {
+                let sub = props
+                    .get(k)
+                    .unwrap_or_else(|| panic!("{at}: key {k:?} not in the schema"));
+                check_keys(v, sub, &format!("{at}.{k}"));
+            }
+            if let Some(required) = schema["required"].as_array() {
+                for r in required {
+                    assert!(map.contains_key(r.as_str().unwrap()), "{at}: {r} missing");
+                }
+            }
+        }
+        Value::Array(items) => {
+            for (i, item) in items.iter().enumerate() {
+                check_keys(item, &schema["items"], &format!("{at}[{i}]"));
+            }
+        }
+        _ => {}
+    }
+}
+
+fn files_in(dir: &Path) -> BTreeSet<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect()
+}
+
+#[test]
+fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.mcap");
+    let reference = reference();
+    write_mcap(&path, &reference);
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(bytes.starts_with(MAGIC) && bytes.ends_with(MAGIC));
+
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let topics: BTreeMap<&str, (&str, &str, &str, u64)> = summary
+        .channels
+        .values()
+        .map(|c| {
+            let s = c.schema.as_ref().expect("every channel has a schema");
+            let count = summary.stats.as_ref().unwrap().channel_message_counts[&c.id];
+            (
+                c.topic.as_str(),
+                (
+                    s.name.as_str(),
+                    s.encoding.as_str(),
+                    c.message_encoding.as_str(),
+                    count,
+                ),
+            )
+        })
+        .collect();
+    let n = reference.len() as u64;
+    let expected = [
+        ("/reference", "dronecine.Reference", n),
+        ("/actors", "dronecine.Actors", n),
+        ("/camera", "dronecine.Camera", 1),
+        ("/scene/stage", "foxglove.SceneUpdate", 1),
+        ("/scene/drone", "foxglove.SceneUpdate", 1),
+        ("/scene/actors", "foxglove.SceneUpdate", 1),
+        ("/scene/path", "foxglove.SceneUpdate", 1),
+        ("/camera_calibration", "foxglove.CameraCalibration", 1),
+    ];
+    for (topic, schema, count) in expected {
+        assert_eq!(
+            topics.get(topic),
+            Some(&(schema, "jsonschema", "json", count)),
+            "{topic}"
+        );
+    }
+    // /tf at 30 Hz over 2.49 s.
+    let (tf_schema, _, _, tf_count) = topics["/tf"];
+    assert_eq!(tf_schema, "foxglove.FrameTransforms");
+    assert!((74..=76).contains(&tf_count), "{tf_count} transforms");
+    assert_eq!(topics.len(), expected.len() + 1);
+
+    // Metadata record and attachment.
+    assert_eq!(summary.metadata_indexes.len(), 1);
+    let meta = mcap::read::metadata(&bytes, &summary.metadata_indexes[0]).unwrap();
+    assert_eq!(meta.name, "dronecine");
+    let sha: String = Sha256::digest(SCRIPT.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    assert_eq!(meta.metadata["source_sha256"], sha);
+    assert_eq!(meta.metadata["profile"], "ardrone2");
+    assert_eq!(meta.metadata["compiler_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(meta.metadata["rate_hz"].parse::<f64>().unwrap(), RATE_HZ);
+    assert_eq!(meta.metadata["script_name"], "scene.psl");
+    assert_eq!(summary.attachment_indexes.len(), 1);
+    let att = mcap::read::attachment(&bytes, &summary.attachment_indexes[0]).unwrap();
+    assert_eq!(
+        (att.name.as_str(), att.media_type.as_str()),
+        ("scene.psl", "text/plain")
+    );
+    assert_eq!(&*att.data, SCRIPT.as_bytes());
+
+    // Every message: valid JSON whose keys the schema declares; log and publish time agree.
+    let mut reference_msgs = Vec::new();
+    let mut actor_msgs = Vec::new();
+    let mut by_topic: BTreeMap<String, Vec<(u64, Value)>> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let value: Value = serde_json::from_slice(&m.data).unwrap_or_else(|e| {
+            panic!(
+                "{}: {e}: {}",
+                m.channel.topic,
+                String::from_utf8_lossy(&m.data)
+            )
+        });
+        let schema: Value =
+            serde_json::from_slice(&m.channel.schema.as_ref().unwrap().data).unwrap();
+        check_keys(&value, &schema, &m.channel.topic);
+        assert_eq!(m.log_time, m.publish_time);
+        match m.channel.topic.as_str() {
+            "/reference" | "/actors" | "/camera" => {
+                // Our own schemas: the keys are exactly the properties.
+                let keys: BTreeSet<&String> = value.as_object().unwrap().keys().collect();
+                let props: BTreeSet<&String> =
+                    schema["properties"].as_object().unwrap().keys().collect();
+                assert_eq!(keys, props, "{}", m.channel.topic);
+            }
+            _ => {}
+        }
+        match m.channel.topic.as_str() {
+            "/reference" => reference_msgs.push((m.log_time, value)),
+            "/actors" => actor_msgs.push((m.log_time, value)),
+            topic => by_topic
+                .entry(topic.to_string())
+                .or_default()
+                .push((m.log_time, value)),
+        }
+    }
+
+    // The samples, exactly.
+    assert_eq!(reference_msgs.len(), reference.len());
+    for ((log_time, v), (s, _)) in reference_msgs.iter().zip(&reference) {
+        assert_eq!(*log_time, ns(s.t_s));
+        let back = Sample {
+            t_s: v["t_s"].as_f64().unwrap(),
+            position_m: vec3(&v["position_m"]),
+            velocity_mps: vec3(&v["velocity_mps"]),
+            acceleration_mps2: vec3(&v["acceleration_mps2"]),
+            heading_rad: v["heading_rad"].as_f64().unwrap(),
+            heading_rate_radps: v["heading_rate_radps"].as_f64().unwrap(),
+            camera_pitch_rad: v["camera_pitch_rad"].as_f64().unwrap(),
+            shot: v["shot"].as_u64().unwrap() as usize,
+        };
+        assert_eq!(&back, s);
+    }
+    let names = names();
+    for ((log_time, v), (s, actors)) in actor_msgs.iter().zip(&reference) {
+        assert_eq!(*log_time, ns(s.t_s));
+        assert_eq!(v["t_s"].as_f64().unwrap(), s.t_s);
+        let list = v["actors"].as_array().unwrap();
+        assert_eq!(list.len(), actors.len());
+        for ((a, pose), name) in list.iter().zip(actors).zip(&names) {
+            assert_eq!(a["name"].as_str().unwrap(), name);
+            assert_eq!(vec3(&a["position_m"]), pose.position_m);
+            assert_eq!(a["facing_rad"].as_f64().unwrap(), pose.facing_rad);
+            assert_eq!(a["height_m"].as_f64().unwrap(), pose.height_m);
+        }
+    }
+
+    let camera = &by_topic["/camera"][0].1;
+    assert_eq!(camera["fov_x_rad"].as_f64().unwrap(), 84f64.to_radians());
+    assert_eq!(camera["aspect"].as_f64().unwrap(), 16.0 / 9.0);
+
+    // The transforms follow the samples (to the millimetre) and name every frame.
+    for (log_time, tf) in &by_topic["/tf"] {
+        let s = &reference
+            .iter()
+            .find(|(s, _)| ns(s.t_s) == *log_time)
+            .unwrap()
+            .0;
+        let transforms = tf["transforms"].as_array().unwrap();
+        let children: Vec<&str> = transforms
+            .iter()
+            .map(|t| t["child_frame_id"].as_str().unwrap())
+            .collect();
+        assert_eq!(children, ["drone", "camera", "actor/A", "actor/Bo \"B\""]);
+        let drone = &transforms[0];
+        assert_eq!(drone["parent_frame_id"], "world");
+        for (axis, p) in ["x", "y", "z"].iter().zip(s.position_m) {
+            assert!((drone["translation"][axis].as_f64().unwrap() - p).abs() <= 5e-4);
+        }
+        let sec = drone["timestamp"]["sec"].as_u64().unwrap();
+        let nsec = drone["timestamp"]["nsec"].as_u64().unwrap();
+        assert_eq!(sec * 1_000_000_000 + nsec, *log_time);
+    }
+
+    // The path: one strip per shot, from the first position to the last, joined.
+    let path = &by_topic["/scene/path"][0].1;
+    let lines = path["entities"][0]["lines"].as_array().unwrap();
+    assert_eq!(lines.len(), 2);
+    let point = |p: &Value| {
+        [
+            p["x"].as_f64().unwrap(),
+            p["y"].as_f64().unwrap(),
+            p["z"].as_f64().unwrap(),
+        ]
+    };
+    let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|i| (a[i] - b[i]).abs() <= 5e-4);
+    let first = point(&lines[0]["points"][0]);
+    let last_strip = lines[1]["points"].as_array().unwrap();
+    assert!(close(first, reference[0].0.position_m));
+    assert!(close(
+        point(last_strip.last().unwrap()),
+        reference.last().unwrap().0.position_m
+    ));
+    let end_of_first = lines[0]["points"].as_array().unwrap().last().unwrap();
+    assert_eq!(point(end_of_first), point(&last_strip[0]), "strips join");
+
+    // Actor entities ride their frames.
+    let actors = &by_topic["/scene/actors"][0].1["entities"];
+    assert_eq!(actors[1]["frame_id"], "actor/Bo \"B\"");
+    assert_eq!(actors[1]["frame_locked"], true);
+    let calib = &by_topic["/camera_calibration"][0].1;
+    assert_eq!(calib["frame_id"], "camera");
+}
+
+#[test]
+fn files_appear_only_on_finish_and_vanish_when_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let reference = reference();
+    let mcap_path = dir.path().join("out.mcap");
+    let csv_path = dir.path().join("out.csv");
+
+    let mut m = McapWriter::create(&mcap_path, &info(&names)).unwrap();
+    let mut c = CsvWriter::create(&csv_path).unwrap();
+    for (s, a) in &reference {
+        m.write(s, a).unwrap();
+        c.write(s).unwrap();
+    }
+    let during = files_in(dir.path());
+    assert_eq!(during.len(), 2);
+    assert!(
+        during
+            .iter()
+            .all(|f| f.starts_with('.') && f.ends_with(".tmp")),
+        "{during:?}"
+    );
+    m.finish().unwrap();
+    c.finish().unwrap();
+    assert_eq!(
+        files_in(dir.path()),
+        BTreeSet::from(["out.csv".to_string(), "out.mcap".to_string()])
+    );
+
+    // Unfinished writers leave nothing behind, and never touch the destination.
+    let before = std::fs::read(&mcap_path).unwrap();
+    let mut m = McapWriter::create(&mcap_path, &info(&names)).unwrap();
+    let mut c = CsvWriter::create(&csv_path).unwrap();
+    for (s, a) in &reference[..10] {
+        m.write(s, a).unwrap();
+        c.write(s).unwrap();
+    }
+    drop(m);
+    drop(c);
+    assert_eq!(
+        files_in(dir.path()),
+        BTreeSet::from(["out.csv".to_string(), "out.mcap".to_string()])
+    );
+    assert_eq!(std::fs::read(&mcap_path).unwrap(), before);
+}
+
+#[test]
+fn unwritable_paths_are_errors_that_name_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let missing = dir.path().join("no such dir").join("out.mcap");
+    let e = McapWriter::create(&missing, &info(&names))
+        .err()
+        .expect("an error");
+    assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
+    assert!(
+        e.to_string().contains(&missing.display().to_string()),
+        "{e}"
+    );
+    let missing_csv = dir.path().join("no such dir").join("out.csv");
+    let e = CsvWriter::create(&missing_csv).err().expect("an error");
+    assert!(
+        e.to_string().contains(&missing_csv.display().to_string()),
+        "{e}"
+    );
+    // A path that names no file.
+    let e = McapWriter::create(Path::new("/"), &info(&names))
+        .err()
+        .expect("an error");
+    assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+    assert!(files_in(dir.path()).is_empty());
+}
+
+#[test]
+fn a_wrong_number_of_actors_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let mut m = McapWriter::create(&dir.path().join("out.mcap"), &info(&names)).unwrap();
+    let (s, a) = &reference()[0];
+    let e = m.write(s, &a[..1]).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+}
+
+#[test]
+fn non_finite_values_stay_valid_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.mcap");
+    let mut reference = reference();
+    reference[3].0.velocity_mps[1] = f64::NAN;
+    reference[4].0.heading_rad = f64::INFINITY;
+    reference[5].1[0].facing_rad = f64::NEG_INFINITY;
+    write_mcap(&path, &reference);
+    let bytes = std::fs::read(&path).unwrap();
+    let mut nulls = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        // Every message, /tf included, still parses.
+        let v: Value = serde_json::from_slice(&m.data).unwrap();
+        if m.channel.topic == "/reference" || m.channel.topic == "/actors" {
+            nulls += v.to_string().matches("null").count();
+        }
+    }
+    assert_eq!(nulls, 3);
+}
+
+#[test]
+fn csv_rows_parse_back_to_the_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.csv");
+    let mut reference = reference();
+    reference[7].0.acceleration_mps2[2] = f64::NAN;
+    let mut w = CsvWriter::create(&path).unwrap();
+    for (s, _) in &reference {
+        w.write(s).unwrap();
+    }
+    w.finish().unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap().split(',').collect::<Vec<_>>(),
+        CSV_COLUMNS
+    );
+    let mut rows = 0;
+    for (line, (s, _)) in lines.zip(&reference) {
+        let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        assert_eq!(f.len(), CSV_COLUMNS.len());
+        let back = Sample {
+            t_s: f[0],
+            position_m: [f[1], f[2], f[3]],
+            velocity_mps: [f[4], f[5], f[6]],
+            acceleration_mps2: [f[7], f[8], f[9]],
+            heading_rad: f[10],
+            heading_rate_radps: f[11],
+            camera_pitch_rad: f[12],
+            shot: f[13] as usize,
+        };
+        if s.acceleration_mps2[2].is_nan() {
+            assert!(back.acceleration_mps2[2].is_nan());
+            assert_eq!(back.position_m, s.position_m);
+        } else {
+            assert_eq!(&back, s);
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, reference.len());
+}
