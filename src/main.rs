@@ -3,6 +3,7 @@
 //! module.
 
 mod check;
+mod compile;
 mod files;
 mod fmt;
 
@@ -47,6 +48,31 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Compile a script into the timed 6D reference a drone flies (MCAP, CSV, previews).
+    ///
+    /// Each framing becomes a camera position around the actors, transitions interpolate the
+    /// visual parameters, cuts get the repositioning flights they need, and every sample is
+    /// checked against the drone profile, the stage and the actors' safety distance.
+    Compile {
+        /// The script.
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+        /// The MCAP file to write (opens in Foxglove).
+        #[arg(short, long, value_name = "OUT.mcap")]
+        output: PathBuf,
+        /// Sample rate of the reference, Hz.
+        #[arg(long, value_name = "HZ", default_value_t = 100.0)]
+        rate: f64,
+        /// Write previews (top and side views, plots, storyboard; SVG and PNG) to this folder.
+        #[arg(long, value_name = "DIR")]
+        preview: Option<PathBuf>,
+        /// Also write the reference as CSV.
+        #[arg(long, value_name = "FILE")]
+        csv: Option<PathBuf>,
+        /// Write the outputs even when the drone cannot fly the script (errors become warnings).
+        #[arg(long)]
+        allow_infeasible: bool,
+    },
     /// Print a shell completion script.
     Completions {
         /// The shell to complete for.
@@ -85,6 +111,22 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Check { files, format } => check::run(&files, format == Format::Json, color),
         Command::Fmt { files, check } => fmt::run(&files, check, color),
+        Command::Compile {
+            file,
+            output,
+            rate,
+            preview,
+            csv,
+            allow_infeasible,
+        } => compile::run(&compile::Args {
+            file: &file,
+            out: &output,
+            rate_hz: rate,
+            preview: preview.as_deref(),
+            csv: csv.as_deref(),
+            allow_infeasible,
+            color,
+        }),
         Command::Completions { shell } => {
             clap_complete::generate(
                 shell,

@@ -1,0 +1,300 @@
+//! `dronecine compile`: script → checked → compiled reference → MCAP (+ CSV, previews).
+//!
+//! Everything is streamed: the director hands each sample to the MCAP and CSV writers as it
+//! is made; previews get a decimated copy (10 Hz). Writers go through temporary files, so a
+//! failed compilation (or a crash) never leaves an output that looks complete.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use dronecine_compiler::compile::{self, Compiled, Options};
+use dronecine_compiler::director::ShotTiming;
+use dronecine_compiler::output::{CsvWriter, McapWriter, RunInfo};
+use dronecine_compiler::preview::{self, PreviewInput, ShotInfo, ShotKind};
+use dronecine_compiler::profile::{Profile, ProfileError, DEFAULT_NAME};
+use dronecine_compiler::reference::{ActorPose, Sample};
+use dronecine_grammar::diag;
+use dronecine_grammar::script::{DroneRef, Scene, Script, ShotContent, Transition};
+use dronecine_grammar::vocab::MoveKind;
+use dronecine_grammar::Severity;
+
+use crate::check;
+
+pub struct Args<'a> {
+    pub file: &'a Path,
+    pub out: &'a Path,
+    pub rate_hz: f64,
+    pub preview: Option<&'a Path>,
+    pub csv: Option<&'a Path>,
+    pub allow_infeasible: bool,
+    pub color: bool,
+}
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::FAILURE
+}
+
+/// Resolve the script's drone profile: a built-in name or a TOML file next to the script.
+/// Errors are rendered here (against the TOML text when there is one).
+pub fn load_profile(
+    scene: &Scene,
+    base: &Path,
+    script_name: &str,
+    script_text: &str,
+    color: bool,
+) -> Result<Profile, ExitCode> {
+    match &scene.drone {
+        None => Ok(Profile::builtin(DEFAULT_NAME).expect("the default profile is built in")),
+        Some(DroneRef::Builtin { name }) => Profile::builtin(name)
+            .ok_or_else(|| fail(format!("`{name}` is not a built-in drone profile"))),
+        Some(DroneRef::File { path }) => {
+            let full = base.join(path);
+            match Profile::load(&full) {
+                Ok((profile, source, warnings)) => {
+                    if !warnings.is_empty() {
+                        let name = full.display().to_string();
+                        eprint!("{}", diag::render(&name, &source, &warnings, color, 100));
+                    }
+                    Ok(profile)
+                }
+                Err(e @ ProfileError::Unreadable { .. }) => {
+                    let d = e.not_found(Default::default());
+                    if let Some(d) = d {
+                        eprint!("{}", diag::render(script_name, script_text, &[d], color, 100));
+                    }
+                    Err(ExitCode::FAILURE)
+                }
+                Err(ProfileError::Invalid {
+                    source,
+                    diagnostics,
+                }) => {
+                    let name = full.display().to_string();
+                    eprint!("{}", diag::render(&name, &source, &diagnostics, color, 100));
+                    eprintln!("error: the drone profile `{name}` is not valid");
+                    Err(ExitCode::FAILURE)
+                }
+            }
+        }
+    }
+}
+
+pub fn run(a: &Args) -> ExitCode {
+    if !(a.rate_hz.is_finite() && a.rate_hz >= 1.0 && a.rate_hz <= 1000.0) {
+        return fail(format!(
+            "--rate {} is outside 1–1000 Hz; the servo runs at 100 Hz (the default)",
+            a.rate_hz
+        ));
+    }
+    let r = check::check_file(a.file);
+    if r.checked.has_errors() || r.checked.script.is_none() {
+        eprint!(
+            "{}",
+            diag::render(&r.name, &r.text, &r.checked.diagnostics, a.color, 100)
+        );
+        eprintln!("error: `{}` has errors; nothing was compiled", r.name);
+        return ExitCode::FAILURE;
+    }
+    let script = r.checked.script.as_ref().expect("checked above");
+    let Some(scene) = &script.scene else {
+        // The compiler reports why a film annotation cannot be flown.
+        let c = compile::compile::<()>(script, &dummy_profile(), &Options::default(), |_, _| {
+            Ok(())
+        })
+        .unwrap_or_else(|_| unreachable!());
+        eprint!(
+            "{}",
+            diag::render(&r.name, &r.text, &c.diagnostics, a.color, 100)
+        );
+        return ExitCode::FAILURE;
+    };
+    let base = crate::files::base_dir(a.file);
+    let profile = match load_profile(scene, &base, &r.name, &r.text, a.color) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+
+    let script_name = a
+        .file
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| r.name.clone());
+    let actor_names: Vec<String> = scene.actors.iter().map(|x| x.name.clone()).collect();
+    let lens = match scene.lens {
+        Some(l) => dronecine_compiler::camera::Lens {
+            fov_x_rad: l.fov_x_rad,
+            aspect: l.aspect,
+        },
+        None => dronecine_compiler::camera::Lens {
+            fov_x_rad: profile.camera.fov_x_rad,
+            aspect: profile.camera.aspect,
+        },
+    };
+    let info = RunInfo {
+        script_name: &script_name,
+        script_text: &r.text,
+        profile_name: &profile.name,
+        rate_hz: a.rate_hz,
+        lens,
+        stage: scene.stage,
+        actor_names: &actor_names,
+    };
+    let mut mcap = match McapWriter::create(a.out, &info) {
+        Ok(w) => w,
+        Err(e) => return fail(e),
+    };
+    let mut csv = match a.csv.map(CsvWriter::create).transpose() {
+        Ok(w) => w,
+        Err(e) => return fail(e),
+    };
+    let every = ((a.rate_hz / 10.0).round() as usize).max(1);
+    let mut kept: Vec<Sample> = Vec::new();
+    let mut kept_actors: Vec<Vec<ActorPose>> = Vec::new();
+    let mut n = 0usize;
+    let opts = Options { rate_hz: a.rate_hz };
+    let compiled = compile::compile(script, &profile, &opts, |s, actors| {
+        mcap.write(s, actors)?;
+        if let Some(c) = csv.as_mut() {
+            c.write(s)?;
+        }
+        if a.preview.is_some() && n % every == 0 {
+            kept.push(*s);
+            kept_actors.push(actors.to_vec());
+        }
+        n += 1;
+        Ok::<(), std::io::Error>(())
+    });
+    let mut compiled = match compiled {
+        Ok(c) => c,
+        Err(e) => return fail(e),
+    };
+    let errors = compiled.has_errors();
+    if errors && a.allow_infeasible {
+        for d in &mut compiled.diagnostics {
+            d.severity = Severity::Warning;
+        }
+    }
+    if !compiled.diagnostics.is_empty() {
+        eprint!(
+            "{}",
+            diag::render(&r.name, &r.text, &compiled.diagnostics, a.color, 100)
+        );
+    }
+    if errors && !a.allow_infeasible {
+        eprintln!(
+            "error: `{}` cannot be flown by {}; nothing was written (--allow-infeasible writes \
+             it anyway)",
+            r.name, profile.name
+        );
+        return ExitCode::FAILURE;
+    }
+    if let Err(e) = mcap.finish() {
+        return fail(e);
+    }
+    if let Some(c) = csv {
+        if let Err(e) = c.finish() {
+            return fail(e);
+        }
+    }
+    let mut written: Vec<PathBuf> = vec![a.out.to_path_buf()];
+    written.extend(a.csv.map(Path::to_path_buf));
+    if let Some(dir) = a.preview {
+        let shots = shot_infos(script, &r.text, &compiled.timings);
+        let input = PreviewInput {
+            samples: &kept,
+            actors: &kept_actors,
+            actor_names: &actor_names,
+            stage: scene.stage,
+            lens,
+            limits: &profile.limits,
+            model: &profile.model,
+            shots: &shots,
+        };
+        match preview::write_previews(dir, &input) {
+            Ok(paths) => written.extend(paths),
+            Err(e) => return fail(format!("cannot write previews to `{}`: {e}", dir.display())),
+        }
+    }
+    let _ = writeln!(
+        std::io::stdout().lock(),
+        "{}",
+        summary(&r.name, script, &profile, &compiled, a.rate_hz)
+    );
+    for p in written {
+        let size = std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
+        println!("  wrote {} ({})", p.display(), human_bytes(size));
+    }
+    ExitCode::SUCCESS
+}
+
+fn summary(name: &str, script: &Script, profile: &Profile, c: &Compiled, rate_hz: f64) -> String {
+    let repositions: Vec<&ShotTiming> =
+        c.timings.iter().filter(|t| t.reposition.is_some()).collect();
+    let flying: f64 = repositions
+        .iter()
+        .filter_map(|t| t.reposition.map(|(a, b)| b - a))
+        .sum();
+    format!(
+        "{name}: {} shots for {}, {:.1} s of reference ({:.1} s as written; {} repositioning \
+         {} {:.1} s), {} samples at {} Hz",
+        script.timeline.len(),
+        profile.name,
+        c.duration_s,
+        script.duration_s,
+        repositions.len(),
+        if repositions.len() == 1 {
+            "flight,"
+        } else {
+            "flights,"
+        },
+        flying,
+        c.samples,
+        rate_hz
+    )
+}
+
+fn human_bytes(n: u64) -> String {
+    if n >= 1 << 20 {
+        format!("{:.1} MB", n as f64 / (1 << 20) as f64)
+    } else {
+        format!("{:.1} kB", n as f64 / 1024.0)
+    }
+}
+
+/// The previews' list of shots and repositioning flights, labelled with the PSL text.
+fn shot_infos(script: &Script, src: &str, timings: &[ShotTiming]) -> Vec<ShotInfo> {
+    let mut out = Vec::new();
+    for t in timings {
+        let shot = &script.timeline[t.index];
+        if let Some((a, b)) = t.reposition {
+            out.push(ShotInfo {
+                start_s: a,
+                end_s: b,
+                label: format!("repositioning flight to shot {}", t.index + 1),
+                kind: ShotKind::Reposition,
+            });
+        }
+        let label = src
+            .get(shot.span.start..shot.span.end)
+            .unwrap_or("")
+            .trim()
+            .to_string();
+        let kind = match (&shot.content, &shot.transition) {
+            (ShotContent::Path(_), _) => ShotKind::Path,
+            (_, Transition::Move { kind, .. }) if *kind != MoveKind::Hold => ShotKind::Transition,
+            _ => ShotKind::Hold,
+        };
+        out.push(ShotInfo {
+            start_s: t.start_s,
+            end_s: t.end_s,
+            label,
+            kind,
+        });
+    }
+    out
+}
+
+fn dummy_profile() -> Profile {
+    Profile::builtin(DEFAULT_NAME).expect("the default profile is built in")
+}
