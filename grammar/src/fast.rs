@@ -877,13 +877,11 @@ impl<'a> P<'a> {
         let (first, e) = self.subject(self.ws(j))?;
         let mut subjects = vec![first];
         let mut end = self.ws(e);
-        loop {
-            let Some(a) = self.kw(self.ws(end), "and") else {
-                break;
-            };
-            let Some((s, e)) = self.subject(self.ws(a)) else {
-                break;
-            };
+        // (kw_and ~ subject)*: the element is a sequence, all or nothing.
+        while let Some((s, e)) = self
+            .kw(self.ws(end), "and")
+            .and_then(|a| self.subject(self.ws(a)))
+        {
             subjects.push(s);
             end = e;
         }
