@@ -9,6 +9,7 @@
 
 pub mod ast;
 pub mod diag;
+pub mod fast;
 pub mod format;
 pub mod parser;
 pub mod resolve;

@@ -5,12 +5,18 @@
 //! next lines are parsed as usual. The tree-building code below relies on the grammar's
 //! shape; `expect_*` helpers turn a mismatch into an internal-error diagnostic rather than a
 //! panic.
+//!
+//! Each line first goes to the hand-written fast path (`fast.rs`), which accepts only lines
+//! pest accepts and builds the same `Line`; any other line (and every error) goes through
+//! pest, so diagnostics are pest's. `parse_with_pest` skips the fast path: it is the
+//! reference the fast path is tested against.
 
 use pest::iterators::Pair;
 use pest::Parser as _;
 
 use crate::ast::*;
 use crate::diag::Diagnostic;
+use crate::fast;
 use crate::span::Span;
 use crate::syntax;
 use crate::vocab::{CameraAngle, MoveKind, Profile, ScreenThird, Size};
@@ -21,7 +27,28 @@ pub struct PslParser;
 
 /// Parse a whole script. Returns the tree and the syntax diagnostics, all lines considered.
 pub fn parse(src: &str) -> (File<'_>, Vec<Diagnostic>) {
-    let mut lines = Vec::new();
+    parse_lines(src, true)
+}
+
+/// `parse` with every line through pest, without the fast path: the same result, slower.
+pub fn parse_with_pest(src: &str) -> (File<'_>, Vec<Diagnostic>) {
+    parse_lines(src, false)
+}
+
+/// One line (without its line break, starting at byte `offset`, 1-based `number`) through
+/// pest only, with its diagnostics: what `fast::parse_line` must agree with.
+pub fn parse_line_with_pest(
+    text: &str,
+    offset: usize,
+    number: usize,
+) -> (Line<'_>, Vec<Diagnostic>) {
+    let mut diagnostics = Vec::new();
+    let line = parse_line(text, offset, number, &mut diagnostics);
+    (line, diagnostics)
+}
+
+fn parse_lines(src: &str, fast_path: bool) -> (File<'_>, Vec<Diagnostic>) {
+    let mut lines = Vec::with_capacity(src.bytes().filter(|&b| b == b'\n').count() + 1);
     let mut diagnostics = Vec::new();
     let mut offset = 0;
     for (i, raw) in src.split('\n').enumerate() {
@@ -33,7 +60,15 @@ pub fn parse(src: &str) -> (File<'_>, Vec<Diagnostic>) {
                 text = rest;
             }
         }
-        lines.push(parse_line(text, start, i + 1, &mut diagnostics));
+        let fast = if fast_path {
+            fast::parse_line(text, start, i + 1)
+        } else {
+            None
+        };
+        lines.push(match fast {
+            Some(line) => line,
+            None => parse_line(text, start, i + 1, &mut diagnostics),
+        });
         offset += raw.len() + 1;
     }
     // A trailing newline does not open a new line.
