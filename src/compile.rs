@@ -62,7 +62,10 @@ pub fn load_profile(
                 Err(e @ ProfileError::Unreadable { .. }) => {
                     let d = e.not_found(Default::default());
                     if let Some(d) = d {
-                        eprint!("{}", diag::render(script_name, script_text, &[d], color, 100));
+                        eprint!(
+                            "{}",
+                            diag::render(script_name, script_text, &[d], color, 100)
+                        );
                     }
                     Err(ExitCode::FAILURE)
                 }
@@ -99,10 +102,9 @@ pub fn run(a: &Args) -> ExitCode {
     let script = r.checked.script.as_ref().expect("checked above");
     let Some(scene) = &script.scene else {
         // The compiler reports why a film annotation cannot be flown.
-        let c = compile::compile::<()>(script, &dummy_profile(), &Options::default(), |_, _| {
-            Ok(())
-        })
-        .unwrap_or_else(|_| unreachable!());
+        let c =
+            compile::compile::<()>(script, &dummy_profile(), &Options::default(), |_, _| Ok(()))
+                .unwrap_or_else(|_| unreachable!());
         eprint!(
             "{}",
             diag::render(&r.name, &r.text, &c.diagnostics, a.color, 100)
@@ -229,8 +231,11 @@ pub fn run(a: &Args) -> ExitCode {
 }
 
 fn summary(name: &str, script: &Script, profile: &Profile, c: &Compiled, rate_hz: f64) -> String {
-    let repositions: Vec<&ShotTiming> =
-        c.timings.iter().filter(|t| t.reposition.is_some()).collect();
+    let repositions: Vec<&ShotTiming> = c
+        .timings
+        .iter()
+        .filter(|t| t.reposition.is_some())
+        .collect();
     let flying: f64 = repositions
         .iter()
         .filter_map(|t| t.reposition.map(|(a, b)| b - a))

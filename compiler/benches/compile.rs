@@ -76,8 +76,8 @@ fn bench(c: &mut Criterion) {
                     actor_names: &names,
                 };
                 let mut w = McapWriter::create(&out, &info).unwrap();
-                let c = compile(&script, &profile, &Options::default(), |s, a| w.write(s, a))
-                    .unwrap();
+                let c =
+                    compile(&script, &profile, &Options::default(), |s, a| w.write(s, a)).unwrap();
                 w.finish().unwrap();
                 c.samples
             })

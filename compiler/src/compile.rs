@@ -72,13 +72,12 @@ pub fn compile<E>(
     let blocking = Blocking::new(scene);
     let mut director = Director::new(script, scene, profile);
     let mut poses = blocking.poses(0.0);
-    let dt = 1.0 / opts.rate_hz;
     let mut k: u64 = 0;
     let mut last_t = 0.0;
     // Guard against a timeline that never ends (it always does: every phase has an end).
     let limit = ((script.duration_s * 4.0 + 3600.0) * opts.rate_hz) as u64;
     loop {
-        let t = k as f64 * dt;
+        let t = k as f64 / opts.rate_hz;
         blocking.poses_into(t, &mut poses);
         let sample = director.step(t, &poses);
         if director.finished() || k > limit {

@@ -156,15 +156,17 @@ impl Monitor {
                     .unwrap_or(shot.start_s);
                 format!("{:.1} s into the shot", (t - start).max(0.0))
             };
+            // How much longer a retimeable shot must be for both its speed and its
+            // acceleration to fit (speed scales as 1/T, acceleration as 1/T²), with 5% margin.
+            let retime = (st.demand_speed.value / self.speed_max)
+                .max((st.demand_accel.value / self.accel_max).sqrt())
+                * 1.05;
             let mut demand_reported = false;
             if st.demand_speed.value > self.speed_max * SLACK {
                 demand_reported = true;
                 let need = st.demand_speed.value;
                 let help = if retimeable {
-                    format!(
-                        "make it at least {:.1} s",
-                        round_up_1(duration * need / self.speed_max)
-                    )
+                    format!("make it at least {:.1} s", round_up_1(duration * retime))
                 } else {
                     "the framing follows the actors: slow their movement (a longer `over`) or \
                      use a wider size"
@@ -189,10 +191,7 @@ impl Monitor {
                 demand_reported = true;
                 let need = st.demand_accel.value;
                 let help = if retimeable {
-                    format!(
-                        "make it at least {:.1} s",
-                        round_up_1(duration * (need / self.accel_max).sqrt())
-                    )
+                    format!("make it at least {:.1} s", round_up_1(duration * retime))
                 } else {
                     "the framing follows the actors: make their movements smoother (a longer \
                      `over`) or use a wider size"

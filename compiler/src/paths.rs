@@ -232,11 +232,50 @@ impl PathPlan {
             },
             g => g,
         };
-        PathPlan {
+        let mut plan = PathPlan {
             geometry,
             duration_s,
             ramp_s: ramp,
+        };
+        // Longer ramps for fast paths: a min-jerk ramp to cruise speed V over r seconds peaks
+        // at 1.875·V/r in acceleration; keep that under half the limit where the duration
+        // allows (r ≤ T/3), so starting and stopping never ask more than the corners do.
+        let length = plan.length_m(actors);
+        for _ in 0..4 {
+            let cruise = length / (duration_s - plan.ramp_s);
+            let wanted = 1.875 * cruise / (0.5 * accel_mps2);
+            plan.ramp_s = wanted.clamp(ramp, duration_s / 3.0);
         }
+        plan
+    }
+
+    /// Length of the path, measured on the geometry.
+    fn length_m(&self, actors: &[ActorPose]) -> f64 {
+        let n = 400;
+        let mut len = 0.0;
+        let mut prev = self.geometry_at(0.0, actors);
+        for k in 1..=n {
+            let p = self.geometry_at(k as f64 / n as f64, actors);
+            len += (p - prev).norm();
+            prev = p;
+        }
+        len
+    }
+
+    /// The point at fraction `s` of the path (no timing).
+    fn geometry_at(&self, s: f64, actors: &[ActorPose]) -> Vec3 {
+        // Evaluate through `at` with a linear clock: t = s·T gives fraction ease(t); invert
+        // by bisection on the monotone ease.
+        let (mut lo, mut hi) = (0.0, self.duration_s);
+        for _ in 0..50 {
+            let mid = (lo + hi) / 2.0;
+            if ease(mid, self.duration_s, self.ramp_s).0 < s {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        self.at(lo, actors).p
     }
 
     /// The target at `t_s` into the path.
@@ -613,7 +652,7 @@ mod tests {
             let (mut lo, mut hi) = (0.0, 10.0);
             for _ in 0..60 {
                 let mid = (lo + hi) / 2.0;
-                if ease(mid, 10.0, ramp_s(10.0)).0 < target {
+                if ease(mid, 10.0, plan.ramp_s).0 < target {
                     lo = mid
                 } else {
                     hi = mid

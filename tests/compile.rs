@@ -1,0 +1,396 @@
+//! The compiler on the shipped scripts and on purpose-made ones: compiled paths (snapshots),
+//! framing where PSL says on screen, mirror symmetry, consistent derivatives, one evaluator
+//! for batch and online, and feasibility errors whose fix works.
+
+mod common;
+
+use dronecine_compiler::blocking::Blocking;
+use dronecine_compiler::camera::{CameraPose, Lens, Vec3};
+use dronecine_compiler::compile::{compile, Compiled, Options};
+use dronecine_compiler::director::Director;
+use dronecine_compiler::framing;
+use dronecine_compiler::profile::Profile;
+use dronecine_compiler::reference::{ActorPose, Sample};
+use dronecine_grammar::script::{Script, ShotContent, Transition};
+use dronecine_grammar::vocab::MoveKind;
+use dronecine_grammar::Code;
+use serde::Serialize;
+
+fn ardrone() -> Profile {
+    Profile::builtin("ardrone2").unwrap()
+}
+
+fn run(script: &Script) -> (Compiled, Vec<Sample>, Vec<Vec<ActorPose>>) {
+    let mut samples = Vec::new();
+    let mut actors = Vec::new();
+    let c = compile::<()>(script, &ardrone(), &Options::default(), |s, a| {
+        samples.push(*s);
+        actors.push(a.to_vec());
+        Ok(())
+    })
+    .unwrap();
+    (c, samples, actors)
+}
+
+fn script_of(src: &str) -> Script {
+    let checked = dronecine_grammar::check(src, &Default::default());
+    assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
+    checked.script.unwrap()
+}
+
+fn shipped() -> Vec<(String, Script)> {
+    common::scripts("shots")
+        .into_iter()
+        .filter_map(|p| {
+            let (_, checked) = common::check_path(&p);
+            let script = checked.script.unwrap();
+            script.scene.is_some().then(|| {
+                let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                (name, script)
+            })
+        })
+        .collect()
+}
+
+fn lens_of(script: &Script) -> Lens {
+    let p = ardrone();
+    match script.scene.as_ref().unwrap().lens {
+        Some(l) => Lens {
+            fov_x_rad: l.fov_x_rad,
+            aspect: l.aspect,
+        },
+        None => Lens {
+            fov_x_rad: p.camera.fov_x_rad,
+            aspect: p.camera.aspect,
+        },
+    }
+}
+
+#[derive(Serialize)]
+struct Row {
+    t_s: f64,
+    shot: usize,
+    p: [f64; 3],
+    heading: f64,
+}
+
+fn r3(x: f64) -> f64 {
+    let r = (x * 1000.0).round() / 1000.0;
+    if r == 0.0 {
+        0.0
+    } else {
+        r
+    }
+}
+
+#[test]
+fn every_shipped_script_compiles_without_errors_and_its_path_is_stable() {
+    for (name, script) in shipped() {
+        let (c, samples, _) = run(&script);
+        let errors: Vec<_> = c.diagnostics.iter().filter(|d| d.is_error()).collect();
+        assert!(errors.is_empty(), "{name}: {errors:#?}");
+        // Down-sampled to 2 Hz, rounded to mm and mrad.
+        let rows: Vec<Row> = samples
+            .iter()
+            .step_by(50)
+            .map(|s| Row {
+                t_s: r3(s.t_s),
+                shot: s.shot,
+                p: s.position_m.map(r3),
+                heading: r3(s.heading_rad),
+            })
+            .collect();
+        let timings: Vec<_> = c
+            .timings
+            .iter()
+            .map(|t| {
+                (
+                    t.index,
+                    r3(t.start_s),
+                    r3(t.end_s),
+                    t.reposition.map(|(a, b)| (r3(a), r3(b))),
+                )
+            })
+            .collect();
+        insta::with_settings!({snapshot_suffix => name.clone(), prepend_module_to_snapshot => false}, {
+            insta::assert_yaml_snapshot!("compiled", (timings, rows));
+        });
+    }
+}
+
+#[test]
+fn velocity_and_acceleration_are_the_derivatives_of_position() {
+    for (name, script) in shipped() {
+        let (_, s, _) = run(&script);
+        for k in 1..s.len() - 1 {
+            let dt = s[k + 1].t_s - s[k - 1].t_s;
+            for i in 0..3 {
+                let v_num = (s[k + 1].position_m[i] - s[k - 1].position_m[i]) / dt;
+                let a_num = (s[k + 1].velocity_mps[i] - s[k - 1].velocity_mps[i]) / dt;
+                assert!(
+                    (v_num - s[k].velocity_mps[i]).abs() < 1e-3,
+                    "{name} t={} axis {i}: v {} vs {v_num}",
+                    s[k].t_s,
+                    s[k].velocity_mps[i]
+                );
+                assert!(
+                    (a_num - s[k].acceleration_mps2[i]).abs() < 0.05,
+                    "{name} t={} axis {i}: a {} vs {a_num}",
+                    s[k].t_s,
+                    s[k].acceleration_mps2[i]
+                );
+            }
+        }
+    }
+}
+
+/// Screen errors of every framed actor, during holds, from 0.5 s into the shot.
+fn hold_framing_errors(script: &Script) -> Vec<(String, f64, f64, f64)> {
+    let profile = ardrone();
+    let lens = lens_of(script);
+    let scene = script.scene.as_ref().unwrap();
+    let names: Vec<String> = scene.actors.iter().map(|a| a.name.clone()).collect();
+    let (c, samples, actors) = run(script);
+    let mut out = Vec::new();
+    for (s, poses) in samples.iter().zip(&actors) {
+        let shot = &script.timeline[s.shot];
+        let Some(t) = c.timings.iter().find(|t| t.index == s.shot) else {
+            continue;
+        };
+        let ShotContent::Composition(comp) = &shot.content else {
+            continue;
+        };
+        let hold =
+            !matches!(&shot.transition, Transition::Move { kind, .. } if *kind != MoveKind::Hold);
+        if !hold || s.t_s < t.start_s + 0.5 || s.t_s > t.end_s {
+            continue;
+        }
+        let v = framing::solve(comp, &names, poses, &lens, &profile.camera.gimbal).unwrap();
+        let pose = CameraPose {
+            position_m: Vec3::from(s.position_m),
+            heading_rad: s.heading_rad,
+            pitch_rad: s.camera_pitch_rad,
+        };
+        for target in
+            framing::screen_targets(&v, poses, &lens, &profile.camera.gimbal, &pose.position_m)
+        {
+            let got = pose.project(&lens, &target.point_m).unwrap();
+            out.push((
+                names[target.actor].clone(),
+                s.t_s,
+                (got[0] - target.screen[0]).abs(),
+                (got[1] - target.screen[1]).abs(),
+            ));
+        }
+    }
+    out
+}
+
+#[test]
+fn holds_put_the_actors_where_psl_says_on_screen() {
+    // One actor, moving and turning; the shot size's band fills the frame.
+    let script = script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (-1, 0) facing 0deg\n\
+         at 1s A walks to (0.5, 0.5) over 6s\nat 8s A turns to 40deg over 4s\n\
+         MS on A 34left screen left for 14s\n",
+    );
+    let errs = hold_framing_errors(&script);
+    assert!(errs.len() > 1000);
+    let worst = errs.iter().map(|e| e.2.max(e.3)).fold(0.0, f64::max);
+    assert!(worst < 0.02, "worst screen error {worst}");
+
+    // Two moving actors (the shipped scene). Without roll only the aimed actor lands
+    // exactly (camera-math §4); the other one lands exactly only when both aim points are at
+    // the camera's height and the camera sits on its toric position. Per sample, the aimed
+    // actor is held to 0.02; the other actor is held to 0.02 RMS in x and 0.05 RMS in y
+    // (1.80 m and 1.65 m actors; the camera lags its moving target a little). In y the level
+    // AR.Drone camera (no gimbal) frames the aimed actor's band by altitude alone, so the
+    // other actor, at another distance and height, sits about 0.09 off: held to 0.10 RMS.
+    let (_, checked) = common::check_path(&common::workspace().join("shots/two-actors.psl"));
+    let errs = hold_framing_errors(&checked.script.unwrap());
+    let (mut aimed_worst, mut other_x, mut other_y, mut n) = (0.0f64, 0.0, 0.0, 0.0);
+    for pair in errs.chunks(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        let (aimed, other) = if a.2.max(a.3) <= b.2.max(b.3) {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        aimed_worst = aimed_worst.max(aimed.2.max(aimed.3));
+        other_x += other.2 * other.2;
+        other_y += other.3 * other.3;
+        n += 1.0;
+    }
+    let (rms_x, rms_y) = ((other_x / n).sqrt(), (other_y / n).sqrt());
+    assert!(
+        aimed_worst < 0.02,
+        "aimed actor: worst screen error {aimed_worst}"
+    );
+    assert!(rms_x < 0.02, "other actor: RMS screen x error {rms_x}");
+    assert!(rms_y < 0.10, "other actor: RMS screen y error {rms_y}");
+    eprintln!("two actors: aimed worst {aimed_worst:.4}, other RMS x {rms_x:.4} y {rms_y:.4}");
+}
+
+#[test]
+fn mirror_profiles_give_mirror_paths() {
+    let make = |a: &str, b: &str| {
+        script_of(&format!(
+            "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+             MS on A {a} for 3s\nthen dolly to MLS on A {b} over 6s\ncut to FS on A {a} for 3s\n"
+        ))
+    };
+    for (l, r) in [
+        ("34left", "34right"),
+        ("left", "right"),
+        ("34backleft", "34backright"),
+    ] {
+        for (a, b) in [(l, "front"), ("front", l)] {
+            let mirror = |p: &'static str| -> &'static str {
+                if p == l {
+                    r
+                } else {
+                    p
+                }
+            };
+            let (_, left, _) = run(&make(a, b));
+            let (_, right, _) = run(&make(mirror(a), mirror(b)));
+            assert_eq!(left.len(), right.len());
+            for (p, q) in left.iter().zip(&right) {
+                let (pm, qm) = (p.position_m, q.position_m);
+                assert!(
+                    (pm[0] - qm[0]).abs() < 1e-6
+                        && (pm[1] + qm[1]).abs() < 1e-6
+                        && (pm[2] - qm[2]).abs() < 1e-6,
+                    "{a}→{b} at {}: {pm:?} vs {qm:?}",
+                    p.t_s
+                );
+                let dh = dronecine_grammar::vocab::wrap_angle_rad(p.heading_rad + q.heading_rad);
+                assert!(dh.abs() < 1e-6, "{a}→{b} heading at {}", p.t_s);
+            }
+        }
+    }
+}
+
+#[test]
+fn batch_and_online_give_the_same_samples() {
+    for (name, script) in shipped() {
+        let (_, batch, _) = run(&script);
+        // Online: a director stepped by hand with poses from elsewhere (here: the blocking).
+        let scene = script.scene.as_ref().unwrap();
+        let blocking = Blocking::new(scene);
+        let mut director = Director::new(&script, scene, &ardrone());
+        let mut online = Vec::new();
+        let mut k = 0u64;
+        loop {
+            let t = k as f64 / 100.0;
+            let s = director.step(t, &blocking.poses(t));
+            if director.finished() {
+                break;
+            }
+            online.push(s);
+            k += 1;
+        }
+        assert_eq!(batch.len(), online.len(), "{name}");
+        for (a, b) in batch.iter().zip(&online) {
+            assert_eq!(
+                serde_json::to_string(a).unwrap(),
+                serde_json::to_string(b).unwrap(),
+                "{name}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_path_too_fast_is_an_error_whose_fix_works() {
+    let src = |secs: f64| {
+        format!(
+            "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+             path square side 4m center (0, 0) altitude 1.5m for {secs}s\n"
+        )
+    };
+    let (c, _, _) = run(&script_of(&src(6.0)));
+    let d = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == Code::Infeasible)
+        .expect("too fast");
+    assert!(d.message.contains("m/s"), "{}", d.message);
+    let help = d.help.as_deref().unwrap();
+    let secs: f64 = help
+        .trim_start_matches("make it at least ")
+        .trim_end_matches(" s")
+        .parse()
+        .unwrap_or_else(|_| panic!("help names a duration: {help}"));
+    assert!(secs > 6.0);
+    let (c, _, _) = run(&script_of(&src(secs)));
+    assert!(
+        !c.diagnostics.iter().any(|d| d.code == Code::Infeasible),
+        "the suggested {secs} s still fails: {:?}",
+        c.diagnostics
+    );
+}
+
+#[test]
+fn cuts_insert_repositioning_flights_and_pinned_cuts_that_do_not_fit_are_errors() {
+    let base = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+                MS on A front for 4s\n";
+    let (c, samples, _) = run(&script_of(&format!("{base}cut to MS on A back for 4s\n")));
+    let t = &c.timings[1];
+    let (a, b) = t.reposition.expect("a repositioning flight");
+    assert!((a - 4.0).abs() < 1e-9 && b > a + 1.0 && (t.start_s - b).abs() < 1e-9);
+    assert!(c
+        .diagnostics
+        .iter()
+        .any(|d| d.code == Code::Reposition && !d.is_error()));
+    // The flight stays out of the actor's safety distance (it goes round).
+    for s in &samples {
+        let d = s.position_m[0].hypot(s.position_m[1]);
+        assert!(
+            d > ardrone().safety.actor_distance_m,
+            "{} m at {}",
+            d,
+            s.t_s
+        );
+    }
+    let (c, _, _) = run(&script_of(&format!(
+        "{base}at 4.5s cut to MS on A back for 4s\n"
+    )));
+    let d = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == Code::CutTooShort)
+        .expect("error");
+    assert!(
+        d.is_error() && d.help.as_deref().unwrap().contains("at "),
+        "{d:?}"
+    );
+    let (c, _, _) = run(&script_of(&format!(
+        "{base}at 12s cut to MS on A back for 4s\n"
+    )));
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+    assert!(
+        (c.timings[1].start_s - 12.0).abs() < 1e-9,
+        "a pinned shot starts on time"
+    );
+}
+
+#[test]
+fn a_size_inside_the_safety_distance_is_an_error() {
+    let (c, _, _) = run(&script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\nlens 92deg\nactor A height 1.80m at (0, 0) facing 0deg\n\
+         CU on A front for 4s\n",
+    ));
+    let d = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == Code::TooClose)
+        .expect("too close");
+    assert!(d.message.contains("0.50 m"), "{}", d.message);
+    // The paper's MS with the AR.Drone's own lens (the profile's) is allowed.
+    let (c, _, _) = run(&script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+         MS on A front for 4s\n",
+    ));
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+}
