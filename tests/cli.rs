@@ -200,3 +200,122 @@ fn help_version_and_completions() {
     let o = dronecine(&["completions", "tcsh"]);
     assert_eq!(o.status.code(), Some(2), "clap rejects an unknown shell");
 }
+
+#[test]
+fn compile_writes_mcap_csv_and_previews() {
+    let dir = temp_dir("compile-ok");
+    let out = dir.join("square.mcap");
+    let csv = dir.join("square.csv");
+    let prev = dir.join("preview");
+    let o = dronecine(&[
+        "compile",
+        "shots/square.psl",
+        "-o",
+        out.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--preview",
+        prev.to_str().unwrap(),
+        "--rate",
+        "50",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&out).unwrap();
+    assert!(bytes.starts_with(b"\x89MCAP0\r\n") && bytes.ends_with(b"\x89MCAP0\r\n"));
+    let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
+    assert_eq!(rows, 1 + 20 * 50 + 1, "header + 20 s at 50 Hz, both ends");
+    for f in ["top", "side", "timeseries", "storyboard"] {
+        assert!(prev.join(format!("{f}.png")).exists(), "{f}.png");
+    }
+    assert!(
+        stdout(&o).contains("1001 samples at 50 Hz"),
+        "{}",
+        stdout(&o)
+    );
+}
+
+#[test]
+fn compile_bad_inputs_are_clear_errors_not_panics() {
+    let dir = temp_dir("compile-bad");
+    let out = dir.join("x.mcap");
+    let outs = out.to_str().unwrap();
+    // A missing file.
+    let o = dronecine(&["compile", "shots/nope.psl", "-o", outs]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("cannot read"), "{}", stderr(&o));
+    // A film annotation cannot be flown.
+    let o = dronecine(&["compile", "shots/annotation.psl", "-o", outs]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("compile::no_scene"), "{}", stderr(&o));
+    // An unwritable output path.
+    let o = dronecine(&[
+        "compile",
+        "shots/square.psl",
+        "-o",
+        "/nonexistent-dir/x.mcap",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("/nonexistent-dir/x.mcap"),
+        "{}",
+        stderr(&o)
+    );
+    // A bad TOML value: the diagnostic points into the profile.
+    std::fs::write(
+        dir.join("mine.toml"),
+        profile_text().replace("tau_vz_s = 1.25", "tau_vz_s = -1.25"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s.psl"),
+        "stage 8m x 6m x 3m\ndrone \"mine.toml\"\nactor A height 1.80m at (0, 0) facing 0deg\nMS on A for 2s\n",
+    )
+    .unwrap();
+    let o = dronecine(&["compile", dir.join("s.psl").to_str().unwrap(), "-o", outs]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("profile::bad_value") && e.contains("mine.toml"),
+        "{e}"
+    );
+    // An infeasible script writes nothing, unless asked.
+    std::fs::write(
+        dir.join("fast.psl"),
+        "stage 8m x 6m x 3m\nactor A height 1.80m at (0, 0) facing 0deg\npath square side 4m center (0, 0) altitude 1.5m for 4s\n",
+    )
+    .unwrap();
+    let fast = dir.join("fast.psl");
+    let o = dronecine(&["compile", fast.to_str().unwrap(), "-o", outs]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("compile::infeasible"), "{}", stderr(&o));
+    assert!(!out.exists(), "nothing written");
+    let o = dronecine(&[
+        "compile",
+        fast.to_str().unwrap(),
+        "-o",
+        outs,
+        "--allow-infeasible",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.exists());
+    assert_eq!(
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| e
+                .as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .ends_with(".tmp"))
+            .count(),
+        0
+    );
+}
+
+fn profile_text() -> String {
+    std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/compiler/profiles/ardrone2.toml"
+    ))
+    .unwrap()
+}
