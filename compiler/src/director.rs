@@ -350,25 +350,10 @@ impl Director {
     }
 
     fn begin_shot(&mut self, index: usize, start_s: f64, actors: &[ActorPose]) {
-        let shot = &self.shots[index];
-        let duration = shot.end_s - shot.start_s;
+        let duration = self.shots[index].end_s - self.shots[index].start_s;
         if matches!(self.plans[index], Plan::PathPending) {
-            if let ShotContent::Path(path) = &shot.content {
-                let from = if matches!(self.phase, Phase::NotStarted) {
-                    Vec3::zeros()
-                } else {
-                    self.state.p
-                };
-                let plan = PathPlan::new(
-                    &path.shape,
-                    duration,
-                    self.limits.accel_h_mps2,
-                    from,
-                    |n| self.names.iter().position(|x| x == n),
-                    actors,
-                );
-                self.plans[index] = Plan::Path(plan);
-            }
+            // The camera's position when the path starts (the origin before the first tick).
+            self.begin_shot_plan_only(index, actors);
         }
         let reposition = match self.phase {
             Phase::Reposition { start_s, end_s, .. } => Some((start_s, end_s)),
@@ -376,7 +361,7 @@ impl Director {
         };
         self.timings.push(ShotTiming {
             index,
-            script_start_s: shot.start_s,
+            script_start_s: self.shots[index].start_s,
             start_s,
             end_s: start_s + duration,
             reposition,
