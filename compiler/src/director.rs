@@ -114,6 +114,9 @@ pub struct Director {
     monitor: Monitor,
     warned: Vec<bool>,
     too_close: Vec<bool>,
+    /// Per-tick scratch: the actors extrapolated, and their body axes.
+    ahead: Vec<ActorPose>,
+    axes: Vec<(Vec3, f64)>,
 }
 
 impl Director {
@@ -195,6 +198,8 @@ impl Director {
             monitor: Monitor::new(profile, scene, script.timeline.len()),
             warned: vec![false; script.timeline.len()],
             too_close: vec![false; script.timeline.len()],
+            ahead: Vec::with_capacity(scene.actors.len()),
+            axes: Vec::with_capacity(scene.actors.len()),
         }
     }
 
@@ -242,8 +247,12 @@ impl Director {
         // The target and its velocity (forward difference with the actors extrapolated).
         self.visual = None;
         let target = self.target(t_s, actors, true);
-        let ahead: Vec<ActorPose> = actors.iter().map(|a| extrapolate(a, EPS_S)).collect();
+        // Reused buffers: the sampling loop allocates nothing per tick.
+        let mut ahead = std::mem::take(&mut self.ahead);
+        ahead.clear();
+        ahead.extend(actors.iter().map(|a| extrapolate(a, EPS_S)));
         let target_ahead = self.target(t_s + EPS_S, &ahead, false);
+        self.ahead = ahead;
         let v_t = (target_ahead - target) / EPS_S;
         let a_t = match self.last_target {
             Some((t0, v0, _)) if t_s > t0 => (v_t - v0) / (t_s - t0),
@@ -263,11 +272,13 @@ impl Director {
                 a: Vec3::zeros(),
             };
         } else {
-            let axes: Vec<(Vec3, f64)> = actors
-                .iter()
-                .map(|a| (Vec3::from(a.position_m), a.height_m))
-                .collect();
-            let extra = steering::separation(&self.state.p, &axes, self.safety_m, 3.0)
+            self.axes.clear();
+            self.axes.extend(
+                actors
+                    .iter()
+                    .map(|a| (Vec3::from(a.position_m), a.height_m)),
+            );
+            let extra = steering::separation(&self.state.p, &self.axes, self.safety_m, 3.0)
                 + steering::containment(&self.state.p, &self.stage_lo, &self.stage_hi, 4.0);
             self.state = steering::step(&self.state, &goal, extra, &self.limits, &self.gains, dt);
         }
