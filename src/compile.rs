@@ -101,14 +101,8 @@ pub fn run(a: &Args) -> ExitCode {
     }
     let script = r.checked.script.as_ref().expect("checked above");
     let Some(scene) = &script.scene else {
-        // The compiler reports why a film annotation cannot be flown.
-        let c =
-            compile::compile::<()>(script, &dummy_profile(), &Options::default(), |_, _| Ok(()))
-                .unwrap_or_else(|_| unreachable!());
-        eprint!(
-            "{}",
-            diag::render(&r.name, &r.text, &c.diagnostics, a.color, 100)
-        );
+        let d = compile::no_scene(script);
+        eprint!("{}", diag::render(&r.name, &r.text, &[d], a.color, 100));
         return ExitCode::FAILURE;
     };
     let base = crate::files::base_dir(a.file);
@@ -298,8 +292,4 @@ fn shot_infos(script: &Script, src: &str, timings: &[ShotTiming]) -> Vec<ShotInf
         });
     }
     out
-}
-
-fn dummy_profile() -> Profile {
-    Profile::builtin(DEFAULT_NAME).expect("the default profile is built in")
 }

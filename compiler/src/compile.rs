@@ -3,7 +3,7 @@
 
 use dronecine_grammar::script::{Script, ShotContent};
 use dronecine_grammar::vocab::CameraAngle;
-use dronecine_grammar::{Code, Diagnostic, Span};
+use dronecine_grammar::{Code, Diagnostic};
 
 use crate::blocking::Blocking;
 use crate::director::{Director, ShotTiming};
@@ -51,19 +51,9 @@ pub fn compile<E>(
     mut sink: impl FnMut(&Sample, &[ActorPose]) -> Result<(), E>,
 ) -> Result<Compiled, E> {
     let Some(scene) = &script.scene else {
-        let span = script.timeline.first().map(|s| s.span).unwrap_or_default();
         return Ok(Compiled {
             timings: Vec::new(),
-            diagnostics: vec![Diagnostic::error(
-                Code::NoScene,
-                span,
-                "this script is a film annotation: it has no stage, actors or drone to fly",
-            )
-            .with_label("subtitle-timed annotation")
-            .with_help(
-                "add a scene set-up (`stage 8m x 6m x 3m`, `actor A height 1.80m at (0, 0) \
-                 facing 0deg`) and write the shots with durations (`MS on A for 4s`)",
-            )],
+            diagnostics: vec![no_scene(script)],
             samples: 0,
             duration_s: 0.0,
         });
@@ -98,6 +88,21 @@ pub fn compile<E>(
     })
 }
 
+/// Why a film annotation (no scene set-up) cannot be compiled, on its first shot.
+pub fn no_scene(script: &Script) -> Diagnostic {
+    let span = script.timeline.first().map(|s| s.span).unwrap_or_default();
+    Diagnostic::error(
+        Code::NoScene,
+        span,
+        "this script is a film annotation: it has no stage, actors or drone to fly",
+    )
+    .with_label("subtitle-timed annotation")
+    .with_help(
+        "add a scene set-up (`stage 8m x 6m x 3m`, `actor A height 1.80m at (0, 0) facing 0deg`) \
+         and write the shots with durations (`MS on A for 4s`)",
+    )
+}
+
 /// Warnings that need no flight: camera angles a drone without a gimbal cannot render.
 fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
     let mut out = Vec::new();
@@ -128,6 +133,5 @@ fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
             }
         }
     }
-    let _ = Span::default();
     out
 }

@@ -25,7 +25,7 @@ use dronecine_grammar::{Code, Diagnostic, Span};
 
 use crate::blocking::min_jerk;
 use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
-use crate::feasibility::Monitor;
+use crate::feasibility::{round_up_1, Monitor};
 use crate::framing::{self, FramingError};
 use crate::paths::PathPlan;
 use crate::profile::{Gimbal, Profile};
@@ -335,11 +335,9 @@ impl Director {
                     }
                     let next = index + 1;
                     if next >= self.shots.len() {
+                        // The last sample sits exactly on the end; the one after is done.
                         if t_s > end_s + 1e-9 {
                             self.phase = Phase::Done;
-                        } else {
-                            // The last sample sits exactly on the end.
-                            return continuous;
                         }
                         return continuous;
                     }
@@ -441,7 +439,7 @@ impl Director {
                     .with_help(format!(
                         "pin the shot at `at {}s` or later, or shorten the shot before it by \
                          {late:.1} s",
-                        round_up(arrive, 1)
+                        round_up_1(arrive)
                     )),
                 );
                 arrive
@@ -821,11 +819,6 @@ fn fit_duration(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>, t0: f64, limits: &Stee
         t *= scale * 1.02;
     }
     t
-}
-
-fn round_up(x: f64, decimals: i32) -> f64 {
-    let m = 10f64.powi(decimals);
-    (x * m).ceil() / m
 }
 
 /// The point `looking at A` aims at: the centre of A's medium-shot band.

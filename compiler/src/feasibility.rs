@@ -313,6 +313,7 @@ impl Monitor {
     }
 }
 
-fn round_up_1(x: f64) -> f64 {
+/// Round up to a tenth (durations and times suggested to the user).
+pub(crate) fn round_up_1(x: f64) -> f64 {
     (x * 10.0).ceil() / 10.0
 }

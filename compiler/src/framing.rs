@@ -382,6 +382,19 @@ pub fn solve<S: AsRef<str>>(
     };
     let elevation = sphere::elevation_rad(comp.camera_angle);
     let level = fixed_pitch(gimbal);
+    // The two actors of a two-actor composition: screens checked, names found, distinct.
+    let pair_of = |sa: &Subject, sb: &Subject, sizes: (Size, Size)| {
+        check_screen(sa)?;
+        check_screen(sb)?;
+        let (a, b) = (
+            lookup(&sa.actor, names, actors)?,
+            lookup(&sb.actor, names, actors)?,
+        );
+        if a == b {
+            return Err(FramingError::SameActor(sa.actor.clone()));
+        }
+        Pair::new(a, b, sa, sb, sizes, actors, elevation, level, lens)
+    };
     match comp.framings.as_slice() {
         [f] if f.subjects.len() == 1 => {
             let s = &f.subjects[0];
@@ -391,50 +404,12 @@ pub fn solve<S: AsRef<str>>(
         }
         [f] if f.subjects.len() == 2 => {
             let (sa, sb) = (&f.subjects[0], &f.subjects[1]);
-            check_screen(sa)?;
-            check_screen(sb)?;
-            let (a, b) = (
-                lookup(&sa.actor, names, actors)?,
-                lookup(&sb.actor, names, actors)?,
-            );
-            if a == b {
-                return Err(FramingError::SameActor(sa.actor.clone()));
-            }
-            let pair = Pair::new(
-                a,
-                b,
-                sa,
-                sb,
-                (f.size, f.size),
-                actors,
-                elevation,
-                level,
-                lens,
-            )?;
+            let pair = pair_of(sa, sb, (f.size, f.size))?;
             solve_together(pair, sa, f.size, actors, lens).map(Visual::Two)
         }
         [fg, bg] if fg.subjects.len() == 1 && bg.subjects.len() == 1 => {
             let (sa, sb) = (&fg.subjects[0], &bg.subjects[0]);
-            check_screen(sa)?;
-            check_screen(sb)?;
-            let (a, b) = (
-                lookup(&sa.actor, names, actors)?,
-                lookup(&sb.actor, names, actors)?,
-            );
-            if a == b {
-                return Err(FramingError::SameActor(sa.actor.clone()));
-            }
-            let pair = Pair::new(
-                a,
-                b,
-                sa,
-                sb,
-                (fg.size, bg.size),
-                actors,
-                elevation,
-                level,
-                lens,
-            )?;
+            let pair = pair_of(sa, sb, (fg.size, bg.size))?;
             solve_over_shoulder(pair, sa, sb, bg.size, actors, lens).map(Visual::Two)
         }
         _ => Err(unsupported),

@@ -249,33 +249,18 @@ impl PathPlan {
         plan
     }
 
-    /// Length of the path, measured on the geometry.
+    /// Length of the path, measured along it (the timing does not change the curve).
     fn length_m(&self, actors: &[ActorPose]) -> f64 {
         let n = 400;
+        let step = self.duration_s / n as f64;
         let mut len = 0.0;
-        let mut prev = self.geometry_at(0.0, actors);
+        let mut prev = self.at(0.0, actors).p;
         for k in 1..=n {
-            let p = self.geometry_at(k as f64 / n as f64, actors);
+            let p = self.at(k as f64 * step, actors).p;
             len += (p - prev).norm();
             prev = p;
         }
         len
-    }
-
-    /// The point at fraction `s` of the path (no timing).
-    fn geometry_at(&self, s: f64, actors: &[ActorPose]) -> Vec3 {
-        // Evaluate through `at` with a linear clock: t = s·T gives fraction ease(t); invert
-        // by bisection on the monotone ease.
-        let (mut lo, mut hi) = (0.0, self.duration_s);
-        for _ in 0..50 {
-            let mid = (lo + hi) / 2.0;
-            if ease(mid, self.duration_s, self.ramp_s).0 < s {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        self.at(lo, actors).p
     }
 
     /// The target at `t_s` into the path.
