@@ -1,0 +1,94 @@
+//! What a flight records, tick by tick: the contract between the flight loop (`flight.rs`),
+//! the flight log (`log/`, MCAP) and `replay`.
+//!
+//! Replay re-runs the controller from [`FlightHeader`] (which controller, which profile, which
+//! options) on the logged [`TickInput`]s and compares its commands with the logged ones, bit
+//! for bit; so every field the controller reads is here, and floats are logged exactly
+//! (shortest round-trip form).
+
+use crate::backend::{FlightState, MocapFrame};
+use crate::control::{TickFault, TickInput, TickOutput};
+use crate::frames::{ActorPose, Command, Sample};
+use serde::{Deserialize, Serialize};
+
+/// Which controller flew, and how it was set up: enough to build it again.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ControllerSetup {
+    /// `"lqg"` or `"pid"`.
+    pub kind: String,
+    /// LQG: the paper's pre-filter without the acceleration feed-forward.
+    pub paper_prefilter: bool,
+    /// LQG: solve the DARE at every tick instead of rotating the body-frame gains.
+    pub per_tick_solve: bool,
+}
+
+/// Written once, at the start of the log (MCAP metadata `dronecine.flight`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlightHeader {
+    pub script_name: String,
+    pub script_text: String,
+    pub profile_name: String,
+    /// The profile as TOML (`Profile::to_toml`), so replay needs no file.
+    pub profile_toml: String,
+    pub controller: ControllerSetup,
+    /// `"sim"` or the drone URL.
+    pub backend: String,
+    /// The simulator's seed (`None` on hardware).
+    pub seed: Option<u64>,
+    pub rate_hz: f64,
+    pub actor_names: Vec<String>,
+    pub dronecine_version: String,
+}
+
+/// Where one actor is on screen and where the script puts it (holds only; `None` when the
+/// actor is behind the camera or the shot has no framing for it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FramingRecord {
+    pub actor: usize,
+    pub screen: Option<[f64; 2]>,
+    pub requested: Option<[f64; 2]>,
+}
+
+/// One control tick.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TickRecord<'a> {
+    /// Phase of the flight (take-off, approach, shots, landing).
+    pub phase: Phase,
+    /// Index of the shot in the timeline (`None` outside the shots).
+    pub shot: Option<usize>,
+    /// The full reference sample (camera pitch included) the servo was given.
+    pub sample: &'a Sample,
+    /// Exactly what the controller was given…
+    pub input: TickInput,
+    /// …and what it returned.
+    pub output: Result<TickOutput, TickFault>,
+    /// What was sent to the drone (the output's command, or the failsafe's).
+    pub command_sent: Command,
+    /// The raw mocap frame of this tick (`None` when no new frame arrived).
+    pub mocap: Option<&'a MocapFrame>,
+    /// The actors as the director saw them this tick.
+    pub actors: &'a [ActorPose],
+    pub framing: &'a [FramingRecord],
+    pub drone_state: FlightState,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Phase {
+    TakeOff,
+    /// From the take-off hover to the first sample of the reference.
+    Approach,
+    Shots,
+    Landing,
+}
+
+/// Something that happened, on `/events`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Event {
+    pub t_s: f64,
+    /// `"info"`, `"warning"` or `"error"`.
+    pub level: String,
+    /// A stable kind: `take_off`, `shot_start`, `landing`, `landed`, `failsafe`,
+    /// `deadline_missed`, `fault`, …
+    pub kind: String,
+    pub message: String,
+}
