@@ -217,6 +217,33 @@ impl Director {
         &self.timings
     }
 
+    /// The framing held at the last [`Director::step`]: each framed actor's aim point and the
+    /// screen point the script puts it at, for a camera at `camera_m` (cleared and filled
+    /// into `out`, allocating nothing once it has room for two). Returns false, with `out`
+    /// empty, outside holds: during a move, a path, a repositioning flight, or the first
+    /// `SETTLE_S` of a shot. `shoot` measures its framing error with it.
+    pub fn hold_targets(
+        &self,
+        actors: &[ActorPose],
+        camera_m: &Vec3,
+        out: &mut Vec<framing::ScreenTarget>,
+    ) -> bool {
+        out.clear();
+        let Phase::Shot { index, start_s, .. } = self.phase else {
+            return false;
+        };
+        if !matches!(self.plans.get(index), Some(Plan::Hold(_)))
+            || self.last_t_s < start_s + SETTLE_S
+        {
+            return false;
+        }
+        let Some(v) = &self.visual else {
+            return false;
+        };
+        framing::screen_targets_into(v, actors, &self.lens, &self.gimbal, camera_m, out);
+        !out.is_empty()
+    }
+
     /// Index of the shot being flown (or flown to), for the sample's `shot` field.
     fn shot_index(&self) -> usize {
         match self.phase {

@@ -1171,20 +1171,36 @@ pub fn screen_targets(
     gimbal: &Gimbal,
     camera_m: &Vec3,
 ) -> Vec<ScreenTarget> {
+    let mut out = Vec::new();
+    screen_targets_into(v, actors, lens, gimbal, camera_m, &mut out);
+    out
+}
+
+/// [`screen_targets`] into a reused buffer (cleared first): a `One` or `Two` visual (a hold)
+/// allocates nothing once `out` has room for two targets.
+pub fn screen_targets_into(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    camera_m: &Vec3,
+    out: &mut Vec<ScreenTarget>,
+) {
+    out.clear();
     if !valid_indices(v, actors.len()) {
-        return Vec::new();
+        return;
     }
-    match v {
+    let targets = match v {
         Visual::One(o) => {
             let p = &actors[o.actor];
             if fixed_pitch(gimbal) {
-                vec![ScreenTarget {
+                out.push(ScreenTarget {
                     actor: o.actor,
                     point_m: band_centre(p, o.band_m),
                     screen: o.screen,
-                }]
+                });
             } else {
-                vec![ScreenTarget {
+                out.push(ScreenTarget {
                     actor: o.actor,
                     point_m: size::bisector_point(
                         camera_m,
@@ -1192,46 +1208,49 @@ pub fn screen_targets(
                         &band_point(p, o.band_m[0]),
                     ),
                     screen: size::band_aim_screen(lens, o.screen),
-                }]
+                });
             }
+            return;
         }
-        Visual::Two(t) => vec![
-            ScreenTarget {
+        Visual::Two(t) => {
+            out.push(ScreenTarget {
                 actor: t.a,
                 point_m: band_centre(&actors[t.a], t.band_a_m),
                 screen: t.screen_a,
-            },
-            ScreenTarget {
+            });
+            out.push(ScreenTarget {
                 actor: t.b,
                 point_m: band_centre(&actors[t.b], t.band_b_m),
                 screen: t.screen_b,
-            },
-        ],
+            });
+            return;
+        }
         Visual::Blend { from, to, s } => {
             let t0 = screen_targets(from, actors, lens, gimbal, camera_m);
             let t1 = screen_targets(to, actors, lens, gimbal, camera_m);
-            let mut out = Vec::new();
+            let mut blend = Vec::new();
             for x in &t0 {
                 match t1.iter().find(|y| y.actor == x.actor) {
-                    Some(y) => out.push(ScreenTarget {
+                    Some(y) => blend.push(ScreenTarget {
                         actor: x.actor,
                         point_m: x.point_m + (y.point_m - x.point_m) * *s,
                         screen: lerp2(x.screen, y.screen, *s),
                     }),
-                    None if *s < 0.5 => out.push(*x),
+                    None if *s < 0.5 => blend.push(*x),
                     None => {}
                 }
             }
             if *s >= 0.5 {
                 for y in &t1 {
                     if !t0.iter().any(|x| x.actor == y.actor) {
-                        out.push(*y);
+                        blend.push(*y);
                     }
                 }
             }
-            out
+            blend
         }
-    }
+    };
+    out.extend(targets);
 }
 
 /// Distance from a point to an actor's body axis (the vertical segment feet → head).

@@ -71,6 +71,11 @@ pub trait Mocap {
     /// Fills `frame` with the newest frame not yet returned; `false` when none has arrived
     /// since the last call (then `frame` is left as it was).
     fn poll(&mut self, frame: &mut MocapFrame) -> Result<bool, BackendError>;
+
+    /// "Action!": the shots start now, at `t_s` on the flight clock. The simulator's actors
+    /// start their blocking (the script's clock) from this moment; live actors take the cue
+    /// from the set, so real backends ignore it.
+    fn action(&mut self, _t_s: f64) {}
 }
 
 pub trait Clock {

@@ -5,8 +5,11 @@
 //! - `backend`: the `Drone`, `Mocap` and `Clock` traits.
 //! - `control`: the `Controller` trait the servo and the PID baseline implement.
 //! - `record`: what a flight logs each tick (flight loop → log → replay).
+//! - `flight`: the flight loop (pre-flight, take-off, approach, shots, landing, report).
 
 pub mod backend;
 pub mod control;
+pub mod flight;
 pub mod frames;
 pub mod record;
+pub mod report;

@@ -1,0 +1,861 @@
+//! The flight loop behind `dronecine shoot`: pre-flight checks, take-off, the approach to the
+//! first framing, the shots with the online director, landing, and the report.
+//!
+//! One tick, at the loop's rate on the backend's [`Clock`]:
+//! 1. wait for the tick time (the simulator advances its world; a wall clock sleeps);
+//! 2. read the newest mocap frame: the drone's measured pose, the actors' poses (smoothed into
+//!    [`ActorPose`]s with velocity and turn rate for the director);
+//! 3. the reference: during the shots the online [`Director`] re-solves the framing against
+//!    the live actor poses (the same evaluator `compile` runs in batch);
+//! 4. the controller's tick, then the command (or a failsafe's) to the drone;
+//! 5. metrics, the flight record to the [`FlightSink`], progress to the [`Observer`].
+//!
+//! The loop knows the backend only through the traits of `backend.rs`, and allocates nothing
+//! per tick once started (events, which are rare, allocate their message).
+//!
+//! Replay rule (see `replay.rs`): the controller is reset once, with the first logged tick's
+//! measurement at `t_s − dt_s`, and then given every logged [`TickInput`] in order.
+//!
+//! Failsafes (each logged as an event): a controller fault (NaN, time not increasing) →
+//! hover for that tick; the drone's body not tracked for `mocap_hover_s` → hover, for
+//! `mocap_land_s` → land; the drone outside the stage → land; battery below
+//! `battery_land_percent` → land.
+
+use std::io;
+
+use dronecine_compiler::camera::{CameraPose, Lens, Vec3};
+use dronecine_compiler::director::Director;
+use dronecine_compiler::framing::ScreenTarget;
+use dronecine_compiler::profile::Profile;
+use dronecine_grammar::script::{Scene, Script};
+use serde::Serialize;
+
+use crate::backend::{BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame};
+use crate::control::{Controller, Measurement, Reference, TickInput};
+use crate::frames::{wrap_angle_rad, ActorPose, Command, Sample};
+use crate::record::{Event, FramingRecord, Phase, TickRecord};
+use crate::report::{Counts, FlightReport, Metrics};
+
+/// Where the flight record goes (the MCAP flight log, or nowhere).
+pub trait FlightSink {
+    fn tick(&mut self, record: &TickRecord) -> io::Result<()>;
+    fn event(&mut self, event: &Event) -> io::Result<()>;
+}
+
+/// Records nothing (benchmarks, tests).
+pub struct NullSink;
+
+impl FlightSink for NullSink {
+    fn tick(&mut self, _: &TickRecord) -> io::Result<()> {
+        Ok(())
+    }
+    fn event(&mut self, _: &Event) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// What a progress display shows, offered every tick.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    pub t_s: f64,
+    pub phase: Phase,
+    pub shot: Option<usize>,
+    pub shots: usize,
+    /// Script time within the shots (0 before they start).
+    pub script_t_s: f64,
+    /// Script duration as written.
+    pub script_duration_s: f64,
+    /// Distance from the measured position to the reference, when measured.
+    pub position_error_m: Option<f64>,
+}
+
+pub trait Observer {
+    fn progress(&mut self, progress: &Progress);
+    fn event(&mut self, _event: &Event) {}
+}
+
+pub struct NoObserver;
+
+impl Observer for NoObserver {
+    fn progress(&mut self, _: &Progress) {}
+}
+
+/// The hardware (or the simulator) the loop flies.
+pub struct Backends<'a> {
+    pub drone: &'a mut dyn Drone,
+    pub mocap: &'a mut dyn Mocap,
+    pub clock: &'a mut dyn Clock,
+}
+
+/// Thresholds of the failsafes and the pre-flight checks.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Safety {
+    /// Drone not tracked this long → hover.
+    pub mocap_hover_s: f64,
+    /// Drone not tracked this long → land.
+    pub mocap_land_s: f64,
+    /// Below this, no take-off, and a flying drone lands.
+    pub battery_land_percent: f64,
+    /// Pre-flight: the first mocap frame must arrive within this.
+    pub mocap_wait_s: f64,
+    pub take_off_timeout_s: f64,
+    pub landing_timeout_s: f64,
+}
+
+impl Default for Safety {
+    fn default() -> Self {
+        Safety {
+            mocap_hover_s: 0.5,
+            mocap_land_s: 2.0,
+            battery_land_percent: 15.0,
+            mocap_wait_s: 2.0,
+            take_off_timeout_s: 10.0,
+            landing_timeout_s: 15.0,
+        }
+    }
+}
+
+pub struct FlightSetup<'a> {
+    pub script: &'a Script,
+    /// The script's text (shot labels in the report).
+    pub source: &'a str,
+    pub scene: &'a Scene,
+    pub profile: &'a Profile,
+    /// Control rate.
+    pub rate_hz: f64,
+    pub safety: Safety,
+}
+
+#[derive(Debug)]
+pub enum FlightError {
+    /// A pre-flight check failed: the drone never took off.
+    Preflight(String),
+    Backend(BackendError),
+    /// The flight log could not be written; the drone was landed.
+    Log(io::Error),
+}
+
+impl std::fmt::Display for FlightError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FlightError::Preflight(m) => write!(f, "pre-flight check failed: {m}"),
+            FlightError::Backend(e) => write!(f, "drone backend: {e}"),
+            FlightError::Log(e) => write!(f, "flight log: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for FlightError {}
+
+impl From<BackendError> for FlightError {
+    fn from(e: BackendError) -> Self {
+        FlightError::Backend(e)
+    }
+}
+
+/// Actor poses from the mocap, smoothed by an α-β tracker per actor: the director wants a
+/// velocity and a turn rate (feed-forward), which raw differences of a noisy position would
+/// make jumpy.
+struct ActorTracker {
+    poses: Vec<ActorPose>,
+    last_t_s: Vec<Option<f64>>,
+}
+
+const TRACK_ALPHA: f64 = 0.4;
+const TRACK_BETA: f64 = 0.05;
+
+impl ActorTracker {
+    fn new(scene: &Scene) -> Self {
+        ActorTracker {
+            poses: scene
+                .actors
+                .iter()
+                .map(|a| ActorPose {
+                    position_m: [a.position_m[0], a.position_m[1], 0.0],
+                    velocity_mps: [0.0; 3],
+                    facing_rad: a.facing_rad,
+                    facing_rate_radps: 0.0,
+                    height_m: a.height_m,
+                })
+                .collect(),
+            last_t_s: vec![None; scene.actors.len()],
+        }
+    }
+
+    /// Folds a frame in. Untracked actors keep moving with their last velocity for the tick.
+    fn update(&mut self, frame: &MocapFrame) {
+        for (i, pose) in self.poses.iter_mut().enumerate() {
+            let Some(Some(m)) = frame.actors.get(i) else {
+                continue;
+            };
+            if !finite_pose(m) {
+                continue;
+            }
+            match self.last_t_s[i] {
+                Some(t0) if frame.t_s > t0 => {
+                    let dt = frame.t_s - t0;
+                    for k in 0..2 {
+                        let pred = pose.position_m[k] + pose.velocity_mps[k] * dt;
+                        let r = m.position_m[k] - pred;
+                        pose.position_m[k] = pred + TRACK_ALPHA * r;
+                        pose.velocity_mps[k] += TRACK_BETA * r / dt;
+                    }
+                    let pred = pose.facing_rad + pose.facing_rate_radps * dt;
+                    let r = wrap_angle_rad(m.heading_rad - pred);
+                    pose.facing_rad = wrap_angle_rad(pred + TRACK_ALPHA * r);
+                    pose.facing_rate_radps += TRACK_BETA * r / dt;
+                }
+                Some(_) => continue,
+                None => {
+                    pose.position_m = [m.position_m[0], m.position_m[1], 0.0];
+                    pose.facing_rad = m.heading_rad;
+                }
+            }
+            pose.position_m[2] = 0.0;
+            self.last_t_s[i] = Some(frame.t_s);
+        }
+    }
+}
+
+fn finite_pose(p: &BodyPose) -> bool {
+    p.position_m.iter().all(|x| x.is_finite()) && p.heading_rad.is_finite()
+}
+
+/// A minimum-jerk flight between two poses (the approach and the landing hold).
+#[derive(Clone, Copy, Debug)]
+struct Glide {
+    t0_s: f64,
+    duration_s: f64,
+    from_m: Vec3,
+    to_m: Vec3,
+    from_heading_rad: f64,
+    turn_rad: f64,
+}
+
+impl Glide {
+    /// Long enough that the peaks stay at half the profile's speed and acceleration
+    /// (minimum jerk: peak speed 1.875·d/T, peak acceleration 5.77·d/T²) and yaw rate.
+    fn new(t0_s: f64, from: &Sample, to: &Sample, profile: &Profile) -> Glide {
+        let from_m = Vec3::from(from.position_m);
+        let to_m = Vec3::from(to.position_m);
+        let d = (to_m - from_m).norm();
+        let turn_rad = wrap_angle_rad(to.heading_rad - from.heading_rad);
+        let lim = &profile.limits;
+        let dz = (to_m.z - from_m.z).abs();
+        let duration_s = [
+            2.0,
+            1.875 * d / (0.5 * lim.speed_max_mps),
+            (5.77 * d / (0.5 * lim.accel_max_mps2)).sqrt(),
+            1.875 * dz / (0.5 * lim.vz_max_mps),
+            1.875 * turn_rad.abs() / (0.5 * lim.yaw_rate_max_radps),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
+        Glide {
+            t0_s,
+            duration_s,
+            from_m,
+            to_m,
+            from_heading_rad: from.heading_rad,
+            turn_rad,
+        }
+    }
+
+    fn end_s(&self) -> f64 {
+        self.t0_s + self.duration_s
+    }
+
+    fn sample(&self, t_s: f64, pitch_rad: f64) -> Sample {
+        let u = ((t_s - self.t0_s) / self.duration_s).clamp(0.0, 1.0);
+        let (s, ds, dds) = dronecine_compiler::blocking::min_jerk(u);
+        let (ds, dds) = (
+            ds / self.duration_s,
+            dds / (self.duration_s * self.duration_s),
+        );
+        let d = self.to_m - self.from_m;
+        Sample {
+            t_s,
+            position_m: (self.from_m + d * s).into(),
+            velocity_mps: (d * ds).into(),
+            acceleration_mps2: (d * dds).into(),
+            heading_rad: wrap_angle_rad(self.from_heading_rad + self.turn_rad * s),
+            heading_rate_radps: self.turn_rad * ds,
+            camera_pitch_rad: pitch_rad,
+            shot: 0,
+        }
+    }
+}
+
+fn hover_sample(t_s: f64, at: &Sample) -> Sample {
+    Sample {
+        t_s,
+        velocity_mps: [0.0; 3],
+        acceleration_mps2: [0.0; 3],
+        heading_rate_radps: 0.0,
+        ..*at
+    }
+}
+
+/// Pause after the approach, before "action!", so the drone settles on the first framing.
+const SETTLE_S: f64 = 1.0;
+/// Hold after the last shot, before landing.
+const HOLD_BEFORE_LANDING_S: f64 = 1.0;
+
+/// Flies the script. Returns the report, also when a failsafe ended the flight early
+/// (`completed` is then false); an error only when the flight could not start or a backend
+/// or the log failed (the drone is landed first whenever it flies).
+pub fn fly(
+    setup: &FlightSetup,
+    controller: &mut dyn Controller,
+    backends: Backends,
+    sink: &mut dyn FlightSink,
+    observer: &mut dyn Observer,
+) -> Result<FlightReport, FlightError> {
+    Flight::new(setup, controller, backends, sink, observer)?.run()
+}
+
+struct Flight<'s, 'b> {
+    setup: &'s FlightSetup<'s>,
+    controller: &'s mut dyn Controller,
+    drone: &'b mut dyn Drone,
+    mocap: &'b mut dyn Mocap,
+    clock: &'b mut dyn Clock,
+    sink: &'s mut dyn FlightSink,
+    observer: &'s mut dyn Observer,
+    period_s: f64,
+    lens: Lens,
+    frame: MocapFrame,
+    /// The newest frame arrived this tick.
+    fresh: bool,
+    last_frame_t_s: Option<f64>,
+    last_drone_seen_s: f64,
+    measured: Option<Measurement>,
+    actors: ActorTracker,
+    targets: Vec<ScreenTarget>,
+    framing: Vec<FramingRecord>,
+    last_tick_s: Option<f64>,
+    controller_started: bool,
+    metrics: Metrics,
+    failsafes: u64,
+    faults: u64,
+    deadline_misses: u64,
+    hovering: bool,
+    log_error: Option<io::Error>,
+    script_duration_s: f64,
+}
+
+/// How a phase of the loop ended.
+enum Outcome {
+    Done,
+    /// A failsafe asks for landing now.
+    Land,
+}
+
+impl<'s, 'b> Flight<'s, 'b> {
+    fn new(
+        setup: &'s FlightSetup<'s>,
+        controller: &'s mut dyn Controller,
+        backends: Backends<'b>,
+        sink: &'s mut dyn FlightSink,
+        observer: &'s mut dyn Observer,
+    ) -> Result<Self, FlightError> {
+        if !(setup.rate_hz.is_finite() && setup.rate_hz > 0.0 && setup.rate_hz <= 1000.0) {
+            return Err(FlightError::Preflight(format!(
+                "the control rate must be in (0, 1000] Hz, not {}",
+                setup.rate_hz
+            )));
+        }
+        let n_actors = setup.scene.actors.len();
+        let script_duration_s = setup.script.timeline.last().map_or(0.0, |s| s.end_s);
+        let probe = Director::new(setup.script, setup.scene, setup.profile);
+        Ok(Flight {
+            setup,
+            controller,
+            drone: backends.drone,
+            mocap: backends.mocap,
+            clock: backends.clock,
+            sink,
+            observer,
+            period_s: 1.0 / setup.rate_hz,
+            lens: *probe.lens(),
+            frame: MocapFrame {
+                actors: Vec::with_capacity(n_actors),
+                ..MocapFrame::default()
+            },
+            fresh: false,
+            last_frame_t_s: None,
+            last_drone_seen_s: f64::NEG_INFINITY,
+            measured: None,
+            actors: ActorTracker::new(setup.scene),
+            targets: Vec::with_capacity(4),
+            framing: Vec::with_capacity(n_actors.max(2)),
+            last_tick_s: None,
+            controller_started: false,
+            metrics: Metrics::new(setup.script.timeline.len()),
+            failsafes: 0,
+            faults: 0,
+            deadline_misses: 0,
+            hovering: false,
+            log_error: None,
+            script_duration_s,
+        })
+    }
+
+    fn event(&mut self, t_s: f64, level: &str, kind: &str, message: String) {
+        let e = Event {
+            t_s,
+            level: level.to_string(),
+            kind: kind.to_string(),
+            message,
+        };
+        self.observer.event(&e);
+        if let Err(err) = self.sink.event(&e) {
+            self.log_error.get_or_insert(err);
+        }
+    }
+
+    /// Waits for the next tick and reads the mocap.
+    fn wait_tick(&mut self, t_next_s: f64) -> Result<f64, FlightError> {
+        self.clock.sleep_until(t_next_s);
+        let now = self.clock.now_s();
+        if now > t_next_s + 0.5 * self.period_s {
+            self.deadline_misses += 1;
+            self.event(
+                now,
+                "warning",
+                "deadline_missed",
+                format!(
+                    "tick due at {t_next_s:.3} s ran at {now:.3} s ({:.1} ms late)",
+                    (now - t_next_s) * 1e3
+                ),
+            );
+        }
+        self.fresh = self.mocap.poll(&mut self.frame)?;
+        if self.fresh {
+            if self.last_frame_t_s.is_some_and(|t0| self.frame.t_s <= t0) {
+                // Out of order or replayed: its measurement is not used.
+                self.fresh = false;
+                self.event(
+                    now,
+                    "warning",
+                    "stale_frame",
+                    format!(
+                        "mocap frame {} at {:.4} s is not newer than the previous one; ignored",
+                        self.frame.frame, self.frame.t_s
+                    ),
+                );
+            } else {
+                self.last_frame_t_s = Some(self.frame.t_s);
+                self.actors.update(&self.frame);
+                self.measured = match self.frame.drone {
+                    Some(p) => {
+                        self.last_drone_seen_s = now;
+                        Some(Measurement {
+                            position_m: p.position_m,
+                            heading_rad: p.heading_rad,
+                        })
+                    }
+                    None => None,
+                };
+            }
+        }
+        if !self.fresh {
+            self.measured = None;
+        }
+        Ok(now)
+    }
+
+    fn run(mut self) -> Result<FlightReport, FlightError> {
+        let t_start = self.clock.now_s();
+        // Pre-flight: the drone and every actor tracked, battery, the reference's start
+        // inside the stage.
+        let mut t = t_start;
+        let mut seen_drone: Option<Measurement> = None;
+        while t - t_start <= self.setup.safety.mocap_wait_s {
+            t = self.wait_tick(t + self.period_s)?;
+            if let Some(m) = self.measured {
+                seen_drone = Some(m);
+                break;
+            }
+        }
+        let Some(m0) = seen_drone else {
+            return Err(FlightError::Preflight(format!(
+                "the drone is not tracked by the motion capture (no pose in {:.1} s): \
+                 check its rigid body",
+                self.setup.safety.mocap_wait_s
+            )));
+        };
+        if !finite_pose(&BodyPose {
+            position_m: m0.position_m,
+            heading_rad: m0.heading_rad,
+        }) {
+            return Err(FlightError::Preflight(
+                "the drone's tracked pose is not a number".into(),
+            ));
+        }
+        let untracked: Vec<&str> = self
+            .setup
+            .scene
+            .actors
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !matches!(self.frame.actors.get(*i), Some(Some(_))))
+            .map(|(_, a)| a.name.as_str())
+            .collect();
+        if !untracked.is_empty() {
+            return Err(FlightError::Preflight(format!(
+                "actor{} not tracked by the motion capture: {}",
+                if untracked.len() > 1 { "s" } else { "" },
+                untracked.join(", ")
+            )));
+        }
+        let telemetry = self.drone.telemetry();
+        if telemetry.battery_percent < self.setup.safety.battery_land_percent {
+            return Err(FlightError::Preflight(format!(
+                "battery at {:.0}%, below the {:.0}% needed to fly: charge or swap it",
+                telemetry.battery_percent, self.setup.safety.battery_land_percent
+            )));
+        }
+        let first = self.first_framing();
+        let stage = self.setup.scene.stage;
+        if !inside(&stage, &first.position_m, 0.0) {
+            return Err(FlightError::Preflight(format!(
+                "the first framing puts the drone at ({:.2}, {:.2}, {:.2}) m, outside the \
+                 stage: move the actors or change the first shot",
+                first.position_m[0], first.position_m[1], first.position_m[2]
+            )));
+        }
+
+        // Take-off.
+        self.event(t, "info", "take_off", "taking off".into());
+        self.drone.take_off()?;
+        let deadline = t + self.setup.safety.take_off_timeout_s;
+        loop {
+            t = self.wait_tick(t + self.period_s)?;
+            match self.drone.telemetry().state {
+                FlightState::Flying => break,
+                FlightState::Emergency => {
+                    return Err(FlightError::Preflight(
+                        "the drone went into emergency during take-off".into(),
+                    ))
+                }
+                _ if t > deadline => {
+                    self.drone.land()?;
+                    return Err(FlightError::Preflight(format!(
+                        "the drone did not report flying within {:.0} s of take-off",
+                        self.setup.safety.take_off_timeout_s
+                    )));
+                }
+                _ => {}
+            }
+        }
+        let flying_s = t;
+
+        // Approach: from where the drone hovers to the first framing.
+        let here = match self.measured.or(seen_drone) {
+            Some(m) => Sample {
+                t_s: t,
+                position_m: m.position_m,
+                velocity_mps: [0.0; 3],
+                acceleration_mps2: [0.0; 3],
+                heading_rad: m.heading_rad,
+                heading_rate_radps: 0.0,
+                camera_pitch_rad: first.camera_pitch_rad,
+                shot: 0,
+            },
+            None => unreachable_measurement(&first, t),
+        };
+        // Against the actors as they stand now (they may have moved during take-off).
+        let first = self.first_framing();
+        let glide = Glide::new(t, &here, &first, self.setup.profile);
+        self.event(
+            t,
+            "info",
+            "approach",
+            format!("flying to the first framing ({:.1} s)", glide.duration_s),
+        );
+        let mut outcome = Outcome::Done;
+        while t < glide.end_s() + SETTLE_S {
+            t = self.wait_tick(t + self.period_s)?;
+            let sample = glide.sample(t, first.camera_pitch_rad);
+            if let Outcome::Land = self.control(t, Phase::Approach, None, &sample)? {
+                outcome = Outcome::Land;
+                break;
+            }
+        }
+
+        // The shots.
+        let mut completed = false;
+        let mut last = hover_sample(t, &first);
+        let mut director = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
+        if let Outcome::Done = outcome {
+            let action_s = t + self.period_s;
+            self.mocap.action(action_s);
+            self.event(action_s, "info", "action", "action!".into());
+            let mut current: Option<usize> = None;
+            loop {
+                t = self.wait_tick(t + self.period_s)?;
+                let script_t = t - action_s;
+                let sample = director.step(script_t, &self.actors.poses);
+                if current != Some(sample.shot) {
+                    current = Some(sample.shot);
+                    self.event(
+                        t,
+                        "info",
+                        "shot_start",
+                        format!(
+                            "shot {} of {}",
+                            sample.shot + 1,
+                            self.setup.script.timeline.len()
+                        ),
+                    );
+                }
+                // The framing as the drone really films it: the measured pose, the camera
+                // pitch the reference asks of the gimbal (level without one).
+                self.framing.clear();
+                if let Some(m) = self.measured {
+                    let camera = CameraPose {
+                        position_m: Vec3::from(m.position_m),
+                        heading_rad: m.heading_rad,
+                        pitch_rad: sample.camera_pitch_rad,
+                    };
+                    if director.hold_targets(
+                        &self.actors.poses,
+                        &camera.position_m,
+                        &mut self.targets,
+                    ) {
+                        for target in &self.targets {
+                            self.framing.push(FramingRecord {
+                                actor: target.actor,
+                                screen: camera.project(&self.lens, &target.point_m),
+                                requested: Some(target.screen),
+                            });
+                        }
+                    }
+                }
+                let world_sample = Sample { t_s: t, ..sample };
+                last = world_sample;
+                if let Outcome::Land =
+                    self.control(t, Phase::Shots, Some(sample.shot), &world_sample)?
+                {
+                    break;
+                }
+                if director.finished() {
+                    completed = true;
+                    break;
+                }
+            }
+        }
+
+        // Landing: hold the last pose a moment, then land.
+        self.framing.clear();
+        if completed {
+            let end = t + HOLD_BEFORE_LANDING_S;
+            while t < end {
+                t = self.wait_tick(t + self.period_s)?;
+                if let Outcome::Land =
+                    self.control(t, Phase::Landing, None, &hover_sample(t, &last))?
+                {
+                    completed = false;
+                    break;
+                }
+            }
+        }
+        self.event(t, "info", "landing", "landing".into());
+        self.drone.land()?;
+        let deadline = t + self.setup.safety.landing_timeout_s;
+        loop {
+            t = self.wait_tick(t + self.period_s)?;
+            let state = self.drone.telemetry().state;
+            if matches!(state, FlightState::Landed | FlightState::Emergency) {
+                self.event(t, "info", "landed", format!("{state:?}").to_lowercase());
+                break;
+            }
+            if t > deadline {
+                self.event(
+                    t,
+                    "error",
+                    "landing_timeout",
+                    format!(
+                        "the drone still reports {state:?} {:.0} s after the landing command",
+                        self.setup.safety.landing_timeout_s
+                    ),
+                );
+                break;
+            }
+        }
+        if let Some(e) = self.log_error.take() {
+            return Err(FlightError::Log(e));
+        }
+        let labels: Vec<String> = self
+            .setup
+            .script
+            .timeline
+            .iter()
+            .map(|shot| shot_label(self.setup.source, shot))
+            .collect();
+        Ok(self.metrics.report(
+            &labels,
+            Counts {
+                completed,
+                flight_time_s: t - flying_s,
+                failsafes: self.failsafes,
+                faults: self.faults,
+                deadline_misses: self.deadline_misses,
+            },
+        ))
+    }
+
+    /// One controlled tick: controller, failsafes, command, metrics, record.
+    fn control(
+        &mut self,
+        t: f64,
+        phase: Phase,
+        shot: Option<usize>,
+        sample: &Sample,
+    ) -> Result<Outcome, FlightError> {
+        let mut outcome = Outcome::Done;
+        let dt = match self.last_tick_s {
+            Some(t0) => t - t0,
+            None => self.period_s,
+        };
+        let input = TickInput {
+            t_s: t,
+            dt_s: dt,
+            measurement: self.measured,
+            reference: Reference::from(sample),
+        };
+        if !self.controller_started {
+            // The replay rule: reset with the first tick's measurement at t − Δ.
+            match self.measured {
+                Some(m) => {
+                    self.controller.reset(t - dt, &m);
+                    self.controller_started = true;
+                }
+                None => {
+                    // Nothing to start the filters from: hover until the drone is seen.
+                    self.drone.hover()?;
+                    return Ok(outcome);
+                }
+            }
+        }
+        let output = self.controller.tick(&input);
+        self.last_tick_s = Some(t);
+        let mut command_sent = match &output {
+            Ok(o) => o.command,
+            Err(fault) => {
+                self.faults += 1;
+                self.event(
+                    t,
+                    "error",
+                    "fault",
+                    format!("controller refused the tick ({fault:?}); hovering"),
+                );
+                Command::HOVER
+            }
+        };
+        // Failsafes.
+        let unseen_s = t - self.last_drone_seen_s;
+        if unseen_s >= self.setup.safety.mocap_land_s {
+            self.failsafe(t, "the drone has not been tracked for 2 s: landing");
+            outcome = Outcome::Land;
+        } else if unseen_s >= self.setup.safety.mocap_hover_s {
+            if !self.hovering {
+                self.failsafe(t, "the drone is not tracked: hovering");
+            }
+            self.hovering = true;
+        } else {
+            self.hovering = false;
+        }
+        if let Some(m) = self.measured {
+            if !inside(&self.setup.scene.stage, &m.position_m, 0.0) {
+                self.failsafe(
+                    t,
+                    &format!(
+                        "the drone left the stage at ({:.2}, {:.2}, {:.2}) m: landing",
+                        m.position_m[0], m.position_m[1], m.position_m[2]
+                    ),
+                );
+                outcome = Outcome::Land;
+            }
+        }
+        let battery = self.drone.telemetry().battery_percent;
+        if battery < self.setup.safety.battery_land_percent {
+            self.failsafe(t, &format!("battery at {battery:.0}%: landing"));
+            outcome = Outcome::Land;
+        }
+        if self.hovering || output.is_err() || matches!(outcome, Outcome::Land) {
+            command_sent = Command::HOVER;
+            self.drone.hover()?;
+        } else {
+            self.drone.send(&command_sent)?;
+        }
+
+        self.metrics
+            .record(phase, shot, &input, &output, &self.framing);
+        let error = Metrics::tracking_error(&input);
+
+        let state = self.drone.telemetry().state;
+        let record = TickRecord {
+            phase,
+            shot,
+            sample,
+            input,
+            output,
+            command_sent,
+            mocap: self.fresh.then_some(&self.frame),
+            actors: &self.actors.poses,
+            framing: &self.framing,
+            drone_state: state,
+        };
+        if let Err(e) = self.sink.tick(&record) {
+            self.log_error.get_or_insert(e);
+            self.failsafe(t, "the flight log cannot be written: landing");
+            outcome = Outcome::Land;
+        }
+        self.observer.progress(&Progress {
+            t_s: t,
+            phase,
+            shot,
+            shots: self.setup.script.timeline.len(),
+            script_t_s: if phase == Phase::Shots {
+                sample.t_s.min(self.script_duration_s)
+            } else {
+                0.0
+            },
+            script_duration_s: self.script_duration_s,
+            position_error_m: error.map(|e| e.0),
+        });
+        Ok(outcome)
+    }
+
+    /// The first shot's framing against the actors as they stand now.
+    fn first_framing(&self) -> Sample {
+        let mut probe = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
+        probe.step(0.0, &self.actors.poses)
+    }
+
+    fn failsafe(&mut self, t: f64, message: &str) {
+        self.failsafes += 1;
+        self.event(t, "error", "failsafe", message.to_string());
+    }
+}
+
+/// The sample to fly when the drone has never been measured (cannot happen after the
+/// pre-flight check; kept total instead of panicking).
+fn unreachable_measurement(first: &Sample, t: f64) -> Sample {
+    hover_sample(t, first)
+}
+
+fn inside(stage: &dronecine_grammar::script::Stage, p: &[f64; 3], margin_m: f64) -> bool {
+    let (lo, hi) = (stage.min_m(), stage.max_m());
+    (0..3).all(|i| p[i] >= lo[i] + margin_m - 1e-9 && p[i] <= hi[i] - margin_m + 1e-9)
+}
+
+fn shot_label(source: &str, shot: &dronecine_grammar::script::Shot) -> String {
+    source
+        .get(shot.span.start..shot.span.end)
+        .unwrap_or("")
+        .trim()
+        .to_string()
+}

@@ -1,0 +1,312 @@
+//! The flight report: tracking and framing figures for the whole flight and per shot.
+//!
+//! [`Metrics`] folds in one tick at a time from exactly what the flight record holds (the
+//! controller's input and output and the framing), so `shoot` and `replay` compute the same
+//! report from the same ticks. Only ticks of the shots count (not take-off, approach or
+//! landing).
+//!
+//! - position error: |measured position − reference position|, on ticks with a measurement;
+//! - heading error: the wrapped difference of measured and reference headings;
+//! - framing error: the screen distance between where an actor is (projected through the
+//!   measured camera pose) and where the script puts it, over the holds; an actor behind the
+//!   camera counts as √8 (corner to opposite corner);
+//! - saturated fraction: ticks where the controller clamped a set-point, over controlled ticks.
+
+use serde::Serialize;
+
+use crate::control::{TickFault, TickInput, TickOutput};
+use crate::record::{FramingRecord, Phase};
+
+/// Figures of one shot, or of the whole flight.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Figures {
+    pub rms_position_error_m: f64,
+    pub max_position_error_m: f64,
+    pub rms_heading_error_rad: f64,
+    /// `None` (JSON null) when there was no hold.
+    pub rms_framing_error: Option<f64>,
+    pub saturated_fraction: f64,
+    /// Ticks with a measurement.
+    pub measured_ticks: u64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ShotReport {
+    pub index: usize,
+    /// The shot's PSL text.
+    pub label: String,
+    /// First and last tick of the shot on the flight clock.
+    pub start_s: f64,
+    pub end_s: f64,
+    #[serde(flatten)]
+    pub figures: Figures,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FlightReport {
+    /// Every shot flown to its end and the drone landed normally.
+    pub completed: bool,
+    /// From take-off to landed.
+    pub flight_time_s: f64,
+    pub shots_time_s: f64,
+    #[serde(flatten)]
+    pub figures: Figures,
+    pub failsafes: u64,
+    pub faults: u64,
+    pub deadline_misses: u64,
+    pub shots: Vec<ShotReport>,
+}
+
+/// Running sums for [`Figures`].
+#[derive(Clone, Copy, Debug, Default)]
+struct Accum {
+    n: u64,
+    sq_pos: f64,
+    max_pos: f64,
+    sq_heading: f64,
+    framing_n: u64,
+    sq_framing: f64,
+    saturated: u64,
+    controlled: u64,
+    first_t_s: Option<f64>,
+    last_t_s: f64,
+}
+
+impl Accum {
+    fn figures(&self) -> Figures {
+        let rms = |s: f64, n: u64| if n == 0 { 0.0 } else { (s / n as f64).sqrt() };
+        Figures {
+            rms_position_error_m: rms(self.sq_pos, self.n),
+            max_position_error_m: self.max_pos,
+            rms_heading_error_rad: rms(self.sq_heading, self.n),
+            rms_framing_error: (self.framing_n > 0).then(|| rms(self.sq_framing, self.framing_n)),
+            saturated_fraction: if self.controlled == 0 {
+                0.0
+            } else {
+                self.saturated as f64 / self.controlled as f64
+            },
+            measured_ticks: self.n,
+        }
+    }
+}
+
+/// Accumulates the report tick by tick (no allocation per tick).
+#[derive(Clone, Debug)]
+pub struct Metrics {
+    total: Accum,
+    shots: Vec<Accum>,
+}
+
+/// The framing error of an actor behind the camera, squared.
+const BEHIND_SQ: f64 = 8.0;
+
+impl Metrics {
+    pub fn new(shots: usize) -> Metrics {
+        Metrics {
+            total: Accum::default(),
+            shots: vec![Accum::default(); shots],
+        }
+    }
+
+    /// The error of one tick: distance and wrapped heading error, when measured.
+    pub fn tracking_error(input: &TickInput) -> Option<(f64, f64)> {
+        let m = input.measurement?;
+        let r = &input.reference;
+        let d: f64 = (0..3)
+            .map(|i| (m.position_m[i] - r.position_m[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        Some((
+            d,
+            crate::frames::wrap_angle_rad(m.heading_rad - r.heading_rad),
+        ))
+    }
+
+    pub fn record(
+        &mut self,
+        phase: Phase,
+        shot: Option<usize>,
+        input: &TickInput,
+        output: &Result<TickOutput, TickFault>,
+        framing: &[FramingRecord],
+    ) {
+        let (Phase::Shots, Some(i)) = (phase, shot) else {
+            return;
+        };
+        if i >= self.shots.len() {
+            self.shots.resize(i + 1, Accum::default());
+        }
+        let saturated = matches!(
+            output,
+            Ok(TickOutput {
+                saturated: true,
+                ..
+            })
+        );
+        let error = Self::tracking_error(input);
+        for acc in [&mut self.total, &mut self.shots[i]] {
+            acc.first_t_s.get_or_insert(input.t_s);
+            acc.last_t_s = input.t_s;
+            acc.controlled += 1;
+            acc.saturated += saturated as u64;
+            if let Some((e, h)) = error {
+                acc.n += 1;
+                acc.sq_pos += e * e;
+                acc.max_pos = acc.max_pos.max(e);
+                acc.sq_heading += h * h;
+            }
+            for f in framing {
+                acc.framing_n += 1;
+                acc.sq_framing += match (f.screen, f.requested) {
+                    (Some(s), Some(r)) => (s[0] - r[0]).powi(2) + (s[1] - r[1]).powi(2),
+                    _ => BEHIND_SQ,
+                };
+            }
+        }
+    }
+
+    /// The report; `labels[i]` names shot `i`. Shots never reached are left out.
+    pub fn report(&self, labels: &[String], counts: Counts) -> FlightReport {
+        let shots = self
+            .shots
+            .iter()
+            .enumerate()
+            .filter_map(|(i, a)| {
+                Some(ShotReport {
+                    index: i,
+                    label: labels.get(i).cloned().unwrap_or_default(),
+                    start_s: a.first_t_s?,
+                    end_s: a.last_t_s,
+                    figures: a.figures(),
+                })
+            })
+            .collect();
+        FlightReport {
+            completed: counts.completed,
+            flight_time_s: counts.flight_time_s,
+            shots_time_s: self
+                .total
+                .first_t_s
+                .map_or(0.0, |t0| self.total.last_t_s - t0),
+            figures: self.total.figures(),
+            failsafes: counts.failsafes,
+            faults: counts.faults,
+            deadline_misses: counts.deadline_misses,
+            shots,
+        }
+    }
+}
+
+/// What the report takes from the flight's events.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Counts {
+    pub completed: bool,
+    pub flight_time_s: f64,
+    pub failsafes: u64,
+    pub faults: u64,
+    pub deadline_misses: u64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::{Measurement, Reference};
+
+    fn input(t_s: f64, err_m: f64, heading_err_rad: f64, measured: bool) -> TickInput {
+        TickInput {
+            t_s,
+            dt_s: 0.01,
+            measurement: measured.then_some(Measurement {
+                position_m: [1.0 + err_m, 2.0, 1.0],
+                heading_rad: 3.0 + heading_err_rad,
+            }),
+            reference: Reference {
+                position_m: [1.0, 2.0, 1.0],
+                heading_rad: 3.0,
+                ..Reference::default()
+            },
+        }
+    }
+
+    #[test]
+    fn figures_are_rms_and_max_over_the_shots_only() {
+        let mut m = Metrics::new(2);
+        let ok = Ok(TickOutput::default());
+        let sat = Ok(TickOutput {
+            saturated: true,
+            ..TickOutput::default()
+        });
+        m.record(Phase::Approach, None, &input(0.0, 9.0, 0.0, true), &ok, &[]);
+        m.record(Phase::Shots, Some(0), &input(1.0, 0.3, 0.0, true), &ok, &[]);
+        m.record(
+            Phase::Shots,
+            Some(0),
+            &input(1.01, 0.4, 0.0, true),
+            &sat,
+            &[],
+        );
+        m.record(
+            Phase::Shots,
+            Some(1),
+            &input(2.0, 0.0, 0.2, false),
+            &ok,
+            &[],
+        );
+        // A heading error across ±π is short.
+        m.record(
+            Phase::Shots,
+            Some(1),
+            &input(2.01, 0.0, 6.2, true),
+            &ok,
+            &[],
+        );
+        let r = m.report(&["a".into(), "b".into()], Counts::default());
+        let rms = ((0.09 + 0.16 + 0.0) / 3.0f64).sqrt();
+        assert!((r.figures.rms_position_error_m - rms).abs() < 1e-12);
+        assert!((r.figures.max_position_error_m - 0.4).abs() < 1e-12);
+        assert_eq!(r.figures.measured_ticks, 3);
+        assert!((r.figures.saturated_fraction - 0.25).abs() < 1e-12);
+        let h = 6.2 - 2.0 * std::f64::consts::PI;
+        assert!((r.shots[1].figures.rms_heading_error_rad - h.abs()).abs() < 1e-9);
+        assert!((r.shots[0].figures.max_position_error_m - 0.4).abs() < 1e-12);
+        assert_eq!((r.shots[1].start_s, r.shots[1].end_s), (2.0, 2.01));
+        assert_eq!(r.figures.rms_framing_error, None);
+    }
+
+    #[test]
+    fn framing_error_is_the_screen_distance() {
+        let mut m = Metrics::new(1);
+        let f = [
+            FramingRecord {
+                actor: 0,
+                screen: Some([0.3, 0.4]),
+                requested: Some([0.0, 0.0]),
+            },
+            FramingRecord {
+                actor: 1,
+                screen: None,
+                requested: Some([0.0, 0.0]),
+            },
+        ];
+        m.record(
+            Phase::Shots,
+            Some(0),
+            &input(0.0, 0.0, 0.0, true),
+            &Ok(TickOutput::default()),
+            &f[..1],
+        );
+        let r = m.report(&[], Counts::default());
+        assert!((r.figures.rms_framing_error.unwrap() - 0.5).abs() < 1e-12);
+        m.record(
+            Phase::Shots,
+            Some(0),
+            &input(0.01, 0.0, 0.0, true),
+            &Ok(TickOutput::default()),
+            &f[1..],
+        );
+        let r = m.report(&[], Counts::default());
+        assert!(
+            (r.figures.rms_framing_error.unwrap() - ((0.25 + 8.0) / 2.0f64).sqrt()).abs() < 1e-12
+        );
+    }
+}
