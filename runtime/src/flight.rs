@@ -527,6 +527,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
 
         // Take-off.
+        let take_off_s = t;
         self.event(t, "info", "take_off", "taking off".into());
         self.drone.take_off()?;
         let deadline = t + self.setup.safety.take_off_timeout_s;
@@ -549,7 +550,6 @@ impl<'s, 'b> Flight<'s, 'b> {
                 _ => {}
             }
         }
-        let flying_s = t;
 
         // Approach: from where the drone hovers to the first framing.
         let here = match self.measured.or(seen_drone) {
@@ -684,21 +684,25 @@ impl<'s, 'b> Flight<'s, 'b> {
                 break;
             }
         }
+        self.event(
+            t,
+            if completed { "info" } else { "error" },
+            "flight_end",
+            format!(
+                "{} after {:.2} s of flight",
+                if completed { "completed" } else { "aborted" },
+                t - take_off_s
+            ),
+        );
         if let Some(e) = self.log_error.take() {
             return Err(FlightError::Log(e));
         }
-        let labels: Vec<String> = self
-            .setup
-            .script
-            .timeline
-            .iter()
-            .map(|shot| shot_label(self.setup.source, shot))
-            .collect();
+        let labels = crate::report::shot_labels(self.setup.script, self.setup.source);
         Ok(self.metrics.report(
             &labels,
             Counts {
                 completed,
-                flight_time_s: t - flying_s,
+                flight_time_s: t - take_off_s,
                 failsafes: self.failsafes,
                 faults: self.faults,
                 deadline_misses: self.deadline_misses,
@@ -850,12 +854,4 @@ fn unreachable_measurement(first: &Sample, t: f64) -> Sample {
 fn inside(stage: &dronecine_grammar::script::Stage, p: &[f64; 3], margin_m: f64) -> bool {
     let (lo, hi) = (stage.min_m(), stage.max_m());
     (0..3).all(|i| p[i] >= lo[i] + margin_m - 1e-9 && p[i] <= hi[i] - margin_m + 1e-9)
-}
-
-fn shot_label(source: &str, shot: &dronecine_grammar::script::Shot) -> String {
-    source
-        .get(shot.span.start..shot.span.end)
-        .unwrap_or("")
-        .trim()
-        .to_string()
 }

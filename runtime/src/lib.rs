@@ -8,6 +8,7 @@
 //! - `flight`: the flight loop (pre-flight, take-off, approach, shots, landing, report).
 
 pub mod backend;
+pub mod clock;
 pub mod control;
 pub mod flight;
 pub mod frames;

@@ -46,7 +46,7 @@ pub struct ShotReport {
 pub struct FlightReport {
     /// Every shot flown to its end and the drone landed normally.
     pub completed: bool,
-    /// From take-off to landed.
+    /// From the take-off command to the end (landed, or the landing timed out).
     pub flight_time_s: f64,
     pub shots_time_s: f64,
     #[serde(flatten)]
@@ -174,7 +174,10 @@ impl Metrics {
             .filter_map(|(i, a)| {
                 Some(ShotReport {
                     index: i,
-                    label: labels.get(i).cloned().unwrap_or_default(),
+                    label: labels
+                        .get(i)
+                        .cloned()
+                        .unwrap_or_else(|| format!("shot {}", i + 1)),
                     start_s: a.first_t_s?,
                     end_s: a.last_t_s,
                     figures: a.figures(),
@@ -195,6 +198,21 @@ impl Metrics {
             shots,
         }
     }
+}
+
+/// Each shot's PSL text, by timeline index.
+pub fn shot_labels(script: &dronecine_grammar::Script, source: &str) -> Vec<String> {
+    script
+        .timeline
+        .iter()
+        .map(|shot| {
+            source
+                .get(shot.span.start..shot.span.end)
+                .unwrap_or("")
+                .trim()
+                .to_string()
+        })
+        .collect()
 }
 
 /// What the report takes from the flight's events.
