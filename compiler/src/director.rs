@@ -117,6 +117,41 @@ pub struct Director {
     /// Per-tick scratch: the actors extrapolated, and their body axes.
     ahead: Vec<ActorPose>,
     axes: Vec<(Vec3, f64)>,
+    /// Per plan, the actors each end's composition names (by index), for the solve memo.
+    framed: Vec<[Vec<usize>; 2]>,
+    /// The last few composition solves (see [`Solved`]), replaced round robin.
+    solved: Vec<Solved>,
+    next_solved: usize,
+}
+
+/// How many composition solves the director remembers: a tick solves at most two ends, for
+/// the actors now and 1 ms ahead.
+const SOLVED_SLOTS: usize = 8;
+
+/// A memoised `framing::solve`: it is a pure function of the composition and of the poses of
+/// the actors the composition names, so while those actors stand still (and for the 1 ms
+/// look-ahead of a still actor, which is the same pose) the solve is reused, bit for bit.
+struct Solved {
+    plan: usize,
+    end: usize,
+    actor_count: usize,
+    /// The named actors' poses, compared bit for bit.
+    poses: Vec<ActorPose>,
+    result: Result<framing::Visual, FramingError>,
+}
+
+/// Whether two poses are the same, bit for bit (NaN and signed zeros included).
+fn same_pose(a: &ActorPose, b: &ActorPose) -> bool {
+    let same = |x: f64, y: f64| x.to_bits() == y.to_bits();
+    same(a.position_m[0], b.position_m[0])
+        && same(a.position_m[1], b.position_m[1])
+        && same(a.position_m[2], b.position_m[2])
+        && same(a.velocity_mps[0], b.velocity_mps[0])
+        && same(a.velocity_mps[1], b.velocity_mps[1])
+        && same(a.velocity_mps[2], b.velocity_mps[2])
+        && same(a.facing_rad, b.facing_rad)
+        && same(a.facing_rate_radps, b.facing_rate_radps)
+        && same(a.height_m, b.height_m)
 }
 
 impl Director {
@@ -170,6 +205,20 @@ impl Director {
             };
             plans.push(plan);
         }
+        let names: Vec<String> = scene.actors.iter().map(|a| a.name.clone()).collect();
+        let framed_by = |c: &Composition| -> Vec<usize> {
+            c.actors()
+                .filter_map(|n| names.iter().position(|x| x == n))
+                .collect()
+        };
+        let framed = plans
+            .iter()
+            .map(|plan| match plan {
+                Plan::Hold(c) => [framed_by(c), Vec::new()],
+                Plan::Move { from, to } => [framed_by(from), framed_by(to)],
+                _ => [Vec::new(), Vec::new()],
+            })
+            .collect();
         let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
         let margin = profile.safety.stage_margin_m;
         let stage_lo = Vec3::new(lo[0] + margin, lo[1] + margin, lo[2] + margin);
@@ -177,7 +226,7 @@ impl Director {
         Director {
             shots: script.timeline.clone(),
             plans,
-            names: scene.actors.iter().map(|a| a.name.clone()).collect(),
+            names,
             lens,
             gimbal: profile.camera.gimbal,
             limits,
@@ -200,6 +249,9 @@ impl Director {
             too_close: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
             axes: Vec::with_capacity(scene.actors.len()),
+            framed,
+            solved: Vec::with_capacity(SOLVED_SLOTS),
+            next_solved: 0,
         }
     }
 
@@ -568,28 +620,82 @@ impl Director {
         }
     }
 
-    /// The visual parameters of shot `index` at `into_s` seconds into it (None for paths).
-    fn shot_visual(
-        &self,
+    /// `framing::solve` of end `end` (0: the hold or the move's start, 1: the move's end) of
+    /// plan `index`, memoised (see [`Solved`]).
+    fn solve_end(
+        &mut self,
+        index: usize,
+        end: usize,
+        actors: &[ActorPose],
+    ) -> Result<framing::Visual, FramingError> {
+        let framed = &self.framed[index][end];
+        let known = framed.iter().all(|&i| i < actors.len());
+        let hit = if known {
+            self.solved.iter().position(|m| {
+                m.plan == index
+                    && m.end == end
+                    && m.actor_count == actors.len()
+                    && m.poses.len() == framed.len()
+                    && framed
+                        .iter()
+                        .zip(&m.poses)
+                        .all(|(&i, p)| same_pose(&actors[i], p))
+            })
+        } else {
+            None
+        };
+        if let Some(k) = hit {
+            return self.solved[k].result.clone();
+        }
+        let comp = match (&self.plans[index], end) {
+            (Plan::Hold(c), _)
+            | (Plan::Move { from: c, .. }, 0)
+            | (Plan::Move { to: c, .. }, _) => c,
+            // Only compositions are solved (shot_ends).
+            _ => {
+                return Err(FramingError::Unsupported {
+                    framings: 0,
+                    subjects: 0,
+                })
+            }
+        };
+        let result = framing::solve(comp, &self.names, actors, &self.lens, &self.gimbal);
+        if known {
+            let entry = Solved {
+                plan: index,
+                end,
+                actor_count: actors.len(),
+                poses: framed.iter().map(|&i| actors[i]).collect(),
+                result: result.clone(),
+            };
+            if self.solved.len() < SOLVED_SLOTS {
+                self.solved.push(entry);
+            } else {
+                self.solved[self.next_solved] = entry;
+                self.next_solved = (self.next_solved + 1) % SOLVED_SLOTS;
+            }
+        }
+        result
+    }
+
+    /// The solved ends of shot `index` at `into_s` seconds into it: the hold's visual, or the
+    /// move's two ends and how far along it is (None for paths).
+    #[allow(clippy::type_complexity)]
+    fn shot_ends(
+        &mut self,
         index: usize,
         into_s: f64,
         actors: &[ActorPose],
-    ) -> Option<Result<framing::Visual, FramingError>> {
+    ) -> Option<Result<(framing::Visual, Option<(framing::Visual, f64)>), FramingError>> {
         let duration = self.shots[index].end_s - self.shots[index].start_s;
         match &self.plans[index] {
-            Plan::Hold(c) => Some(framing::solve(
-                c,
-                &self.names,
-                actors,
-                &self.lens,
-                &self.gimbal,
-            )),
-            Plan::Move { from, to } => {
+            Plan::Hold(_) => Some(self.solve_end(index, 0, actors).map(|v| (v, None))),
+            Plan::Move { .. } => {
                 let (s, _, _) = min_jerk(into_s / duration);
-                let a = framing::solve(from, &self.names, actors, &self.lens, &self.gimbal);
-                let b = framing::solve(to, &self.names, actors, &self.lens, &self.gimbal);
+                let a = self.solve_end(index, 0, actors);
+                let b = self.solve_end(index, 1, actors);
                 Some(match (a, b) {
-                    (Ok(a), Ok(b)) => Ok(framing::interpolate(&a, &b, s)),
+                    (Ok(a), Ok(b)) => Ok((a, Some((b, s)))),
                     (Err(e), _) | (_, Err(e)) => Err(e),
                 })
             }
@@ -597,16 +703,39 @@ impl Director {
         }
     }
 
+    /// The visual parameters of shot `index` at `into_s` seconds into it (None for paths).
+    fn shot_visual(
+        &mut self,
+        index: usize,
+        into_s: f64,
+        actors: &[ActorPose],
+    ) -> Option<Result<framing::Visual, FramingError>> {
+        self.shot_ends(index, into_s, actors).map(|r| {
+            r.map(|(a, b)| match b {
+                None => a,
+                Some((b, s)) => framing::interpolate(&a, &b, s),
+            })
+        })
+    }
+
     /// The target of shot `index` at `into_s` seconds into it. With `keep`, the solved visual
     /// is kept for orienting the camera this tick, and the framing is checked against the
     /// actors' safety distance.
     fn shot_target(&mut self, index: usize, into_s: f64, actors: &[ActorPose], keep: bool) -> Vec3 {
-        match self.shot_visual(index, into_s, actors) {
-            Some(Ok(v)) => {
-                let p = framing::place(&v, actors, &self.lens, &self.gimbal).position_m;
+        match self.shot_ends(index, into_s, actors) {
+            Some(Ok((a, b))) => {
+                let p = match &b {
+                    None => framing::position_m(&a, actors, &self.lens, &self.gimbal),
+                    Some((b, s)) => {
+                        framing::position_between_m(&a, b, *s, actors, &self.lens, &self.gimbal)
+                    }
+                };
                 if keep {
                     self.check_clearance(index, &p, actors);
-                    self.visual = Some(v);
+                    self.visual = Some(match b {
+                        None => a,
+                        Some((b, s)) => framing::interpolate(&a, &b, s),
+                    });
                 }
                 p
             }
@@ -700,9 +829,15 @@ impl Director {
     ) -> (f64, f64) {
         let duration = self.shots[index].end_s - self.shots[index].start_s;
         let visual = match &self.plans[index] {
-            Plan::Hold(_) | Plan::Move { .. } => match (cached, self.visual.clone()) {
-                (true, Some(v)) => Some(v),
-                _ => self.shot_visual(index, into_s, actors).and_then(Result::ok),
+            Plan::Hold(_) | Plan::Move { .. } => match (cached, self.visual.take()) {
+                // The tick's visual: used, then put back below.
+                (true, Some(v)) => Some((v, true)),
+                (_, kept) => {
+                    self.visual = kept;
+                    self.shot_visual(index, into_s, actors)
+                        .and_then(Result::ok)
+                        .map(|v| (v, false))
+                }
             },
             Plan::Path(plan) => {
                 let looking_at = match &self.shots[index].content {
@@ -733,9 +868,12 @@ impl Director {
             Plan::PathPending | Plan::Nothing => None,
         };
         match visual {
-            Some(v) => {
+            Some((v, kept)) => {
                 let (h, p, _) =
                     framing::orient_visual(&v, actors, &self.lens, &self.gimbal, position);
+                if kept {
+                    self.visual = Some(v);
+                }
                 (h, p)
             }
             None => (self.heading.heading_rad, self.pitch_rad),

@@ -872,6 +872,50 @@ fn primary_target(t: &TwoVisual, actors: &[ActorPose]) -> (Vec3, [f64; 2]) {
 
 /// Place the camera for a visual against the actors' current poses.
 pub fn place(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Placement {
+    place_impl(v, actors, lens, gimbal, true)
+}
+
+/// The camera position [`place`] gives, without the orientation (the position never depends
+/// on it): what the director needs for its target, at a fraction of the cost.
+pub fn position_m(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Vec3 {
+    place_impl(v, actors, lens, gimbal, false).position_m
+}
+
+/// `position_m(&interpolate(a, b, s), …)`, bit for bit, without building the blend.
+pub fn position_between_m(
+    a: &Visual,
+    b: &Visual,
+    s: f64,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+) -> Vec3 {
+    let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
+    if s == 0.0 {
+        return position_m(a, actors, lens, gimbal);
+    }
+    if s == 1.0 {
+        return position_m(b, actors, lens, gimbal);
+    }
+    if let (Visual::One(x), Visual::One(y)) = (a, b) {
+        if x.actor == y.actor {
+            return position_m(&Visual::One(lerp_one(x, y, s)), actors, lens, gimbal);
+        }
+    }
+    if !(valid_indices(a, actors.len()) && valid_indices(b, actors.len())) {
+        return Vec3::zeros();
+    }
+    place_blend(a, b, s, None, actors, lens, gimbal).position_m
+}
+
+/// [`place`], with the orientation (and its flags) only when `orient`.
+fn place_impl(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    orient: bool,
+) -> Placement {
     if !valid_indices(v, actors.len()) {
         return Placement {
             position_m: Vec3::zeros(),
@@ -884,56 +928,143 @@ pub fn place(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> 
         };
     }
     match v {
-        Visual::One(o) => place_one(o, actors, lens, gimbal),
-        Visual::Two(t) => place_two(t, actors, lens, gimbal),
+        Visual::One(o) => place_one(o, actors, lens, gimbal, orient),
+        Visual::Two(t) => place_two(t, actors, lens, gimbal, orient),
         Visual::Blend { from, to, s } => {
-            let p0 = place(from, actors, lens, gimbal);
-            let p1 = place(to, actors, lens, gimbal);
-            if let Some(mut c) = toric_blend_position(from, to, *s, actors) {
-                if fixed_pitch(gimbal) {
-                    // Level camera: blend the ends' altitude corrections (place_two).
-                    let correction = |p: &Placement, v: &Visual| match v {
-                        Visual::Two(t) => toric::position(
-                            &band_centre(&actors[t.a], t.band_a_m),
-                            &band_centre(&actors[t.b], t.band_b_m),
-                            &t.toric,
-                        )
-                        .map_or(0.0, |c| p.position_m.z - c.z),
-                        _ => 0.0,
-                    };
-                    c.z += lerp(correction(&p0, from), correction(&p1, to), *s);
-                }
-                let (heading_rad, pitch_rad, f) = orient_visual(v, actors, lens, gimbal, &c);
-                return Placement {
-                    position_m: c,
-                    heading_rad,
-                    pitch_rad,
-                    flags: f.union(p0.flags).union(p1.flags),
-                };
-            }
-            // Cylindrical blend about the actors involved.
-            let points: Vec<Vec3> = aim_points(v, actors).into_iter().map(|(_, p)| p).collect();
-            let centre = points.iter().sum::<Vec3>() / points.len().max(1) as f64;
-            let cyl = |p: &Vec3| {
-                let d = p - centre;
-                (d.x.hypot(d.y), d.y.atan2(d.x), d.z)
-            };
-            let (r0, a0, z0) = cyl(&p0.position_m);
-            let (r1, a1, z1) = cyl(&p1.position_m);
-            let (r, a, z) = (lerp(r0, r1, *s), lerp_angle(a0, a1, *s), lerp(z0, z1, *s));
-            let c = centre + Vec3::new(r * a.cos(), r * a.sin(), z);
-            let (heading_rad, pitch_rad, f) = orient_visual(v, actors, lens, gimbal, &c);
-            Placement {
-                position_m: c,
-                heading_rad,
-                pitch_rad,
-                flags: f.union(p0.flags).union(p1.flags),
-            }
+            place_blend(from, to, *s, orient.then_some(v), actors, lens, gimbal)
         }
     }
 }
 
-fn place_one(o: &OneVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Placement {
+/// A camera at `c` oriented for `whole` (the blend being placed), or not oriented at all.
+fn oriented(
+    c: Vec3,
+    whole: Option<&Visual>,
+    flags: Flags,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+) -> Placement {
+    let (heading_rad, pitch_rad, f) = match whole {
+        Some(v) => orient_visual(v, actors, lens, gimbal, &c),
+        None => (0.0, 0.0, Flags::default()),
+    };
+    Placement {
+        position_m: c,
+        heading_rad,
+        pitch_rad,
+        flags: f.union(flags),
+    }
+}
+
+/// The placement of `Visual::Blend { from, to, s }` (indices already checked), oriented for
+/// `whole` when given.
+fn place_blend(
+    from: &Visual,
+    to: &Visual,
+    s: f64,
+    whole: Option<&Visual>,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+) -> Placement {
+    let orient = whole.is_some();
+    let p0 = place_impl(from, actors, lens, gimbal, orient);
+    let p1 = place_impl(to, actors, lens, gimbal, orient);
+    let flags = p0.flags.union(p1.flags);
+    if let Some(mut c) = toric_blend_position(from, to, s, actors) {
+        if fixed_pitch(gimbal) {
+            // Level camera: blend the ends' altitude corrections (place_two).
+            let correction = |p: &Placement, v: &Visual| match v {
+                Visual::Two(t) => toric::position(
+                    &band_centre(&actors[t.a], t.band_a_m),
+                    &band_centre(&actors[t.b], t.band_b_m),
+                    &t.toric,
+                )
+                .map_or(0.0, |c| p.position_m.z - c.z),
+                _ => 0.0,
+            };
+            c.z += lerp(correction(&p0, from), correction(&p1, to), s);
+        }
+        return oriented(c, whole, flags, actors, lens, gimbal);
+    }
+    // Cylindrical blend about the actors involved.
+    let centre = blend_centre(from, to, s, actors);
+    let cyl = |p: &Vec3| {
+        let d = p - centre;
+        (d.x.hypot(d.y), d.y.atan2(d.x), d.z)
+    };
+    let (r0, a0, z0) = cyl(&p0.position_m);
+    let (r1, a1, z1) = cyl(&p1.position_m);
+    let (r, a, z) = (lerp(r0, r1, s), lerp_angle(a0, a1, s), lerp(z0, z1, s));
+    let c = centre + Vec3::new(r * a.cos(), r * a.sin(), z);
+    oriented(c, whole, flags, actors, lens, gimbal)
+}
+
+/// The aim points of a one- or two-actor visual, on the stack (`None` for a blend).
+fn simple_aim_points(v: &Visual, actors: &[ActorPose]) -> Option<([(usize, Vec3); 2], usize)> {
+    match v {
+        Visual::One(o) => Some((
+            [
+                (o.actor, band_centre(&actors[o.actor], o.band_m)),
+                (usize::MAX, Vec3::zeros()),
+            ],
+            1,
+        )),
+        Visual::Two(t) => Some((
+            [
+                (t.a, band_centre(&actors[t.a], t.band_a_m)),
+                (t.b, band_centre(&actors[t.b], t.band_b_m)),
+            ],
+            2,
+        )),
+        Visual::Blend { .. } => None,
+    }
+}
+
+/// The centroid of [`aim_points`] of `Visual::Blend { from, to, s }`, summed in the same
+/// order (so bit for bit the same), without allocating for one- and two-actor ends.
+fn blend_centre(from: &Visual, to: &Visual, s: f64, actors: &[ActorPose]) -> Vec3 {
+    let (Some((p0, n0)), Some((p1, n1))) = (
+        simple_aim_points(from, actors),
+        simple_aim_points(to, actors),
+    ) else {
+        let v = Visual::Blend {
+            from: Box::new(from.clone()),
+            to: Box::new(to.clone()),
+            s,
+        };
+        let points = aim_points(&v, actors);
+        let sum = points.iter().fold(Vec3::zeros(), |acc, (_, p)| acc + p);
+        return sum / points.len().max(1) as f64;
+    };
+    let (p0, p1) = (&p0[..n0], &p1[..n1]);
+    let mut out = [(usize::MAX, Vec3::zeros()); 4];
+    let mut n = 0;
+    for (i, p) in p0 {
+        out[n] = match p1.iter().find(|(j, _)| j == i) {
+            Some((_, q)) => (*i, p + (q - p) * s),
+            None => (*i, *p),
+        };
+        n += 1;
+    }
+    for (j, q) in p1 {
+        if !out[..n].iter().any(|(i, _)| i == j) {
+            out[n] = (*j, *q);
+            n += 1;
+        }
+    }
+    let sum = out[..n].iter().fold(Vec3::zeros(), |acc, (_, p)| acc + p);
+    sum / n.max(1) as f64
+}
+
+fn place_one(
+    o: &OneVisual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    orient: bool,
+) -> Placement {
     let p = &actors[o.actor];
     let m = band_centre(p, o.band_m);
     let mut flags = Flags::default();
@@ -966,7 +1097,11 @@ fn place_one(o: &OneVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) 
             },
         )
     };
-    let (heading_rad, pitch_rad, f) = orient_visual(&Visual::One(*o), actors, lens, gimbal, &c);
+    let (heading_rad, pitch_rad, f) = if orient {
+        orient_visual(&Visual::One(*o), actors, lens, gimbal, &c)
+    } else {
+        (0.0, 0.0, Flags::default())
+    };
     Placement {
         position_m: c,
         heading_rad,
@@ -975,7 +1110,13 @@ fn place_one(o: &OneVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) 
     }
 }
 
-fn place_two(t: &TwoVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Placement {
+fn place_two(
+    t: &TwoVisual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    orient: bool,
+) -> Placement {
     let ma = band_centre(&actors[t.a], t.band_a_m);
     let mb = band_centre(&actors[t.b], t.band_b_m);
     let mut c = match toric::position(&ma, &mb, &t.toric) {
@@ -998,7 +1139,7 @@ fn place_two(t: &TwoVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) 
                 screen,
                 band_m: band,
             };
-            let mut p = place_one(&one, actors, lens, gimbal);
+            let mut p = place_one(&one, actors, lens, gimbal, orient);
             p.flags.degenerate = true;
             return p;
         }
@@ -1013,7 +1154,11 @@ fn place_two(t: &TwoVisual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) 
         let depth = rho / (1.0 + xp * xp).sqrt();
         c.z = target.z - screen[1] * depth / lens.sy();
     }
-    let (heading_rad, pitch_rad, f) = orient_visual(&Visual::Two(*t), actors, lens, gimbal, &c);
+    let (heading_rad, pitch_rad, f) = if orient {
+        orient_visual(&Visual::Two(*t), actors, lens, gimbal, &c)
+    } else {
+        (0.0, 0.0, Flags::default())
+    };
     Placement {
         position_m: c,
         heading_rad,
@@ -1105,19 +1250,24 @@ pub fn interpolate(a: &Visual, b: &Visual, s: f64) -> Visual {
         return b.clone();
     }
     match (a, b) {
-        (Visual::One(x), Visual::One(y)) if x.actor == y.actor => Visual::One(OneVisual {
-            actor: x.actor,
-            distance_m: lerp(x.distance_m, y.distance_m, s),
-            azimuth_rad: lerp_angle(x.azimuth_rad, y.azimuth_rad, s),
-            elevation_rad: lerp(x.elevation_rad, y.elevation_rad, s),
-            screen: lerp2(x.screen, y.screen, s),
-            band_m: lerp2(x.band_m, y.band_m, s),
-        }),
+        (Visual::One(x), Visual::One(y)) if x.actor == y.actor => Visual::One(lerp_one(x, y, s)),
         _ => Visual::Blend {
             from: Box::new(a.clone()),
             to: Box::new(b.clone()),
             s,
         },
+    }
+}
+
+/// Two one-actor visuals of the same actor blended at `s`.
+fn lerp_one(x: &OneVisual, y: &OneVisual, s: f64) -> OneVisual {
+    OneVisual {
+        actor: x.actor,
+        distance_m: lerp(x.distance_m, y.distance_m, s),
+        azimuth_rad: lerp_angle(x.azimuth_rad, y.azimuth_rad, s),
+        elevation_rad: lerp(x.elevation_rad, y.elevation_rad, s),
+        screen: lerp2(x.screen, y.screen, s),
+        band_m: lerp2(x.band_m, y.band_m, s),
     }
 }
 

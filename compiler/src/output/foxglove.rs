@@ -510,17 +510,26 @@ pub fn actors_scene(ns: u64, names: &[String], heights_m: &[f64]) -> Vec<u8> {
 }
 
 /// The whole path: one line strip per shot, in alternating colours.
+///
+/// The points are written straight into the message text (a one-hour reference has tens of
+/// thousands of them: as a JSON tree they cost about 1.5 kB each, the compile's peak memory):
+/// the message is serialized with empty `points` arrays, and each line's points are spliced
+/// into its array, formatted exactly as [`xyz`] values are.
 pub fn path_scene(ns: u64, segments: &[(usize, Vec<[f64; 3]>)]) -> Vec<u8> {
-    let lines: Vec<Value> = segments
+    const EMPTY: &[u8] = b"\"points\":[]";
+    let kept: Vec<&(usize, Vec<[f64; 3]>)> = segments
         .iter()
         .filter(|(_, points)| points.len() >= 2)
-        .map(|(shot, points)| {
+        .collect();
+    let lines: Vec<Value> = kept
+        .iter()
+        .map(|(shot, _)| {
             json!({
                 "type": 0,
                 "pose": pose_value([0.0; 3], IDENTITY),
                 "thickness": 3.0,
                 "scale_invariant": true,
-                "points": points.iter().map(|&p| xyz(p)).collect::<Vec<_>>(),
+                "points": [],
                 "color": rgba(PALETTE[shot % PALETTE.len()]),
                 "colors": [],
                 "indices": []
@@ -529,7 +538,34 @@ pub fn path_scene(ns: u64, segments: &[(usize, Vec<[f64; 3]>)]) -> Vec<u8> {
         .collect();
     let mut e = entity(ns, WORLD, "path", false);
     e["lines"] = Value::Array(lines);
-    scene_update(vec![e])
+    let skeleton = scene_update(vec![e]);
+    let total: usize = kept.iter().map(|(_, p)| p.len()).sum();
+    let mut out = Vec::with_capacity(skeleton.len() + total * 40);
+    let mut rest = &skeleton[..];
+    for (_, points) in &kept {
+        // Only the lines have a `points` key, one each, in order.
+        let Some(at) = rest.windows(EMPTY.len()).position(|w| w == EMPTY) else {
+            break;
+        };
+        let split = at + EMPTY.len() - 1;
+        out.extend_from_slice(&rest[..split]);
+        for (i, p) in points.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            let r = |x: f64| (x * POS_SCALE).round() / POS_SCALE;
+            out.extend_from_slice(b"{\"x\":");
+            let _ = serde_json::to_writer(&mut out, &r(p[0]));
+            out.extend_from_slice(b",\"y\":");
+            let _ = serde_json::to_writer(&mut out, &r(p[1]));
+            out.extend_from_slice(b",\"z\":");
+            let _ = serde_json::to_writer(&mut out, &r(p[2]));
+            out.push(b'}');
+        }
+        rest = &rest[split..];
+    }
+    out.extend_from_slice(rest);
+    out
 }
 
 /// A pinhole calibration whose frustum has exactly the lens's horizontal and vertical
