@@ -56,10 +56,10 @@ fn json_has_the_documented_keys_and_shapes() {
     got.sort();
     assert_eq!(got, want);
     let p = matrix(&v["P"], 6, 6);
-    for i in 0..6 {
-        assert!(p[i][i] > 0.0);
-        for j in 0..6 {
-            assert!((p[i][j] - p[j][i]).abs() <= 1e-9 * p[i][i].abs().max(1.0));
+    for (i, row) in p.iter().enumerate() {
+        assert!(row[i] > 0.0);
+        for (j, v) in row.iter().enumerate() {
+            assert!((v - p[j][i]).abs() <= 1e-9 * row[i].abs().max(1.0));
         }
     }
     matrix(&v["K1"], 3, 6);
