@@ -1,10 +1,11 @@
 //! `Controller::tick` allocates nothing: a counting global allocator around thousands of
 //! ticks of the LQG servo (rotated gains and per-tick solve) and the PID baseline, through
 //! measurements, dropouts, jittery Δ (which re-solves the body-frame gains), saturation and
-//! refused inputs. One test in this binary, so no other test allocates meanwhile.
+//! refused inputs. The count is per thread (the test harness's own threads allocate
+//! whenever they like).
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 use dronecine_compiler::profile::Profile;
 use dronecine_runtime::control::{Controller, Measurement, Reference, TickInput};
@@ -13,13 +14,26 @@ use dronecine_runtime::pid::PidController;
 
 struct Counting;
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-static BYTES: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    /// Allocations and bytes asked for by this thread (const-initialised: reading it does
+    /// not allocate).
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+    static BYTES: Cell<usize> = const { Cell::new(0) };
+}
+
+fn counted(size: usize) {
+    // `try_with`: the thread-locals may be gone while a thread shuts down.
+    let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
+    let _ = BYTES.try_with(|b| b.set(b.get() + size));
+}
+
+fn counts() -> (usize, usize) {
+    (ALLOCATIONS.with(Cell::get), BYTES.with(Cell::get))
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        BYTES.fetch_add(layout.size(), Ordering::SeqCst);
+        counted(layout.size());
         unsafe { System.alloc(layout) }
     }
 
@@ -28,8 +42,7 @@ unsafe impl GlobalAlloc for Counting {
     }
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        BYTES.fetch_add(new_size, Ordering::SeqCst);
+        counted(new_size);
         unsafe { System.realloc(ptr, layout, new_size) }
     }
 }
@@ -76,20 +89,14 @@ fn count(ctl: &mut dyn Controller) -> (usize, usize) {
         },
     );
     let inputs: Vec<TickInput> = (1..5000).map(input).collect();
-    let (a0, b0) = (
-        ALLOCATIONS.load(Ordering::SeqCst),
-        BYTES.load(Ordering::SeqCst),
-    );
+    let (a0, b0) = counts();
     let mut ok = 0usize;
     for i in &inputs {
         if let Ok(o) = ctl.tick(i) {
             ok += usize::from(o.command.is_finite());
         }
     }
-    let (a1, b1) = (
-        ALLOCATIONS.load(Ordering::SeqCst),
-        BYTES.load(Ordering::SeqCst),
-    );
+    let (a1, b1) = counts();
     assert!(ok > 4800, "{ok}");
     (a1 - a0, b1 - b0)
 }
@@ -116,9 +123,9 @@ fn ticks_allocate_nothing() {
     .unwrap();
     let mut pid = PidController::new(&profile);
     // The counter works: a Vec allocates.
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = counts().0;
     let v: Vec<u64> = std::hint::black_box(vec![1, 2, 3]);
-    assert!(ALLOCATIONS.load(Ordering::SeqCst) > before && v.len() == 3);
+    assert!(counts().0 > before && v.len() == 3);
     for (name, ctl) in [
         ("lqg", &mut lqg as &mut dyn Controller),
         ("lqg per-tick solve", &mut per_tick),
