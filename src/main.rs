@@ -6,6 +6,7 @@ mod check;
 mod compile;
 mod files;
 mod fmt;
+mod gains;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -73,6 +74,8 @@ enum Command {
         #[arg(long)]
         allow_infeasible: bool,
     },
+    /// Print the LQG servo's gains for a drone profile (P, K1, N1, poles, Kalman gain, k2).
+    Gains(gains::Args),
     /// Print a shell completion script.
     Completions {
         /// The shell to complete for.
@@ -127,6 +130,7 @@ fn main() -> ExitCode {
             allow_infeasible,
             color,
         }),
+        Command::Gains(args) => gains::run(&args, color),
         Command::Completions { shell } => {
             clap_complete::generate(
                 shell,

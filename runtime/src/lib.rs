@@ -4,13 +4,21 @@
 //! - `frames`: the axis and sign conventions (the one source of truth).
 //! - `backend`: the `Drone`, `Mocap` and `Clock` traits.
 //! - `control`: the `Controller` trait the servo and the PID baseline implement.
+//! - `model`: the translation and heading models (A1, B1, the body-frame lag).
+//! - `dare`: the Riccati solver (structure-preserving doubling, no heap).
+//! - `lqg`: the LQG servo and the Kalman filters.
+//! - `pid`: tum_ardrone's PID autopilot, the baseline.
 //! - `record`: what a flight logs each tick (flight loop → log → replay).
 //! - `flight`: the flight loop (pre-flight, take-off, approach, shots, landing, report).
 
 pub mod backend;
 pub mod clock;
 pub mod control;
+pub mod dare;
 pub mod flight;
 pub mod frames;
+pub mod lqg;
+pub mod model;
+pub mod pid;
 pub mod record;
 pub mod report;

@@ -1,0 +1,700 @@
+//! The LQG servo (control.md §4): an LQ regulator with a reference pre-filter on the
+//! translation model, a pole-placed heading loop, and non-stationary Kalman filters for both.
+//!
+//! **Gains.** With the body-frame lag model and equal x/y weights in Q the regulator is
+//! rotation-equivariant: `K1(c) = K1_body · S(c)ᵀ`, `S = blockdiag(Rz, Rz)`. The body-frame
+//! gain is solved once (three 2×2 single-input DAREs, [`dare::solve_single_input`]) and
+//! rotated each tick; it is solved again only when the measured Δ strays from the Δ it was
+//! solved for by more than [`RESOLVE_TOLERANCE`]. With `per_tick_solve` (or when Q weights x
+//! and y differently, which breaks the symmetry) the full 6×6 DARE is solved at every tick at
+//! the measured Δ and estimated heading.
+//!
+//! **Law.** `u1 = −K1 (x̂ − r) + G⁻¹ (M_D T_D M_Dᵀ v_ref + Δ a_ref)` with `G = M_D T_D P K`:
+//! error feedback, the attitude that holds `v_ref` (`= K⁻¹ M_Dᵀ v_ref` in the paper's
+//! notation), and the acceleration feed-forward `G⁻¹ Δ a_ref`. With `paper_prefilter` the law
+//! is the paper's `u1 = −K1 x̂ + N1 r`, `N1 = (BᵀB)⁻¹Bᵀ((I + B K1) − A)`, with no acceleration
+//! term ([`paper_n1`] equals [`n1`], the simplified form, and a test says so).
+//!
+//! **Heading.** The closed-loop pole `k2 = γ^(Δ/(τ − Δ̄))` (the error falls to γ after τ − Δ̄
+//! seconds), realised by `ċ = (1 − k2)/(K_ψ Δ) · wrap(c_ref − ĉ) + ċ_ref/K_ψ`, sent as the yaw
+//! rate [`frames::yaw_rate_command_radps`].
+//!
+//! **Filters** ([`Estimator`]): a 6-state Kalman filter on the translation model and a scalar
+//! one on the heading, both predicting with the measured Δ, the estimated heading and the
+//! command actually sent (after saturation: nothing winds up), updating when mocap gives a
+//! pose and predicting only when it does not. Heading innovations are wrapped.
+//!
+//! `tick` allocates nothing.
+
+use std::fmt;
+
+use dronecine_compiler::profile::Profile;
+use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
+use serde::Serialize;
+
+use crate::control::{
+    Controller, Estimate, Measurement, Reference, TickFault, TickInput, TickOutput,
+};
+use crate::dare::{self, DareError};
+use crate::frames::{self, Command};
+use crate::model::{rotation6, Matrix6x3, ModelParams};
+
+/// Relative change of Δ from the Δ the body-frame gains were solved for that triggers a new
+/// solve (three 2×2 DAREs).
+pub const RESOLVE_TOLERANCE: f64 = 0.05;
+
+/// The 3×6 feedback gain `K1`.
+pub type Gain = SMatrix<f64, 3, 6>;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ServoOptions {
+    /// Fly the paper's pre-filter `N1` exactly, without the acceleration feed-forward.
+    pub paper_prefilter: bool,
+    /// Solve the full 6×6 DARE at every tick instead of rotating the body-frame gains.
+    pub per_tick_solve: bool,
+    /// Δ̄: the nominal tick, seconds (the heading pole's τ − Δ̄ and the first gain solve).
+    pub nominal_dt_s: f64,
+}
+
+impl Default for ServoOptions {
+    fn default() -> ServoOptions {
+        ServoOptions {
+            paper_prefilter: false,
+            per_tick_solve: false,
+            nominal_dt_s: 0.01,
+        }
+    }
+}
+
+/// What is wrong with a profile (or option) for the servo.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ServoProblem {
+    /// The value is outside what the servo can use; `want` says what is.
+    BadValue { value: f64, want: &'static str },
+    /// The weights give no (good) Riccati solution.
+    Dare(DareError),
+}
+
+/// Why the servo could not be built from a profile: which profile, which key, what is wrong
+/// and how to fix it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ServoError {
+    pub profile: String,
+    /// The profile key (`servo.q`, `model.tau_roll_s`, …) or option (`--dt`).
+    pub key: &'static str,
+    pub problem: ServoProblem,
+}
+
+impl fmt::Display for ServoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "drone profile `{}`: ", self.profile)?;
+        match &self.problem {
+            ServoProblem::BadValue { value, want } => {
+                let section = self.key.split('.').next().unwrap_or("");
+                if self.key.contains('.') {
+                    write!(
+                        f,
+                        "{} = {value} must be {want}; change it in the profile's [{section}] \
+                         section",
+                        self.key
+                    )
+                } else {
+                    write!(f, "{} = {value} must be {want}", self.key)
+                }
+            }
+            ServoProblem::Dare(
+                e @ (DareError::BadWeight { .. } | DareError::PositionsUnweighted { .. }),
+            ) => {
+                write!(f, "{e}")
+            }
+            ServoProblem::Dare(e) => write!(
+                f,
+                "{}: {e}; choose other weights in the profile's [servo] section",
+                self.key
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ServoError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match &self.problem {
+            ServoProblem::Dare(e) => Some(e),
+            ServoProblem::BadValue { .. } => None,
+        }
+    }
+}
+
+/// Checks what the servo and its filters read from a profile. `nominal_dt_s` is the option
+/// `--dt` / `ServoOptions::nominal_dt_s`.
+pub fn check_profile(profile: &Profile, nominal_dt_s: f64) -> Result<(), ServoError> {
+    let err = |key: &'static str, problem| ServoError {
+        profile: profile.name.clone(),
+        key,
+        problem,
+    };
+    let bad = |key: &'static str, value: f64, want: &'static str| {
+        Err(err(key, ServoProblem::BadValue { value, want }))
+    };
+    let positive = "finite and > 0";
+    if !(nominal_dt_s.is_finite() && nominal_dt_s > 0.0) {
+        return bad("nominal tick (--dt)", nominal_dt_s, positive);
+    }
+    let m = &profile.model;
+    let l = &profile.limits;
+    let s = &profile.servo;
+    for (key, v) in [
+        ("model.gain_roll_mps_per_rad", m.gain_roll_mps_per_rad),
+        ("model.gain_pitch_mps_per_rad", m.gain_pitch_mps_per_rad),
+        ("model.gain_vz", m.gain_vz),
+        ("model.tau_roll_s", m.tau_roll_s),
+        ("model.tau_pitch_s", m.tau_pitch_s),
+        ("model.tau_vz_s", m.tau_vz_s),
+        ("model.gain_yaw", m.gain_yaw),
+        ("limits.tilt_max_deg", l.tilt_max_rad),
+        ("limits.vz_max_mps", l.vz_max_mps),
+        ("limits.yaw_rate_max_degps", l.yaw_rate_max_radps),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return bad(key, v, positive);
+        }
+    }
+    dare::check_servo_weights(&s.q, &s.r).map_err(|e| {
+        let key = match e {
+            DareError::BadWeight { key, .. } => key,
+            _ => "servo.q",
+        };
+        err(key, ServoProblem::Dare(e))
+    })?;
+    if !(s.heading_gamma.is_finite() && s.heading_gamma > 0.0 && s.heading_gamma < 1.0) {
+        return bad(
+            "servo.heading_gamma",
+            s.heading_gamma,
+            "between 0 and 1 (the share of a heading error left after heading_tau_s)",
+        );
+    }
+    if !(s.heading_tau_s.is_finite() && s.heading_tau_s > nominal_dt_s) {
+        return bad(
+            "servo.heading_tau_s",
+            s.heading_tau_s,
+            "finite and longer than one tick",
+        );
+    }
+    for (i, &v) in s.process_noise.iter().enumerate() {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(err(
+                "servo.process_noise",
+                ServoProblem::Dare(DareError::BadWeight {
+                    key: "servo.process_noise",
+                    index: i,
+                    value: v,
+                }),
+            ));
+        }
+    }
+    for (i, &v) in s.measurement_noise_m2.iter().enumerate() {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(err(
+                "servo.measurement_noise_m2",
+                ServoProblem::Dare(DareError::BadWeight {
+                    key: "servo.measurement_noise_m2",
+                    index: i,
+                    value: v,
+                }),
+            ));
+        }
+    }
+    if !(s.heading_process_noise_rad2.is_finite() && s.heading_process_noise_rad2 >= 0.0) {
+        return bad(
+            "servo.heading_process_noise_rad2",
+            s.heading_process_noise_rad2,
+            "finite and ≥ 0",
+        );
+    }
+    if !(s.heading_measurement_noise_rad2.is_finite() && s.heading_measurement_noise_rad2 > 0.0) {
+        return bad(
+            "servo.heading_measurement_noise_rad2",
+            s.heading_measurement_noise_rad2,
+            positive,
+        );
+    }
+    Ok(())
+}
+
+/// The Kalman filters of the servo (shared with the PID baseline): a non-stationary 6-state
+/// filter on `x1 = [v; p]` and a scalar one on the heading.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimator {
+    model: ModelParams,
+    /// F1 (per tick) and H1.
+    process: Matrix6<f64>,
+    measurement: Matrix3<f64>,
+    /// f2, h2.
+    heading_process: f64,
+    heading_measurement: f64,
+    x: Vector6<f64>,
+    p: Matrix6<f64>,
+    c: f64,
+    pc: f64,
+}
+
+impl Estimator {
+    /// Filters on the profile's model and noises, started at the origin with a wide
+    /// covariance (1 m², 1 m²/s², 1 rad²) until [`Estimator::reset`]. Noises that are not
+    /// finite and positive are replaced by a tiny positive floor (use [`check_profile`] to
+    /// refuse them instead).
+    pub fn new(profile: &Profile) -> Estimator {
+        let floor = |v: f64| if v.is_finite() && v > 0.0 { v } else { 1e-12 };
+        let s = &profile.servo;
+        let mut process = Matrix6::zeros();
+        for i in 0..6 {
+            process[(i, i)] = floor(s.process_noise[i]);
+        }
+        let mut measurement = Matrix3::zeros();
+        for i in 0..3 {
+            measurement[(i, i)] = floor(s.measurement_noise_m2[i]);
+        }
+        Estimator {
+            model: ModelParams::from_profile(profile),
+            process,
+            measurement,
+            heading_process: floor(s.heading_process_noise_rad2),
+            heading_measurement: floor(s.heading_measurement_noise_rad2),
+            x: Vector6::zeros(),
+            p: Matrix6::identity(),
+            c: 0.0,
+            pc: 1.0,
+        }
+    }
+
+    /// At rest at the measured pose: the position as uncertain as a measurement, the velocity
+    /// as one tick of process noise.
+    pub fn reset(&mut self, m: &Measurement) {
+        self.x = Vector6::new(
+            0.0,
+            0.0,
+            0.0,
+            m.position_m[0],
+            m.position_m[1],
+            m.position_m[2],
+        );
+        self.p = Matrix6::zeros();
+        for i in 0..3 {
+            self.p[(i, i)] = self.process[(i, i)];
+            self.p[(i + 3, i + 3)] = self.measurement[(i, i)];
+        }
+        self.c = frames::wrap_angle_rad(m.heading_rad);
+        self.pc = self.heading_measurement;
+    }
+
+    /// Predicts over Δ with the translation input `u = [φ, θ, ż]` and yaw-rate command that
+    /// were sent, at the estimated heading.
+    pub fn predict(&mut self, dt_s: f64, u: &Vector3<f64>, yaw_rate_command_radps: f64) {
+        let a = self.model.a1(dt_s, self.c);
+        let b = self.model.b1(dt_s, self.c);
+        self.x = a * self.x + b * u;
+        let p = a * self.p * a.transpose() + self.process;
+        self.p = (p + p.transpose()) * 0.5;
+        self.c = self
+            .model
+            .heading_step(self.c, dt_s, yaw_rate_command_radps);
+        self.pc += self.heading_process;
+    }
+
+    /// Corrects with a mocap pose (position and wrapped heading innovation).
+    pub fn update(&mut self, m: &Measurement) {
+        let s = self.p.fixed_view::<3, 3>(3, 3).into_owned() + self.measurement;
+        let pht = self.p.fixed_view::<6, 3>(0, 3).into_owned();
+        // Kᵀ = S⁻¹ (H P) with S symmetric.
+        if let Some(kt) = dare::solve_linear(&s, &pht.transpose()) {
+            let k: Matrix6x3 = kt.transpose();
+            let y = Vector3::from(m.position_m) - self.x.fixed_rows::<3>(3);
+            self.x += k * y;
+            let p = self.p - k * pht.transpose();
+            self.p = (p + p.transpose()) * 0.5;
+        }
+        let kc = self.pc / (self.pc + self.heading_measurement);
+        let innovation = frames::wrap_angle_rad(m.heading_rad - self.c);
+        self.c = frames::wrap_angle_rad(self.c + kc * innovation);
+        self.pc *= 1.0 - kc;
+    }
+
+    /// `x̂1 = [v; p]`.
+    pub fn state(&self) -> Vector6<f64> {
+        self.x
+    }
+
+    pub fn heading_rad(&self) -> f64 {
+        self.c
+    }
+
+    pub fn covariance(&self) -> Matrix6<f64> {
+        self.p
+    }
+
+    pub fn estimate(&self) -> Estimate {
+        Estimate {
+            position_m: [self.x[3], self.x[4], self.x[5]],
+            velocity_mps: [self.x[0], self.x[1], self.x[2]],
+            heading_rad: self.c,
+        }
+    }
+}
+
+/// Whether a tick input can be used: every number finite and Δ > 0.
+pub fn check_input(input: &TickInput) -> Result<(), TickFault> {
+    let r = &input.reference;
+    let finite = input.t_s.is_finite()
+        && input.dt_s.is_finite()
+        && r.position_m.iter().all(|v| v.is_finite())
+        && r.velocity_mps.iter().all(|v| v.is_finite())
+        && r.acceleration_mps2.iter().all(|v| v.is_finite())
+        && r.heading_rad.is_finite()
+        && r.heading_rate_radps.is_finite()
+        && input.measurement.is_none_or(|m| {
+            m.position_m.iter().all(|v| v.is_finite()) && m.heading_rad.is_finite()
+        });
+    if !finite {
+        return Err(TickFault::NotFinite);
+    }
+    if input.dt_s <= 0.0 {
+        return Err(TickFault::TimeNotIncreasing);
+    }
+    Ok(())
+}
+
+/// The simplified pre-filter `N1 = K1 + [G⁻¹ M_D T_D M_Dᵀ, 0]` (`= K1 + [K⁻¹ M_Dᵀ, 0]`).
+pub fn n1(model: &ModelParams, k1: &Gain, dt_s: f64, heading_rad: f64) -> Option<Gain> {
+    let g = model.input_matrix(dt_s, heading_rad);
+    let hold = dare::solve_linear(&g, &model.world_lag(dt_s, heading_rad))?;
+    let mut n = *k1;
+    let mut left = n.fixed_view_mut::<3, 3>(0, 0);
+    left += hold;
+    Some(n)
+}
+
+/// The paper's pre-filter `N1 = (BᵀB)⁻¹Bᵀ((I + B K1) − A)`, literally.
+pub fn paper_n1(a: &Matrix6<f64>, b: &Matrix6x3, k1: &Gain) -> Option<Gain> {
+    let rhs = b.transpose() * ((Matrix6::identity() + b * k1) - a);
+    dare::solve_linear(&(b.transpose() * b), &rhs)
+}
+
+/// The heading loop's closed-loop pole for a step Δ: `γ^(Δ/(τ − Δ̄))`.
+pub fn heading_pole(gamma: f64, tau_s: f64, nominal_dt_s: f64, dt_s: f64) -> f64 {
+    gamma.powf(dt_s / (tau_s - nominal_dt_s))
+}
+
+/// What `dronecine gains` prints: the regulator and filter at one Δ and heading.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GainsReport {
+    pub dt_s: f64,
+    pub heading_rad: f64,
+    /// Riccati solution (world frame at `heading_rad`).
+    #[serde(rename = "P")]
+    pub p: [[f64; 6]; 6],
+    #[serde(rename = "K1")]
+    pub k1: [[f64; 6]; 3],
+    #[serde(rename = "N1")]
+    pub n1: [[f64; 6]; 3],
+    /// |eigenvalues| of `A1 − B1 K1`.
+    pub closed_loop_pole_magnitudes: [f64; 6],
+    /// The steady-state Kalman gain (6×3, update form `P Hᵀ (H P Hᵀ + H1)⁻¹`).
+    pub kalman_gain: [[f64; 3]; 6],
+    pub k2: f64,
+    /// Relative residual of the regulator DARE.
+    pub residual: f64,
+    pub iterations: usize,
+}
+
+fn rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> [[f64; C]; R] {
+    let mut out = [[0.0; C]; R];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = m[(i, j)];
+        }
+    }
+    out
+}
+
+/// The LQG servo.
+#[derive(Clone, Debug)]
+pub struct LqgServo {
+    profile_name: String,
+    model: ModelParams,
+    options: ServoOptions,
+    q: Matrix6<f64>,
+    r: Matrix3<f64>,
+    process: Matrix6<f64>,
+    measurement: Matrix3<f64>,
+    tilt_max_rad: f64,
+    vz_max_mps: f64,
+    yaw_rate_max_radps: f64,
+    heading_gamma: f64,
+    heading_tau_s: f64,
+    /// Whether `K1(c) = K1_body S(c)ᵀ` holds (x and y weighted alike).
+    symmetric: bool,
+    k_body: Gain,
+    k_body_dt_s: f64,
+    /// The gain of the last full solve (per-tick mode).
+    k_world: Gain,
+    estimator: Estimator,
+    /// The translation input and yaw rate sent last tick (after saturation).
+    sent: Vector3<f64>,
+    sent_yaw_radps: f64,
+}
+
+impl LqgServo {
+    pub fn new(profile: &Profile, options: ServoOptions) -> Result<LqgServo, ServoError> {
+        check_profile(profile, options.nominal_dt_s)?;
+        let s = &profile.servo;
+        let q = Matrix6::from_diagonal(&Vector6::from(s.q));
+        let r = Matrix3::from_diagonal(&Vector3::from(s.r));
+        let mut process = Matrix6::zeros();
+        for i in 0..6 {
+            process[(i, i)] = s.process_noise[i];
+        }
+        let measurement = Matrix3::from_diagonal(&Vector3::from(s.measurement_noise_m2));
+        let symmetric = s.q[0] == s.q[1] && s.q[3] == s.q[4];
+        let model = ModelParams::from_profile(profile);
+        let mut servo = LqgServo {
+            profile_name: profile.name.clone(),
+            model,
+            options,
+            q,
+            r,
+            process,
+            measurement,
+            tilt_max_rad: profile.limits.tilt_max_rad,
+            vz_max_mps: profile.limits.vz_max_mps,
+            yaw_rate_max_radps: profile.limits.yaw_rate_max_radps,
+            heading_gamma: s.heading_gamma,
+            heading_tau_s: s.heading_tau_s,
+            symmetric,
+            k_body: Gain::zeros(),
+            k_body_dt_s: options.nominal_dt_s,
+            k_world: Gain::zeros(),
+            estimator: Estimator::new(profile),
+            sent: Vector3::zeros(),
+            sent_yaw_radps: 0.0,
+        };
+        let dt = options.nominal_dt_s;
+        let dare_err = |e| ServoError {
+            profile: profile.name.clone(),
+            key: "servo.q",
+            problem: ServoProblem::Dare(e),
+        };
+        // The full solve checks residual and stability whichever mode flies.
+        let full = dare::solve(&model.a1(dt, 0.0), &model.b1(dt, 0.0), &q, &r).map_err(dare_err)?;
+        servo.k_world = full.k;
+        if symmetric {
+            servo.k_body = servo.body_gain(dt).map_err(dare_err)?;
+        }
+        Ok(servo)
+    }
+
+    pub fn options(&self) -> ServoOptions {
+        self.options
+    }
+
+    pub fn model(&self) -> &ModelParams {
+        &self.model
+    }
+
+    pub fn estimator(&self) -> &Estimator {
+        &self.estimator
+    }
+
+    /// The body-frame gain from the three single-input DAREs at Δ.
+    pub fn body_gain(&self, dt_s: f64) -> Result<Gain, DareError> {
+        let mut k = Gain::zeros();
+        for axis in 0..3 {
+            let (a, b, j) = self
+                .model
+                .body_axis(dt_s, axis)
+                .ok_or(DareError::Singular)?;
+            let q = nalgebra::Matrix2::new(
+                self.q[(axis, axis)],
+                0.0,
+                0.0,
+                self.q[(axis + 3, axis + 3)],
+            );
+            let sol = dare::solve_single_input(&a, &b, &q, self.r[(j, j)])?;
+            k[(j, axis)] = sol.k[(0, 0)];
+            k[(j, axis + 3)] = sol.k[(0, 1)];
+        }
+        Ok(k)
+    }
+
+    /// The feedback gain flown at Δ and heading c (updates the cached solves).
+    fn feedback_gain(&mut self, dt_s: f64, heading_rad: f64) -> Gain {
+        if self.options.per_tick_solve || !self.symmetric {
+            let a = self.model.a1(dt_s, heading_rad);
+            let b = self.model.b1(dt_s, heading_rad);
+            if let Ok((_, k, _)) = dare::solve_unchecked(&a, &b, &self.q, &self.r) {
+                self.k_world = k;
+            }
+            return self.k_world;
+        }
+        if (dt_s - self.k_body_dt_s).abs() > RESOLVE_TOLERANCE * self.k_body_dt_s {
+            if let Ok(k) = self.body_gain(dt_s) {
+                self.k_body = k;
+                self.k_body_dt_s = dt_s;
+            }
+        }
+        self.k_body * rotation6(heading_rad).transpose()
+    }
+
+    /// The gains at the nominal Δ and the current heading estimate.
+    pub fn gains(&self) -> Result<GainsReport, ServoError> {
+        self.gains_at(self.options.nominal_dt_s, self.estimator.heading_rad())
+    }
+
+    /// The regulator (full 6×6 solve), pre-filter, closed-loop poles, steady-state Kalman
+    /// gain (the dual DARE) and heading pole at Δ and heading c.
+    pub fn gains_at(&self, dt_s: f64, heading_rad: f64) -> Result<GainsReport, ServoError> {
+        let err = |key, e| ServoError {
+            profile: self.profile_name.clone(),
+            key,
+            problem: ServoProblem::Dare(e),
+        };
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return Err(ServoError {
+                profile: self.profile_name.clone(),
+                key: "--dt",
+                problem: ServoProblem::BadValue {
+                    value: dt_s,
+                    want: "finite and > 0",
+                },
+            });
+        }
+        let a = self.model.a1(dt_s, heading_rad);
+        let b = self.model.b1(dt_s, heading_rad);
+        let sol = dare::solve(&a, &b, &self.q, &self.r).map_err(|e| err("servo.q", e))?;
+        let n1 = n1(&self.model, &sol.k, dt_s, heading_rad)
+            .ok_or_else(|| err("model", DareError::Singular))?;
+        let poles = dare::eigenvalue_magnitudes(&(a - b * sol.k)).ok_or_else(|| {
+            err(
+                "servo.q",
+                DareError::NotStabilising {
+                    spectral_radius: f64::NAN,
+                },
+            )
+        })?;
+        // The filter's DARE is the regulator's dual: (Aᵀ, Hᵀ, F1, H1).
+        let mut ht = Matrix6x3::zeros();
+        ht.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&Matrix3::identity());
+        let kf = dare::solve(&a.transpose(), &ht, &self.process, &self.measurement)
+            .map_err(|e| err("servo.process_noise", e))?;
+        let pf = kf.p;
+        let s = ht.transpose() * pf * ht + self.measurement;
+        let l = dare::solve_linear(&s, &(ht.transpose() * pf))
+            .ok_or_else(|| err("servo.measurement_noise_m2", DareError::Singular))?
+            .transpose();
+        Ok(GainsReport {
+            dt_s,
+            heading_rad,
+            p: rows(&sol.p),
+            k1: rows(&sol.k),
+            n1: rows(&n1),
+            closed_loop_pole_magnitudes: poles,
+            kalman_gain: rows(&l),
+            k2: heading_pole(
+                self.heading_gamma,
+                self.heading_tau_s,
+                self.options.nominal_dt_s,
+                dt_s,
+            ),
+            residual: sol.residual,
+            iterations: sol.iterations,
+        })
+    }
+
+    /// The translation input before saturation.
+    fn translation_law(&self, k1: &Gain, dt_s: f64, c: f64, r: &Reference) -> Vector3<f64> {
+        let x = self.estimator.state();
+        let v_ref = Vector3::from(r.velocity_mps);
+        let p_ref = Vector3::from(r.position_m);
+        let mut xr = Vector6::zeros();
+        xr.fixed_rows_mut::<3>(0).copy_from(&v_ref);
+        xr.fixed_rows_mut::<3>(3).copy_from(&p_ref);
+        if self.options.paper_prefilter {
+            let a = self.model.a1(dt_s, c);
+            let b = self.model.b1(dt_s, c);
+            if let Some(n) = paper_n1(&a, &b, k1) {
+                return -k1 * x + n * xr;
+            }
+        }
+        let mut u = -k1 * (x - xr);
+        // G⁻¹ (M_D T_D M_Dᵀ v_ref + Δ a_ref): holds v_ref and follows a_ref.
+        let g = self.model.input_matrix(dt_s, c);
+        let mut target = self.model.world_lag(dt_s, c) * v_ref;
+        if !self.options.paper_prefilter {
+            target += Vector3::from(r.acceleration_mps2) * dt_s;
+        }
+        if let Some(ff) = dare::solve_linear(&g, &target) {
+            u += ff;
+        }
+        u
+    }
+}
+
+/// Clamps `v` to ±`max`; sets `*hit` when it had to.
+pub fn clamp_to(v: f64, max: f64, hit: &mut bool) -> f64 {
+    if v > max {
+        *hit = true;
+        max
+    } else if v < -max {
+        *hit = true;
+        -max
+    } else {
+        v
+    }
+}
+
+impl Controller for LqgServo {
+    fn reset(&mut self, _t_s: f64, measurement: &Measurement) {
+        self.estimator.reset(measurement);
+        self.sent = Vector3::zeros();
+        self.sent_yaw_radps = 0.0;
+    }
+
+    fn tick(&mut self, input: &TickInput) -> Result<TickOutput, TickFault> {
+        check_input(input)?;
+        let dt = input.dt_s;
+        self.estimator.predict(dt, &self.sent, self.sent_yaw_radps);
+        if let Some(m) = &input.measurement {
+            self.estimator.update(m);
+        }
+        let c = self.estimator.heading_rad();
+        let r = &input.reference;
+
+        let k1 = self.feedback_gain(dt, c);
+        let u = self.translation_law(&k1, dt, c, r);
+
+        let k2 = heading_pole(
+            self.heading_gamma,
+            self.heading_tau_s,
+            self.options.nominal_dt_s,
+            dt,
+        );
+        let e = frames::wrap_angle_rad(r.heading_rad - c);
+        let c_dot = ((1.0 - k2) / dt * e + r.heading_rate_radps) / self.model.gain_yaw;
+        let yaw = frames::yaw_rate_command_radps(c_dot);
+
+        let mut saturated = false;
+        let command = Command {
+            roll_rad: clamp_to(u[0], self.tilt_max_rad, &mut saturated),
+            pitch_rad: clamp_to(u[1], self.tilt_max_rad, &mut saturated),
+            vz_mps: clamp_to(u[2], self.vz_max_mps, &mut saturated),
+            yaw_rate_radps: clamp_to(yaw, self.yaw_rate_max_radps, &mut saturated),
+        };
+        self.sent = command.translation_input();
+        self.sent_yaw_radps = command.yaw_rate_radps;
+        Ok(TickOutput {
+            command,
+            estimate: self.estimator.estimate(),
+            saturated,
+        })
+    }
+}
