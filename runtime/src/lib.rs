@@ -10,3 +10,4 @@ pub mod backend;
 pub mod control;
 pub mod frames;
 pub mod record;
+pub mod sim;
