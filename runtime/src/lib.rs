@@ -10,6 +10,8 @@
 //! - `pid`: tum_ardrone's PID autopilot, the baseline.
 //! - `record`: what a flight logs each tick (flight loop → log → replay).
 //! - `flight`: the flight loop (pre-flight, take-off, approach, shots, landing, report).
+//! - `sim`: the embedded AR.Drone 2.0 simulator (drone, mocap and clock over one world).
+//! - `report`: the flight report's figures (shared by shoot and replay).
 
 pub mod backend;
 pub mod clock;
@@ -22,3 +24,4 @@ pub mod model;
 pub mod pid;
 pub mod record;
 pub mod report;
+pub mod sim;

@@ -1,0 +1,386 @@
+//! The simulator's configuration: which effects are on ([`Effects`]) and the numbers of each
+//! ([`SimConfig`]), with their defaults and sources, and the check that rejects bad values.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// The effects the simulated AR.Drone, mocap and actors add to the servo's model
+/// (control.md §6). All off ([`Effects::none`]) leaves exactly the model of control.md §2–3;
+/// each one switches on independently.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Effects {
+    /// Attitude follows the command with a first-order lag (`θ̇ = a·(θ_cmd − θ)`) and thrust
+    /// tilts by `sin` of the true attitude (off: the attitude is the command and the model is
+    /// linear in it).
+    pub attitude_lag: bool,
+    /// The firmware's limits: roll and pitch clamped to `tilt_max_rad`, vertical speed to
+    /// `vz_max_mps`, yaw rate to `yaw_rate_max_radps` (the profile's limits).
+    pub tilt_saturation: bool,
+    /// Quadratic air drag on the horizontal air-relative velocity, on top of the model's
+    /// linear drag (the `−v/τ` term).
+    pub drag: bool,
+    /// Descent commands act `descent_gain_factor` times stronger than climb commands.
+    pub asymmetric_vz: bool,
+    /// The yaw rate follows the command with a first-order lag.
+    pub yaw_lag: bool,
+    /// Command packets arrive `latency_s` after they are sent.
+    pub latency: bool,
+    /// A share of the command packets is lost (the drone keeps flying the previous one).
+    pub radio_loss: bool,
+    /// Gaussian noise on every mocap position and heading.
+    pub mocap_noise: bool,
+    /// Mocap bodies untracked in short bursts of frames.
+    pub mocap_dropouts: bool,
+    /// Horizontal wind gusts (a smooth Ornstein–Uhlenbeck process).
+    pub wind: bool,
+    /// Actors deviate smoothly from the script (place, facing, timing).
+    pub actor_deviation: bool,
+    /// The battery drains in flight; an empty battery lands the drone.
+    pub battery: bool,
+}
+
+impl Effects {
+    pub fn all() -> Effects {
+        Effects {
+            attitude_lag: true,
+            tilt_saturation: true,
+            drag: true,
+            asymmetric_vz: true,
+            yaw_lag: true,
+            latency: true,
+            radio_loss: true,
+            mocap_noise: true,
+            mocap_dropouts: true,
+            wind: true,
+            actor_deviation: true,
+            battery: true,
+        }
+    }
+
+    pub fn none() -> Effects {
+        Effects {
+            attitude_lag: false,
+            tilt_saturation: false,
+            drag: false,
+            asymmetric_vz: false,
+            yaw_lag: false,
+            latency: false,
+            radio_loss: false,
+            mocap_noise: false,
+            mocap_dropouts: false,
+            wind: false,
+            actor_deviation: false,
+            battery: false,
+        }
+    }
+}
+
+/// Everything the simulator needs besides the profile and the scene. [`SimConfig::new`] gives
+/// the defaults documented on each field (sources: control.md §5, the tum_ardrone state
+/// estimator of Engel, Sturm & Cremers, the AR.Drone Developer Guide, OptiTrack's
+/// specifications; estimates are marked as such).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SimConfig {
+    /// Seeds every random process (each has its own stream).
+    pub seed: u64,
+    pub effects: Effects,
+    /// Mocap frame rate. Default 100 Hz.
+    pub mocap_rate_hz: f64,
+    /// The plant's fixed integration step, on a grid from t = 0. Default 5 ms (the AR.Drone
+    /// firmware's 200 Hz control loop); commands take effect at the first step that starts
+    /// at or after their arrival.
+    pub step_s: f64,
+    /// Where the drone stands before take-off: x and y are used, the drone stands on the
+    /// floor (z is ignored). Default the origin.
+    pub start_position_m: [f64; 3],
+    /// Heading before take-off (counter-clockwise from +x). Default 0.
+    pub start_heading_rad: f64,
+    /// Height the take-off climbs to. Default 0.8 m (the AR.Drone's).
+    pub takeoff_height_m: f64,
+    /// With no command packet for this long, the firmware hovers. Default 2 s (AR.Drone
+    /// Developer Guide §6: two commands more than 2 s apart and the link counts as lost).
+    pub watchdog_s: f64,
+    /// The firmware's hover (optical-flow velocity hold) brings the ground velocity to zero
+    /// with this time constant; it also holds the altitude. Default 0.5 s (an estimate: it
+    /// holds position loosely, drifting with the wind).
+    pub hover_velocity_tau_s: f64,
+    /// Attitude lag rate `a` in `θ̇ = a·(θ_cmd − θ)`. Default 7 /s (tum_ardrone).
+    pub attitude_rate_per_s: f64,
+    /// Yaw-rate lag rate `b` in `ψ̈ = b·(ψ̇_cmd − ψ̇)`. Default 25 /s (tum_ardrone).
+    pub yaw_rate_lag_per_s: f64,
+    /// Quadratic drag `c` in `a = −c·|v_rel|·v_rel` (horizontal, air-relative). Default
+    /// 0.07 /m: an estimate, `ρ·C_d·A/(2m)` with ρ = 1.2 kg/m³, C_d·A ≈ 0.05 m² (indoor
+    /// hull), m = 0.42 kg.
+    pub drag_quadratic_per_m: f64,
+    /// Descent commands act this many times stronger than climb commands (steady-state
+    /// `ż = K_ż·factor·u` for `u < 0`). Default 2 (tum_ardrone's vertical model:
+    /// `z̈ = 0.8·(0.6·u·(2 if u < 0 else 1) − ż)`).
+    pub descent_gain_factor: f64,
+    /// Command latency. Default 40 ms (WiFi round trip and firmware, an estimate in the
+    /// "tens of ms" of control.md §6).
+    pub latency_s: f64,
+    /// Probability that a command packet is lost. Default 0.01.
+    pub radio_loss_probability: f64,
+    /// Mocap position noise σ per axis. Default 0.3 mm (OptiTrack: sub-millimetre).
+    pub mocap_position_sigma_m: f64,
+    /// Mocap heading noise σ. Default 0.1°.
+    pub mocap_heading_sigma_rad: f64,
+    /// Share of the frames in which a body is untracked. Default 0.005.
+    pub mocap_dropout_fraction: f64,
+    /// Mean length of a dropout burst, in frames (≥ 1). Default 3.
+    pub mocap_dropout_burst_frames: f64,
+    /// Wind gust σ per horizontal axis. Default 0.3 m/s.
+    pub wind_sigma_mps: f64,
+    /// Wind gust correlation time. Default 3 s.
+    pub wind_tau_s: f64,
+    /// Actors' place offset: σ per axis, correlation time and bound. Defaults 6 cm, 2.5 s,
+    /// 15 cm.
+    pub actor_offset_sigma_m: f64,
+    pub actor_offset_tau_s: f64,
+    pub actor_offset_max_m: f64,
+    /// Actors' facing wobble: σ, correlation time, bound. Defaults 3°, 1.5 s, 8°.
+    pub actor_facing_sigma_rad: f64,
+    pub actor_facing_tau_s: f64,
+    pub actor_facing_max_rad: f64,
+    /// Actors' timing lag or lead on the script: σ, correlation time, bound. Defaults
+    /// 0.1 s, 4 s, 0.2 s.
+    pub actor_timing_sigma_s: f64,
+    pub actor_timing_tau_s: f64,
+    pub actor_timing_max_s: f64,
+    /// Battery at start. Default 100 %.
+    pub battery_start_percent: f64,
+    /// Drain while airborne. Default 7 %/min (≈ 13 min of flight on the 1000 mAh pack,
+    /// Parrot's 12 min figure).
+    pub battery_drain_percent_per_min: f64,
+    /// Take-off is refused below this charge. Default 20 % (an estimate of the firmware's
+    /// low-battery lock).
+    pub battery_min_takeoff_percent: f64,
+}
+
+impl SimConfig {
+    /// All effects on, the defaults above.
+    pub fn new(seed: u64) -> SimConfig {
+        SimConfig {
+            seed,
+            effects: Effects::all(),
+            mocap_rate_hz: 100.0,
+            step_s: 0.005,
+            start_position_m: [0.0; 3],
+            start_heading_rad: 0.0,
+            takeoff_height_m: 0.8,
+            watchdog_s: 2.0,
+            hover_velocity_tau_s: 0.5,
+            attitude_rate_per_s: 7.0,
+            yaw_rate_lag_per_s: 25.0,
+            drag_quadratic_per_m: 0.07,
+            descent_gain_factor: 2.0,
+            latency_s: 0.04,
+            radio_loss_probability: 0.01,
+            mocap_position_sigma_m: 0.0003,
+            mocap_heading_sigma_rad: 0.1f64.to_radians(),
+            mocap_dropout_fraction: 0.005,
+            mocap_dropout_burst_frames: 3.0,
+            wind_sigma_mps: 0.3,
+            wind_tau_s: 3.0,
+            actor_offset_sigma_m: 0.06,
+            actor_offset_tau_s: 2.5,
+            actor_offset_max_m: 0.15,
+            actor_facing_sigma_rad: 3f64.to_radians(),
+            actor_facing_tau_s: 1.5,
+            actor_facing_max_rad: 8f64.to_radians(),
+            actor_timing_sigma_s: 0.1,
+            actor_timing_tau_s: 4.0,
+            actor_timing_max_s: 0.2,
+            battery_start_percent: 100.0,
+            battery_drain_percent_per_min: 7.0,
+            battery_min_takeoff_percent: 20.0,
+        }
+    }
+
+    /// Every value checked; the first bad one is reported.
+    pub fn validate(&self) -> Result<(), SimError> {
+        use Expect::*;
+        let checks: [(&'static str, f64, Expect); 32] = [
+            ("mocap_rate_hz", self.mocap_rate_hz, Range(1e-3, 1e4)),
+            ("step_s", self.step_s, Range(1e-5, 0.05)),
+            ("start_position_m[0]", self.start_position_m[0], Finite),
+            ("start_position_m[1]", self.start_position_m[1], Finite),
+            ("start_position_m[2]", self.start_position_m[2], Finite),
+            ("start_heading_rad", self.start_heading_rad, Finite),
+            ("takeoff_height_m", self.takeoff_height_m, Range(0.1, 100.0)),
+            ("watchdog_s", self.watchdog_s, Positive),
+            ("hover_velocity_tau_s", self.hover_velocity_tau_s, Positive),
+            ("attitude_rate_per_s", self.attitude_rate_per_s, Positive),
+            ("yaw_rate_lag_per_s", self.yaw_rate_lag_per_s, Positive),
+            (
+                "drag_quadratic_per_m",
+                self.drag_quadratic_per_m,
+                NonNegative,
+            ),
+            ("descent_gain_factor", self.descent_gain_factor, Positive),
+            ("latency_s", self.latency_s, Range(0.0, 10.0)),
+            (
+                "radio_loss_probability",
+                self.radio_loss_probability,
+                Range(0.0, 1.0),
+            ),
+            (
+                "mocap_position_sigma_m",
+                self.mocap_position_sigma_m,
+                NonNegative,
+            ),
+            (
+                "mocap_heading_sigma_rad",
+                self.mocap_heading_sigma_rad,
+                NonNegative,
+            ),
+            (
+                "mocap_dropout_fraction",
+                self.mocap_dropout_fraction,
+                Range(0.0, 0.99),
+            ),
+            (
+                "mocap_dropout_burst_frames",
+                self.mocap_dropout_burst_frames,
+                Range(1.0, 1e6),
+            ),
+            ("wind_sigma_mps", self.wind_sigma_mps, NonNegative),
+            ("wind_tau_s", self.wind_tau_s, Positive),
+            (
+                "actor_offset_sigma_m",
+                self.actor_offset_sigma_m,
+                NonNegative,
+            ),
+            ("actor_offset_tau_s", self.actor_offset_tau_s, Positive),
+            ("actor_offset_max_m", self.actor_offset_max_m, NonNegative),
+            (
+                "actor_facing_sigma_rad",
+                self.actor_facing_sigma_rad,
+                NonNegative,
+            ),
+            ("actor_facing_tau_s", self.actor_facing_tau_s, Positive),
+            (
+                "actor_facing_max_rad",
+                self.actor_facing_max_rad,
+                Range(0.0, std::f64::consts::FRAC_PI_2),
+            ),
+            (
+                "actor_timing_sigma_s",
+                self.actor_timing_sigma_s,
+                NonNegative,
+            ),
+            ("actor_timing_tau_s", self.actor_timing_tau_s, Positive),
+            (
+                "actor_timing_max_s",
+                self.actor_timing_max_s,
+                Range(0.0, 5.0),
+            ),
+            (
+                "battery_start_percent",
+                self.battery_start_percent,
+                Range(0.0, 100.0),
+            ),
+            (
+                "battery_drain_percent_per_min",
+                self.battery_drain_percent_per_min,
+                NonNegative,
+            ),
+        ];
+        for (field, value, expect) in checks {
+            expect.check(field, value)?;
+        }
+        Range(0.0, 100.0).check(
+            "battery_min_takeoff_percent",
+            self.battery_min_takeoff_percent,
+        )
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Expect {
+    Finite,
+    Positive,
+    NonNegative,
+    /// Inclusive.
+    Range(f64, f64),
+}
+
+impl Expect {
+    fn check(self, field: &'static str, value: f64) -> Result<(), SimError> {
+        let ok = value.is_finite()
+            && match self {
+                Expect::Finite => true,
+                Expect::Positive => value > 0.0,
+                Expect::NonNegative => value >= 0.0,
+                Expect::Range(lo, hi) => (lo..=hi).contains(&value),
+            };
+        if ok {
+            return Ok(());
+        }
+        let expected = match self {
+            Expect::Finite => "a finite number".to_string(),
+            Expect::Positive => "a finite number > 0".to_string(),
+            Expect::NonNegative => "a finite number ≥ 0".to_string(),
+            Expect::Range(lo, hi) => format!("a number in [{lo}, {hi}]"),
+        };
+        Err(SimError::BadConfig {
+            field,
+            value,
+            expected,
+        })
+    }
+}
+
+/// Why a simulator could not be built.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SimError {
+    /// A [`SimConfig`] value out of its range (or NaN / infinite).
+    BadConfig {
+        field: &'static str,
+        value: f64,
+        expected: String,
+    },
+    /// A profile value the plant cannot use (a gain or time constant that is not a positive
+    /// finite number, a limit that is not positive).
+    BadProfile {
+        field: &'static str,
+        value: f64,
+        expected: String,
+    },
+}
+
+impl SimError {
+    pub(crate) fn profile(field: &'static str, value: f64) -> Result<(), SimError> {
+        if value.is_finite() && value > 0.0 {
+            Ok(())
+        } else {
+            Err(SimError::BadProfile {
+                field,
+                value,
+                expected: "a finite number > 0".to_string(),
+            })
+        }
+    }
+}
+
+impl fmt::Display for SimError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SimError::BadConfig {
+                field,
+                value,
+                expected,
+            } => write!(
+                f,
+                "simulator setting {field} = {value}: expected {expected}"
+            ),
+            SimError::BadProfile {
+                field,
+                value,
+                expected,
+            } => write!(f, "profile value {field} = {value}: expected {expected}"),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
