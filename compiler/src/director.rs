@@ -344,10 +344,11 @@ impl Director {
         };
 
         if first || dt <= 0.0 {
-            // The first shot starts framed: on its target, moving with it.
+            // The first shot starts framed: on its target, moving with it (never faster than
+            // the camera may fly: live actors' velocities are estimates).
             self.state = Kinematics {
                 p: target,
-                v: v_t,
+                v: steering::truncate_hv(v_t, self.limits.speed_h_mps, self.limits.speed_v_mps),
                 a: Vec3::zeros(),
             };
         } else {

@@ -624,6 +624,10 @@ impl Pair {
     }
 }
 
+/// How much nearer the symmetric θ the second subject's root must be to win over the
+/// first's (radians of θ).
+const TIE_MARGIN_RAD: f64 = 0.02;
+
 fn solve_together(
     mut pair: Pair,
     sa: &Subject,
@@ -666,10 +670,16 @@ fn solve_together(
             }
         }
     }
+    // The root nearest the symmetric θ = π − α; on a near tie (equal sizes and heights give
+    // mirror-image roots) the first subject keeps its size, so that the choice does not
+    // flicker with noise on live actors' poses.
     let symmetric = PI - alpha;
+    let key = |c: &(f64, Primary)| {
+        (c.0 - symmetric).abs() + if matches!(c.1, Primary::B) { TIE_MARGIN_RAD } else { 0.0 }
+    };
     let (theta, primary) = candidates
         .into_iter()
-        .min_by(|x, y| (x.0 - symmetric).abs().total_cmp(&(y.0 - symmetric).abs()))
+        .min_by(|x, y| key(x).total_cmp(&key(y)))
         .ok_or(FramingError::SizeUnreachable { size: size_ })?;
     let theta = pair.refine_theta(lens, theta, phi, primary);
     Ok(pair.visual(

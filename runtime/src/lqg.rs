@@ -221,8 +221,21 @@ pub fn check_profile(profile: &Profile, nominal_dt_s: f64) -> Result<(), ServoEr
     Ok(())
 }
 
-/// The Kalman filters of the servo (shared with the PID baseline): a non-stationary 6-state
-/// filter on `x1 = [v; p]` and a scalar one on the heading.
+/// The wind estimate's random walk: its variance grows by this much per second,
+/// (m/s)²/s. About an Ornstein–Uhlenbeck gust of σ 0.2 m/s over 4 s (2σ²/τ = 0.02); an
+/// indoor draft drifts slower, and a larger value only makes the estimate noisier.
+pub const DISTURBANCE_DIFFUSION_M2PS3: f64 = 0.2;
+
+type Matrix9 = SMatrix<f64, 9, 9>;
+type Vector9 = SMatrix<f64, 9, 1>;
+type Matrix9x3 = SMatrix<f64, 9, 3>;
+
+/// The Kalman filters of the servo (shared with the PID baseline): a non-stationary filter on
+/// `x1 = [v; p]` — augmented, for the LQG servo, with `d`, the velocity of the air (wind) the
+/// body-frame lag pulls the drone toward (`v[k+1] = (I − L) v + G u + L d`, `L = M_D T_D
+/// M_Dᵀ`; offset-free LQG: the servo tilts into the wind instead of drifting with it) — and
+/// a scalar one on the heading. Without the disturbance its state stays exactly 0 with no
+/// covariance, and the filter is the paper's 6-state one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Estimator {
     model: ModelParams,
@@ -232,8 +245,11 @@ pub struct Estimator {
     /// f2, h2.
     heading_process: f64,
     heading_measurement: f64,
-    x: Vector6<f64>,
-    p: Matrix6<f64>,
+    /// Whether `d` is estimated (its diffusion per second, (m/s)²/s; 0 = off).
+    disturbance_diffusion: f64,
+    /// `[v; p; d]`.
+    x: Vector9,
+    p: Matrix9,
     c: f64,
     pc: f64,
 }
@@ -242,7 +258,7 @@ impl Estimator {
     /// Filters on the profile's model and noises, started at the origin with a wide
     /// covariance (1 m², 1 m²/s², 1 rad²) until [`Estimator::reset`]. Noises that are not
     /// finite and positive are replaced by a tiny positive floor (use [`check_profile`] to
-    /// refuse them instead).
+    /// refuse them instead). No wind estimate.
     pub fn new(profile: &Profile) -> Estimator {
         let floor = |v: f64| if v.is_finite() && v > 0.0 { v } else { 1e-12 };
         let s = &profile.servo;
@@ -254,34 +270,47 @@ impl Estimator {
         for i in 0..3 {
             measurement[(i, i)] = floor(s.measurement_noise_m2[i]);
         }
+        let mut p = Matrix9::zeros();
+        for i in 0..6 {
+            p[(i, i)] = 1.0;
+        }
         Estimator {
             model: ModelParams::from_profile(profile),
             process,
             measurement,
             heading_process: floor(s.heading_process_noise_rad2),
             heading_measurement: floor(s.heading_measurement_noise_rad2),
-            x: Vector6::zeros(),
-            p: Matrix6::identity(),
+            disturbance_diffusion: 0.0,
+            x: Vector9::zeros(),
+            p,
             c: 0.0,
             pc: 1.0,
         }
     }
 
+    /// [`Estimator::new`] that also estimates the air's velocity `d` (a random walk with
+    /// [`DISTURBANCE_DIFFUSION_M2PS3`]).
+    pub fn with_disturbance(profile: &Profile) -> Estimator {
+        Estimator {
+            disturbance_diffusion: DISTURBANCE_DIFFUSION_M2PS3,
+            ..Estimator::new(profile)
+        }
+    }
+
     /// At rest at the measured pose: the position as uncertain as a measurement, the velocity
-    /// as one tick of process noise.
+    /// as one tick of process noise, the wind unknown within ±0.5 m/s (1σ) when estimated.
     pub fn reset(&mut self, m: &Measurement) {
-        self.x = Vector6::new(
-            0.0,
-            0.0,
-            0.0,
-            m.position_m[0],
-            m.position_m[1],
-            m.position_m[2],
-        );
-        self.p = Matrix6::zeros();
+        self.x = Vector9::zeros();
+        for i in 0..3 {
+            self.x[3 + i] = m.position_m[i];
+        }
+        self.p = Matrix9::zeros();
         for i in 0..3 {
             self.p[(i, i)] = self.process[(i, i)];
             self.p[(i + 3, i + 3)] = self.measurement[(i, i)];
+            if self.disturbance_diffusion > 0.0 {
+                self.p[(i + 6, i + 6)] = 0.25;
+            }
         }
         self.c = frames::wrap_angle_rad(m.heading_rad);
         self.pc = self.heading_measurement;
@@ -290,10 +319,33 @@ impl Estimator {
     /// Predicts over Δ with the translation input `u = [φ, θ, ż]` and yaw-rate command that
     /// were sent, at the estimated heading.
     pub fn predict(&mut self, dt_s: f64, u: &Vector3<f64>, yaw_rate_command_radps: f64) {
-        let a = self.model.a1(dt_s, self.c);
-        let b = self.model.b1(dt_s, self.c);
-        self.x = a * self.x + b * u;
-        let p = a * self.p * a.transpose() + self.process;
+        let a1 = self.model.a1(dt_s, self.c);
+        let b1 = self.model.b1(dt_s, self.c);
+        let mut a = Matrix9::zeros();
+        a.fixed_view_mut::<6, 6>(0, 0).copy_from(&a1);
+        for i in 6..9 {
+            a[(i, i)] = 1.0;
+        }
+        let d = self.x.fixed_rows::<3>(6).into_owned();
+        let x1 = a1 * self.x.fixed_rows::<6>(0) + b1 * u;
+        self.x.fixed_rows_mut::<6>(0).copy_from(&x1);
+        if self.disturbance_diffusion > 0.0 {
+            // v ← … + L d, with L = I − A_vv the world-frame lag.
+            let lag = Matrix3::identity() - a1.fixed_view::<3, 3>(0, 0);
+            a.fixed_view_mut::<3, 3>(0, 6).copy_from(&lag);
+            let dv = lag * d;
+            for i in 0..3 {
+                self.x[i] += dv[i];
+            }
+        }
+        let mut p = a * self.p * a.transpose();
+        let mut pvp = p.fixed_view_mut::<6, 6>(0, 0);
+        pvp += self.process;
+        if self.disturbance_diffusion > 0.0 {
+            for i in 6..9 {
+                p[(i, i)] += self.disturbance_diffusion * dt_s;
+            }
+        }
         self.p = (p + p.transpose()) * 0.5;
         self.c = self
             .model
@@ -304,10 +356,10 @@ impl Estimator {
     /// Corrects with a mocap pose (position and wrapped heading innovation).
     pub fn update(&mut self, m: &Measurement) {
         let s = self.p.fixed_view::<3, 3>(3, 3).into_owned() + self.measurement;
-        let pht = self.p.fixed_view::<6, 3>(0, 3).into_owned();
+        let pht: Matrix9x3 = self.p.fixed_view::<9, 3>(0, 3).into_owned();
         // Kᵀ = S⁻¹ (H P) with S symmetric.
         if let Some(kt) = dare::solve_linear(&s, &pht.transpose()) {
-            let k: Matrix6x3 = kt.transpose();
+            let k: Matrix9x3 = kt.transpose();
             let y = Vector3::from(m.position_m) - self.x.fixed_rows::<3>(3);
             self.x += k * y;
             let p = self.p - k * pht.transpose();
@@ -321,15 +373,21 @@ impl Estimator {
 
     /// `x̂1 = [v; p]`.
     pub fn state(&self) -> Vector6<f64> {
-        self.x
+        self.x.fixed_rows::<6>(0).into_owned()
+    }
+
+    /// The estimated air velocity `d` (zero when not estimated).
+    pub fn disturbance_mps(&self) -> Vector3<f64> {
+        self.x.fixed_rows::<3>(6).into_owned()
     }
 
     pub fn heading_rad(&self) -> f64 {
         self.c
     }
 
+    /// The covariance of `[v; p]`.
     pub fn covariance(&self) -> Matrix6<f64> {
-        self.p
+        self.p.fixed_view::<6, 6>(0, 0).into_owned()
     }
 
     pub fn estimate(&self) -> Estimate {
@@ -473,7 +531,12 @@ impl LqgServo {
             k_body: Gain::zeros(),
             k_body_dt_s: options.nominal_dt_s,
             k_world: Gain::zeros(),
-            estimator: Estimator::new(profile),
+            // The paper's law flies the paper's 6-state filter; ours also estimates the wind.
+            estimator: if options.paper_prefilter {
+                Estimator::new(profile)
+            } else {
+                Estimator::with_disturbance(profile)
+            },
             sent: Vector3::zeros(),
             sent_yaw_radps: 0.0,
         };
@@ -628,7 +691,8 @@ impl LqgServo {
         let mut u = -k1 * (x - xr);
         // G⁻¹ (M_D T_D M_Dᵀ v_ref + Δ a_ref): holds v_ref and follows a_ref.
         let g = self.model.input_matrix(dt_s, c);
-        let mut target = self.model.world_lag(dt_s, c) * v_ref;
+        // With the wind estimate d: the lag pulls toward G u + d, so hold v_ref − d.
+        let mut target = self.model.world_lag(dt_s, c) * (v_ref - self.estimator.disturbance_mps());
         if !self.options.paper_prefilter {
             target += Vector3::from(r.acceleration_mps2) * dt_s;
         }

@@ -44,6 +44,8 @@ pub struct Actors {
     still: Vec<Option<Still>>,
     deviations: Vec<Deviation>,
     on: bool,
+    /// World time of "action!" (the script's t = 0); `None` while waiting for it.
+    action_s: Option<f64>,
 }
 
 /// Random stream ids: actors use `ACTOR_STREAM_BASE + 8·i + channel`.
@@ -99,6 +101,7 @@ impl Actors {
             moves,
             deviations,
             on: cfg.effects.actor_deviation,
+            action_s: (!cfg.wait_for_action).then_some(0.0),
         }
     }
 
@@ -133,16 +136,39 @@ impl Actors {
         pose
     }
 
-    /// Where actor `i` truly is at `t_s` (reads go forward in time).
+    /// "Action!" at world time `t_s`: the script's clock starts (once; later cues are
+    /// ignored, so the actors' clock never jumps).
+    pub fn action(&mut self, t_s: f64) {
+        if self.action_s.is_none() && t_s.is_finite() {
+            self.action_s = Some(t_s);
+        }
+    }
+
+    /// Where actor `i` truly is at world time `t_s` (reads go forward in time). Before
+    /// "action!" the script's clock stands at 0 (the deviations still run: actors waiting
+    /// on their marks still sway).
     #[inline]
     pub fn pose(&mut self, i: usize, t_s: f64, z: &Ziggurat) -> ActorPose {
+        let (script_t, running) = match self.action_s {
+            Some(a) => ((t_s - a).max(0.0), t_s >= a),
+            None => (0.0, false),
+        };
         if !self.on {
-            return self.scripted(i, t_s);
+            let mut pose = self.scripted(i, script_t);
+            if !running {
+                pose.velocity_mps = [0.0; 3];
+                pose.facing_rate_radps = 0.0;
+            }
+            return pose;
         }
         let (lag, lag_rate) = self.deviations[i].timing.value_rate(t_s, z);
-        // The script's clock for this actor runs at 1 + δ'.
-        let clock_rate = 1.0 + lag_rate;
-        let mut pose = self.scripted(i, t_s + lag);
+        // The script's clock for this actor runs at 1 + δ' (stopped before the cue).
+        let (clock_rate, lag) = if running {
+            (1.0 + lag_rate, lag)
+        } else {
+            (0.0, 0.0)
+        };
+        let mut pose = self.scripted(i, script_t + lag);
         let d = &mut self.deviations[i];
         for j in 0..2 {
             let (o, rate) = d.offset[j].value_rate(t_s, z);

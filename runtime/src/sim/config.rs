@@ -155,6 +155,10 @@ pub struct SimConfig {
     /// Take-off is refused below this charge. Default 20 % (an estimate of the firmware's
     /// low-battery lock).
     pub battery_min_takeoff_percent: f64,
+    /// The actors stand at their opening marks until the flight loop calls "action!"
+    /// (`Mocap::action`), then walk the script from its time 0 — as on set. Default false:
+    /// the script's clock is the world's from t = 0.
+    pub wait_for_action: bool,
 }
 
 impl SimConfig {
@@ -194,6 +198,7 @@ impl SimConfig {
             battery_start_percent: 100.0,
             battery_drain_percent_per_min: 7.0,
             battery_min_takeoff_percent: 20.0,
+            wait_for_action: false,
         }
     }
 

@@ -476,6 +476,10 @@ impl Mocap for SimMocap {
         frame.actors.clone_from(&latest.actors);
         Ok(true)
     }
+
+    fn action(&mut self, t_s: f64) {
+        self.world.borrow_mut().actors.action(t_s);
+    }
 }
 
 /// The world's clock ([`Clock`]): `sleep_until` runs the physics up to that time.
