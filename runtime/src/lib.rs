@@ -9,4 +9,5 @@
 pub mod backend;
 pub mod control;
 pub mod frames;
+pub mod log;
 pub mod record;
