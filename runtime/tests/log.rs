@@ -329,7 +329,7 @@ fn any_f64() -> impl Strategy<Value = f64> {
             -0.0,
             0.1 + 0.2,
             5e-324,
-            -2.2250738585072009e-308,
+            f64::from_bits(0x800F_FFFF_FFFF_FFFF), // the largest negative subnormal
             f64::MAX,
             f64::MIN_POSITIVE,
             f64::INFINITY,

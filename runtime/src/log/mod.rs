@@ -43,6 +43,7 @@
 
 mod reader;
 mod schema;
+mod text;
 mod writer;
 
 use std::fmt;
@@ -172,17 +173,6 @@ mod exact {
         } else {
             out.extend_from_slice(b"\"-inf\"");
         }
-    }
-
-    #[inline]
-    pub fn vec3(out: &mut Vec<u8>, v: &[f64; 3]) {
-        out.push(b'[');
-        f64(out, v[0]);
-        out.push(b',');
-        f64(out, v[1]);
-        out.push(b',');
-        f64(out, v[2]);
-        out.push(b']');
     }
 
     /// A float as [`f64`] writes it (also `null`, read as NaN, and integers).

@@ -1,10 +1,11 @@
 //! [`FlightLogWriter`]: streams the flight's ticks and events into the MCAP log (contents and
 //! crash behaviour in the module doc of `log`).
 //!
-//! Per tick the writer formats JSON into one reused buffer with the compiler's hand-written
-//! JSON helpers and hands it to the MCAP writer, whose chunk buffer is also reused: once the
-//! first chunk is closed, a tick allocates nothing (except for the message-index entries the
-//! MCAP writer keeps per chunk, whose vectors it reuses too).
+//! Per tick the writer formats JSON into one reused buffer (`text.rs`, the compiler's
+//! hand-written JSON helpers behind a cache of float texts) and hands it to the MCAP writer,
+//! whose in-memory chunk buffer is reused from chunk to chunk; chunks carry no message
+//! indexes (readers scan the ≤ 1 s chunks). The only allocation on the per-tick path is the
+//! compiler's `foxglove::Frames::message` (a 40-byte time stamp, on `/tf` ticks, 30 Hz).
 
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -21,18 +22,21 @@ use dronecine_compiler::output::{json, ns_from_s};
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Attachment, McapError, WriteOptions, Writer};
 
-use super::{exact, schema, topic, LogScene, HEADER_METADATA};
-use crate::backend::{FlightState, MocapFrame};
-use crate::control::{TickFault, TickInput, TickOutput};
-use crate::frames::{ActorPose, Command};
-use crate::record::{Event, FlightHeader, Phase, TickRecord};
+use super::text::Text;
+use super::{schema, topic, LogScene, HEADER_METADATA};
+use crate::record::{Event, FlightHeader, TickRecord};
 
 /// Chunk compression of the flight log.
+///
+/// Measured (`benches/log.rs`, CPU time of one core on the shared 2-core development machine,
+/// 100 Hz, two actors): no compression 3.8 µs and 3.15 kB a tick (an hour: 1.5 s, 1.1 GB);
+/// LZ4 8.3 µs and 0.8 kB a tick. The default is no compression: the flight loop's budget is
+/// CPU time per tick, and a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
-    /// The default: the flight loop's budget is CPU time per tick (see `benches/log.rs`).
+    /// The default (see above).
     None,
-    /// LZ4 frames: about a third of the size, for about twice the CPU time per tick.
+    /// LZ4 frames: a quarter of the size for about twice the CPU time per tick.
     Lz4,
 }
 
@@ -123,8 +127,8 @@ pub struct FlightLogWriter {
     actor_names: Vec<String>,
     /// Heights last published on `/scene/actors`.
     heights_m: Vec<f64>,
-    /// Reused message buffer.
-    buf: Vec<u8>,
+    /// The reused message buffer and float texts.
+    text: Text,
     next_tf_s: f64,
     next_flush_s: f64,
     ticks_since_flush: u64,
@@ -183,6 +187,9 @@ impl FlightLogWriter {
             // Closed by the flush schedule only.
             .chunk_size(None)
             .compression_threads(0)
+            // A crash-cut log has no data-end record to hold it; the chunks' CRCs suffice.
+            .calculate_data_section_crc(false)
+            .emit_message_indexes(false)
             .create(BufWriter::with_capacity(1 << 16, file))
             .map_err(err)?;
 
@@ -299,7 +306,7 @@ impl FlightLogWriter {
             reference_frame: quote("reference"),
             actor_names: scene.actor_names.to_vec(),
             heights_m: Vec::new(),
-            buf: Vec::with_capacity(4096),
+            text: Text::new(),
             next_tf_s: f64::NEG_INFINITY,
             next_flush_s: options.flush_period_s,
             ticks_since_flush: 0,
@@ -327,12 +334,16 @@ impl FlightLogWriter {
             .map_err(|e| mcap_err(path, e))
     }
 
-    /// Puts the reused buffer on a channel (the buffer is taken and given back).
-    fn put_buf(&mut self, channel: fn(&mut Channels) -> &mut Channel, ns: u64) -> io::Result<()> {
-        let buf = std::mem::take(&mut self.buf);
-        let result = self.put(channel, ns, &buf);
-        self.buf = buf;
-        result
+    /// Puts the text buffer on a channel.
+    fn put_text(&mut self, channel: fn(&mut Channels) -> &mut Channel, ns: u64) -> io::Result<()> {
+        let header = channel(&mut self.channels).header(ns);
+        let path = &self.path;
+        let writer = self.writer.as_mut().ok_or_else(|| {
+            io::Error::other(format!("cannot write {}: log finished", path.display()))
+        })?;
+        writer
+            .write_to_known_channel(&header, &self.text.buf)
+            .map_err(|e| mcap_err(path, e))
     }
 
     /// The topics published once, at time 0.
@@ -383,72 +394,39 @@ impl FlightLogWriter {
         let t_s = tick.input.t_s;
         let ns = ns_from_s(t_s);
         let output = tick.output.as_ref().ok();
+        let text = &mut self.text;
 
-        // /reference, exactly as compile.
-        self.buf.clear();
-        write_reference(&mut self.buf, tick.sample);
-        self.put_buf(|c| &mut c.reference, ns)?;
+        // /reference, exactly as compile; its fields are also /servo/tick's reference.
+        text.buf.clear();
+        write_reference(&mut text.buf, tick.sample);
+        text.keep_reference_span(tick.sample, &tick.input.reference);
+        self.put_text(|c| &mut c.reference, ns)?;
 
-        // /actors, the message compile writes.
-        self.buf.clear();
-        write_actors(&mut self.buf, t_s, &self.actor_prefixes, tick.actors);
-        self.put_buf(|c| &mut c.actors, ns)?;
+        self.text.actors(t_s, &self.actor_prefixes, tick.actors);
+        self.put_text(|c| &mut c.actors, ns)?;
 
         if let Some(out) = output {
-            let e = &out.estimate;
-            self.buf.clear();
-            self.buf.extend_from_slice(b"{\"t_s\":");
-            json::f64(&mut self.buf, t_s);
-            self.buf.extend_from_slice(b",\"position_m\":");
-            json::vec3(&mut self.buf, &e.position_m);
-            self.buf.extend_from_slice(b",\"velocity_mps\":");
-            json::vec3(&mut self.buf, &e.velocity_mps);
-            self.buf.extend_from_slice(b",\"heading_rad\":");
-            json::f64(&mut self.buf, e.heading_rad);
-            self.buf.push(b'}');
-            self.put_buf(|c| &mut c.estimate, ns)?;
-            self.last_estimate = Some((e.position_m, e.heading_rad));
+            self.text.estimate(t_s, &out.estimate);
+            self.put_text(|c| &mut c.estimate, ns)?;
+            self.last_estimate = Some((out.estimate.position_m, out.estimate.heading_rad));
         }
 
         if let Some(frame) = tick.mocap {
-            self.buf.clear();
-            write_measurement(&mut self.buf, frame);
-            self.put_buf(|c| &mut c.measurement, ns)?;
+            self.text.measurement(frame);
+            self.put_text(|c| &mut c.measurement, ns)?;
         }
 
-        // /command.
-        {
-            let c = &tick.command_sent;
-            let failsafe = output.is_none_or(|o| !same_command(&o.command, c));
-            let buf = &mut self.buf;
-            buf.clear();
-            buf.extend_from_slice(b"{\"t_s\":");
-            json::f64(buf, t_s);
-            buf.extend_from_slice(b",\"roll_rad\":");
-            json::f64(buf, c.roll_rad);
-            buf.extend_from_slice(b",\"pitch_rad\":");
-            json::f64(buf, c.pitch_rad);
-            buf.extend_from_slice(b",\"yaw_rate_radps\":");
-            json::f64(buf, c.yaw_rate_radps);
-            buf.extend_from_slice(b",\"vz_mps\":");
-            json::f64(buf, c.vz_mps);
-            buf.extend_from_slice(b",\"saturated\":");
-            buf.extend_from_slice(bool_json(output.is_some_and(|o| o.saturated)));
-            buf.extend_from_slice(b",\"failsafe\":");
-            buf.extend_from_slice(bool_json(failsafe));
-            buf.push(b'}');
-            self.put_buf(|c| &mut c.command, ns)?;
-        }
+        self.text.command(t_s, output, &tick.command_sent);
+        self.put_text(|c| &mut c.command, ns)?;
 
         if !tick.framing.is_empty() {
-            self.buf.clear();
-            write_framing(&mut self.buf, t_s, tick.shot, &self.framing_names, tick);
-            self.put_buf(|c| &mut c.framing, ns)?;
+            self.text
+                .framing(t_s, tick.shot, &self.framing_names, tick.framing);
+            self.put_text(|c| &mut c.framing, ns)?;
         }
 
-        self.buf.clear();
-        write_servo_tick(&mut self.buf, tick);
-        self.put_buf(|c| &mut c.servo_tick, ns)?;
+        self.text.servo_tick(tick);
+        self.put_text(|c| &mut c.servo_tick, ns)?;
 
         if t_s >= self.next_tf_s || !t_s.is_finite() {
             self.next_tf_s = advance(self.next_tf_s, t_s, self.options.tf_hz);
@@ -460,12 +438,9 @@ impl FlightLogWriter {
             || self.ticks_since_flush >= self.flush_every_ticks
         {
             if t_s.is_finite() {
+                // The next flush at most one period after this one.
                 let period = self.options.flush_period_s;
-                self.next_flush_s = (self.next_flush_s + period).max(t_s + period / 2.0);
-                // A schedule far ahead of the clock (time jumped backward) restarts at t_s.
-                if self.next_flush_s > t_s + period {
-                    self.next_flush_s = t_s + period;
-                }
+                self.next_flush_s = (self.next_flush_s + period).clamp(t_s, t_s + period);
             }
             self.flush()?;
         }
@@ -487,9 +462,10 @@ impl FlightLogWriter {
         }
         let s = tick.sample;
         let (position_m, heading_rad) = self.last_estimate.unwrap_or((s.position_m, s.heading_rad));
-        self.buf.clear();
+        let buf = &mut self.text.buf;
+        buf.clear();
         self.frames.message(
-            &mut self.buf,
+            buf,
             ns,
             position_m,
             heading_rad,
@@ -497,36 +473,36 @@ impl FlightLogWriter {
             tick.actors.iter().map(|a| (a.position_m, a.facing_rad)),
         );
         // Append world→reference inside the transforms array (`…]}` → `…,{…}]}`).
-        self.buf.truncate(self.buf.len() - 2);
-        self.buf.push(b',');
+        buf.truncate(buf.len() - 2);
+        buf.push(b',');
         let mut stamp = [0u8; 48];
         let stamp = stamp_json(&mut stamp, ns);
         foxglove::transform(
-            &mut self.buf,
+            buf,
             stamp,
             &self.world_frame,
             &self.reference_frame,
             s.position_m,
             foxglove::yaw(s.heading_rad),
         );
-        self.buf.extend_from_slice(b"]}");
-        self.put_buf(|c| &mut c.tf, ns)
+        buf.extend_from_slice(b"]}");
+        self.put_text(|c| &mut c.tf, ns)
     }
 
     /// Writes an event on `/events` (its time exact, as on `/servo/tick`).
     pub fn write_event(&mut self, event: &Event) -> io::Result<()> {
-        let buf = &mut self.buf;
-        buf.clear();
-        buf.extend_from_slice(b"{\"t_s\":");
-        exact::f64(buf, event.t_s);
-        buf.extend_from_slice(b",\"level\":");
-        json::string(buf, &event.level);
-        buf.extend_from_slice(b",\"kind\":");
-        json::string(buf, &event.kind);
-        buf.extend_from_slice(b",\"message\":");
-        json::string(buf, &event.message);
-        buf.push(b'}');
-        self.put_buf(|c| &mut c.events, ns_from_s(event.t_s))
+        let text = &mut self.text;
+        text.buf.clear();
+        text.raw(b"{\"t_s\":");
+        text.exact(event.t_s);
+        text.raw(b",\"level\":");
+        json::string(&mut text.buf, &event.level);
+        text.raw(b",\"kind\":");
+        json::string(&mut text.buf, &event.kind);
+        text.raw(b",\"message\":");
+        json::string(&mut text.buf, &event.message);
+        text.raw(b"}");
+        self.put_text(|c| &mut c.events, ns_from_s(event.t_s))
     }
 
     /// Closes the last chunk and writes the summary and the closing magic.
@@ -573,22 +549,6 @@ fn header_metadata(header: &FlightHeader) -> Result<BTreeMap<String, String>, St
         .collect())
 }
 
-fn bool_json(b: bool) -> &'static [u8] {
-    if b {
-        b"true"
-    } else {
-        b"false"
-    }
-}
-
-/// Bit-for-bit equal commands.
-fn same_command(a: &Command, b: &Command) -> bool {
-    a.roll_rad.to_bits() == b.roll_rad.to_bits()
-        && a.pitch_rad.to_bits() == b.pitch_rad.to_bits()
-        && a.yaw_rate_radps.to_bits() == b.yaw_rate_radps.to_bits()
-        && a.vz_mps.to_bits() == b.vz_mps.to_bits()
-}
-
 /// `{"sec":…,"nsec":…}` into a stack buffer.
 fn stamp_json(buf: &mut [u8; 48], ns: u64) -> &[u8] {
     let mut n = 0;
@@ -603,213 +563,4 @@ fn stamp_json(buf: &mut [u8; 48], ns: u64) -> &[u8] {
     put(digits.format(ns % 1_000_000_000).as_bytes());
     put(b"}");
     &buf[..n]
-}
-
-/// A `/actors` message, as compile writes it.
-fn write_actors(buf: &mut Vec<u8>, t_s: f64, prefixes: &[Vec<u8>], actors: &[ActorPose]) {
-    buf.extend_from_slice(b"{\"t_s\":");
-    json::f64(buf, t_s);
-    buf.extend_from_slice(b",\"actors\":[");
-    for (i, (prefix, a)) in prefixes.iter().zip(actors).enumerate() {
-        if i > 0 {
-            buf.push(b',');
-        }
-        buf.extend_from_slice(prefix);
-        json::vec3(buf, &a.position_m);
-        buf.extend_from_slice(b",\"facing_rad\":");
-        json::f64(buf, a.facing_rad);
-        buf.extend_from_slice(b",\"height_m\":");
-        json::f64(buf, a.height_m);
-        buf.push(b'}');
-    }
-    buf.extend_from_slice(b"]}");
-}
-
-fn write_pose(buf: &mut Vec<u8>, pose: Option<&crate::backend::BodyPose>) {
-    match pose {
-        Some(p) => {
-            buf.extend_from_slice(b"{\"position_m\":");
-            json::vec3(buf, &p.position_m);
-            buf.extend_from_slice(b",\"heading_rad\":");
-            json::f64(buf, p.heading_rad);
-            buf.push(b'}');
-        }
-        None => buf.extend_from_slice(b"null"),
-    }
-}
-
-fn write_measurement(buf: &mut Vec<u8>, frame: &MocapFrame) {
-    buf.extend_from_slice(b"{\"t_s\":");
-    json::f64(buf, frame.t_s);
-    buf.extend_from_slice(b",\"frame\":");
-    json::u64(buf, frame.frame);
-    buf.extend_from_slice(b",\"drone\":");
-    write_pose(buf, frame.drone.as_ref());
-    buf.extend_from_slice(b",\"actors\":[");
-    for (i, a) in frame.actors.iter().enumerate() {
-        if i > 0 {
-            buf.push(b',');
-        }
-        write_pose(buf, a.as_ref());
-    }
-    buf.extend_from_slice(b"]}");
-}
-
-fn write_screen(buf: &mut Vec<u8>, p: Option<[f64; 2]>) {
-    match p {
-        Some([x, y]) => {
-            buf.push(b'[');
-            json::f64(buf, x);
-            buf.push(b',');
-            json::f64(buf, y);
-            buf.push(b']');
-        }
-        None => buf.extend_from_slice(b"null"),
-    }
-}
-
-fn write_framing(
-    buf: &mut Vec<u8>,
-    t_s: f64,
-    shot: Option<usize>,
-    names: &[Vec<u8>],
-    tick: &TickRecord,
-) {
-    buf.extend_from_slice(b"{\"t_s\":");
-    json::f64(buf, t_s);
-    buf.extend_from_slice(b",\"shot\":");
-    write_shot(buf, shot);
-    buf.extend_from_slice(b",\"actors\":[");
-    for (i, f) in tick.framing.iter().enumerate() {
-        if i > 0 {
-            buf.push(b',');
-        }
-        buf.extend_from_slice(b"{\"actor\":");
-        json::u64(buf, f.actor as u64);
-        match names.get(f.actor) {
-            Some(name) => buf.extend_from_slice(name),
-            None => buf.extend_from_slice(b",\"name\":\"\",\"screen\":"),
-        }
-        write_screen(buf, f.screen);
-        buf.extend_from_slice(b",\"requested\":");
-        write_screen(buf, f.requested);
-        buf.push(b'}');
-    }
-    buf.extend_from_slice(b"]}");
-}
-
-fn write_shot(buf: &mut Vec<u8>, shot: Option<usize>) {
-    match shot {
-        Some(s) => json::u64(buf, s as u64),
-        None => buf.extend_from_slice(b"null"),
-    }
-}
-
-fn phase_json(p: Phase) -> &'static [u8] {
-    match p {
-        Phase::TakeOff => b"\"TakeOff\"",
-        Phase::Approach => b"\"Approach\"",
-        Phase::Shots => b"\"Shots\"",
-        Phase::Landing => b"\"Landing\"",
-    }
-}
-
-fn state_json(s: FlightState) -> &'static [u8] {
-    match s {
-        FlightState::Landed => b"\"Landed\"",
-        FlightState::TakingOff => b"\"TakingOff\"",
-        FlightState::Flying => b"\"Flying\"",
-        FlightState::Landing => b"\"Landing\"",
-        FlightState::Emergency => b"\"Emergency\"",
-    }
-}
-
-fn fault_json(f: TickFault) -> &'static [u8] {
-    match f {
-        TickFault::NotFinite => b"\"NotFinite\"",
-        TickFault::TimeNotIncreasing => b"\"TimeNotIncreasing\"",
-    }
-}
-
-fn write_command_exact(buf: &mut Vec<u8>, c: &Command) {
-    buf.extend_from_slice(b"{\"roll_rad\":");
-    exact::f64(buf, c.roll_rad);
-    buf.extend_from_slice(b",\"pitch_rad\":");
-    exact::f64(buf, c.pitch_rad);
-    buf.extend_from_slice(b",\"yaw_rate_radps\":");
-    exact::f64(buf, c.yaw_rate_radps);
-    buf.extend_from_slice(b",\"vz_mps\":");
-    exact::f64(buf, c.vz_mps);
-    buf.push(b'}');
-}
-
-fn write_input_exact(buf: &mut Vec<u8>, input: &TickInput) {
-    buf.extend_from_slice(b"{\"t_s\":");
-    exact::f64(buf, input.t_s);
-    buf.extend_from_slice(b",\"dt_s\":");
-    exact::f64(buf, input.dt_s);
-    buf.extend_from_slice(b",\"measurement\":");
-    match &input.measurement {
-        Some(m) => {
-            buf.extend_from_slice(b"{\"position_m\":");
-            exact::vec3(buf, &m.position_m);
-            buf.extend_from_slice(b",\"heading_rad\":");
-            exact::f64(buf, m.heading_rad);
-            buf.push(b'}');
-        }
-        None => buf.extend_from_slice(b"null"),
-    }
-    let r = &input.reference;
-    buf.extend_from_slice(b",\"reference\":{\"position_m\":");
-    exact::vec3(buf, &r.position_m);
-    buf.extend_from_slice(b",\"velocity_mps\":");
-    exact::vec3(buf, &r.velocity_mps);
-    buf.extend_from_slice(b",\"acceleration_mps2\":");
-    exact::vec3(buf, &r.acceleration_mps2);
-    buf.extend_from_slice(b",\"heading_rad\":");
-    exact::f64(buf, r.heading_rad);
-    buf.extend_from_slice(b",\"heading_rate_radps\":");
-    exact::f64(buf, r.heading_rate_radps);
-    buf.extend_from_slice(b"}}");
-}
-
-fn write_output_exact(buf: &mut Vec<u8>, out: &TickOutput) {
-    buf.extend_from_slice(b"{\"command\":");
-    write_command_exact(buf, &out.command);
-    let e = &out.estimate;
-    buf.extend_from_slice(b",\"estimate\":{\"position_m\":");
-    exact::vec3(buf, &e.position_m);
-    buf.extend_from_slice(b",\"velocity_mps\":");
-    exact::vec3(buf, &e.velocity_mps);
-    buf.extend_from_slice(b",\"heading_rad\":");
-    exact::f64(buf, e.heading_rad);
-    buf.extend_from_slice(b"},\"saturated\":");
-    buf.extend_from_slice(bool_json(out.saturated));
-    buf.push(b'}');
-}
-
-/// A `/servo/tick` message: everything replay needs, floats exact.
-fn write_servo_tick(buf: &mut Vec<u8>, tick: &TickRecord) {
-    buf.extend_from_slice(b"{\"phase\":");
-    buf.extend_from_slice(phase_json(tick.phase));
-    buf.extend_from_slice(b",\"shot\":");
-    write_shot(buf, tick.shot);
-    buf.extend_from_slice(b",\"input\":");
-    write_input_exact(buf, &tick.input);
-    match &tick.output {
-        Ok(out) => {
-            buf.extend_from_slice(b",\"output\":");
-            write_output_exact(buf, out);
-            buf.extend_from_slice(b",\"fault\":null");
-        }
-        Err(fault) => {
-            buf.extend_from_slice(b",\"output\":null,\"fault\":");
-            buf.extend_from_slice(fault_json(*fault));
-        }
-    }
-    buf.extend_from_slice(b",\"command_sent\":");
-    write_command_exact(buf, &tick.command_sent);
-    buf.extend_from_slice(b",\"drone_state\":");
-    buf.extend_from_slice(state_json(tick.drone_state));
-    buf.push(b'}');
 }
