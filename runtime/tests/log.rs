@@ -366,6 +366,11 @@ proptest! {
                     };
                 }
                 tick.input.dt_s = x[3];
+                // A reference given to the controller that is not the sample's.
+                if k % 5 == 4 {
+                    tick.input.reference.heading_rad = x[1];
+                    tick.input.reference.velocity_mps[2] = *t;
+                }
                 tick
             })
             .collect();
