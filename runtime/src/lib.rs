@@ -19,6 +19,7 @@ pub mod control;
 pub mod dare;
 pub mod flight;
 pub mod frames;
+pub mod log;
 pub mod lqg;
 pub mod model;
 pub mod pid;

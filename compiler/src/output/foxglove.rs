@@ -601,7 +601,14 @@ pub fn camera_calibration(ns: u64, lens: &Lens) -> Vec<u8> {
 
 /// Appends one `FrameTransform` object; `stamp` is the tick's `{"sec":…,"nsec":…}` and the
 /// frame names are quoted JSON strings.
-fn transform(out: &mut Vec<u8>, stamp: &[u8], parent: &[u8], child: &[u8], t: [f64; 3], q: Quat) {
+pub fn transform(
+    out: &mut Vec<u8>,
+    stamp: &[u8],
+    parent: &[u8],
+    child: &[u8],
+    t: [f64; 3],
+    q: Quat,
+) {
     out.extend_from_slice(b"{\"timestamp\":");
     out.extend_from_slice(stamp);
     out.extend_from_slice(b",\"parent_frame_id\":");

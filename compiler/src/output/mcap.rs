@@ -90,15 +90,15 @@ pub const ACTORS_SCHEMA: &str = "dronecine.Actors";
 /// The JSON schema of `/camera` messages.
 pub const CAMERA_SCHEMA: &str = "dronecine.Camera";
 
-fn vec3_schema(description: &str) -> serde_json::Value {
+pub fn vec3_schema(description: &str) -> serde_json::Value {
     json!({ "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": description })
 }
 
-fn number_schema(description: &str) -> serde_json::Value {
+pub fn number_schema(description: &str) -> serde_json::Value {
     json!({ "type": "number", "description": description })
 }
 
-fn reference_schema() -> String {
+pub fn reference_schema() -> String {
     json!({
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": REFERENCE_SCHEMA,
@@ -120,7 +120,7 @@ fn reference_schema() -> String {
     .to_string()
 }
 
-fn actors_schema() -> String {
+pub fn actors_schema() -> String {
     json!({
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": ACTORS_SCHEMA,
@@ -147,7 +147,7 @@ fn actors_schema() -> String {
     .to_string()
 }
 
-fn camera_schema() -> String {
+pub fn camera_schema() -> String {
     json!({
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": CAMERA_SCHEMA,
@@ -545,7 +545,7 @@ impl Drop for McapWriter {
 
 /// The next time a decimated topic is due after publishing at `t_s`: one period later on
 /// the running schedule, or one period after `t_s` if the schedule fell behind.
-fn advance(next_s: f64, t_s: f64, hz: f64) -> f64 {
+pub fn advance(next_s: f64, t_s: f64, hz: f64) -> f64 {
     if !(hz.is_finite() && hz > 0.0 && t_s.is_finite()) {
         return f64::NEG_INFINITY;
     }
@@ -559,7 +559,7 @@ fn advance(next_s: f64, t_s: f64, hz: f64) -> f64 {
 }
 
 /// A `/reference` message.
-fn write_reference(buf: &mut Vec<u8>, s: &Sample) {
+pub fn write_reference(buf: &mut Vec<u8>, s: &Sample) {
     buf.extend_from_slice(b"{\"t_s\":");
     json::f64(buf, s.t_s);
     buf.extend_from_slice(b",\"position_m\":");

@@ -17,8 +17,8 @@
 //! the runtime's flight logs may contain them) and as `NaN`/`inf` in CSV.
 
 mod csv;
-mod foxglove;
-mod mcap;
+pub mod foxglove;
+pub mod mcap;
 
 use std::fs::{File, OpenOptions};
 use std::io;
@@ -115,7 +115,7 @@ pub(crate) fn annotate(dest: &Path, e: io::Error) -> io::Error {
 }
 
 /// Nanoseconds from seconds: rounded, negative and non-finite times clamp to 0.
-pub(crate) fn ns_from_s(t_s: f64) -> u64 {
+pub fn ns_from_s(t_s: f64) -> u64 {
     if t_s.is_finite() && t_s > 0.0 {
         // `as` saturates at u64::MAX.
         (t_s * 1e9).round() as u64
@@ -125,7 +125,7 @@ pub(crate) fn ns_from_s(t_s: f64) -> u64 {
 }
 
 /// Hand-written JSON: appends to a byte buffer without intermediate allocations.
-pub(crate) mod json {
+pub mod json {
     /// A number in its shortest round-trip form (`null` if not finite).
     #[inline]
     pub fn f64(out: &mut Vec<u8>, x: f64) {

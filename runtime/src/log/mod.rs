@@ -1,0 +1,255 @@
+//! The flight log of `dronecine shoot`: an MCAP file written tick by tick while the drone flies
+//! ([`FlightLogWriter`]) and read back by `dronecine replay` ([`FlightLog`]).
+//!
+//! # Contents
+//!
+//! Metadata record `dronecine.flight`: every field of the [`FlightHeader`] under its own name,
+//! each value the field's JSON text (`"script_name"` → `"\"orbit.psl\""`, `"seed"` → `"42"` or
+//! `"null"`, `"controller"` → `{"kind":"lqg",…}`). Attachment: the script text (`text/plain`,
+//! named after the script). All channels are JSON messages with JSON schemas; `log_time =
+//! publish_time =` the tick's `input.t_s` in nanoseconds (negative or non-finite times: 0).
+//!
+//! | topic | schema | when | fields |
+//! |---|---|---|---|
+//! | `/reference` | `dronecine.Reference` | every tick | exactly as `dronecine compile` writes it (the tick's [`Sample`](crate::frames::Sample)) |
+//! | `/actors` | `dronecine.Actors` | every tick | exactly as compile: `t_s`, `actors[] {name, position_m, facing_rad, height_m}` |
+//! | `/camera` | `dronecine.Camera` | once (t = 0) | `fov_x_rad`, `aspect` |
+//! | `/estimate` | `dronecine.Estimate` | ticks whose controller answered | `t_s`, `position_m`, `velocity_mps`, `heading_rad` |
+//! | `/measurement` | `dronecine.Measurement` | ticks with a new mocap frame | `t_s` (capture), `frame`, `drone {position_m, heading_rad}` or null, `actors[]` (same, or null) |
+//! | `/command` | `dronecine.Command` | every tick | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
+//! | `/framing` | `dronecine.Framing` | ticks with framing records | `t_s`, `shot`, `actors[] {actor, name, screen, requested}` (`[x, y]` or null) |
+//! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message` |
+//! | `/servo/tick` | `dronecine.ServoTick` | every tick | `phase`, `shot`, `input` (the [`TickInput`](crate::control::TickInput)), `output` or null, `fault` or null, `command_sent`, `drone_state` |
+//! | `/tf` | `foxglove.FrameTransforms` | 30 Hz | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
+//! | `/scene/stage`, `/scene/drone`, `/scene/actors` | `foxglove.SceneUpdate` | once (actors again when a height changes) | as compile |
+//! | `/camera_calibration` | `foxglove.CameraCalibration` | once | as compile |
+//!
+//! # Numbers
+//!
+//! Every float is written in its shortest round-trip form, so that parsing it gives back the
+//! same bits (`-0.0` stays `-0.0`, subnormals and `f64::MAX` survive). Non-finite values, which a
+//! faulty tick input may contain, are written differently by topic: on `/servo/tick` and
+//! `/events` as the strings `"NaN"`, `"inf"` and `"-inf"` (so replay gets them back; a NaN's
+//! payload and sign are not kept); on the other topics as `null` (as compile does).
+//!
+//! # Crash safety
+//!
+//! The log is written in place, not through a temporary file: whatever reached the disk stays
+//! readable after a crash. Chunks are built in memory and written whole; a chunk is closed and
+//! the file flushed (to the OS, without `fsync`) at least every second of flight time, so a
+//! crash of the process loses at most the last second; [`FlightLog::open`] reads every complete
+//! chunk before the damage and sets [`FlightLog::truncated`]. A power cut may lose what the OS
+//! had not yet written.
+
+mod reader;
+mod schema;
+mod text;
+mod writer;
+
+use std::fmt;
+use std::io;
+use std::path::PathBuf;
+
+use dronecine_compiler::camera::Lens;
+use dronecine_grammar::script::Stage;
+
+pub use self::reader::{FlightLog, LoggedTick};
+pub use self::writer::{FlightLogWriter, LogCompression, LogOptions};
+
+/// The static scene the log draws in Foxglove: the stage, the lens and the actors (their
+/// names in the order of [`TickRecord::actors`](crate::record::TickRecord), their heights for
+/// the 3D figures).
+#[derive(Clone, Copy, Debug)]
+pub struct LogScene<'a> {
+    pub stage: Stage,
+    pub lens: Lens,
+    pub actor_names: &'a [String],
+    pub actor_heights_m: &'a [f64],
+}
+
+/// The name of the metadata record that holds the [`FlightHeader`](crate::record::FlightHeader).
+pub const HEADER_METADATA: &str = "dronecine.flight";
+
+/// Topics of the flight log.
+pub mod topic {
+    pub const REFERENCE: &str = "/reference";
+    pub const ACTORS: &str = "/actors";
+    pub const CAMERA: &str = "/camera";
+    pub const ESTIMATE: &str = "/estimate";
+    pub const MEASUREMENT: &str = "/measurement";
+    pub const COMMAND: &str = "/command";
+    pub const FRAMING: &str = "/framing";
+    pub const EVENTS: &str = "/events";
+    pub const SERVO_TICK: &str = "/servo/tick";
+    pub const TF: &str = "/tf";
+    pub const SCENE_STAGE: &str = "/scene/stage";
+    pub const SCENE_DRONE: &str = "/scene/drone";
+    pub const SCENE_ACTORS: &str = "/scene/actors";
+    pub const CAMERA_CALIBRATION: &str = "/camera_calibration";
+}
+
+/// Why a flight log could not be read.
+#[derive(Debug)]
+pub enum LogError {
+    /// The file could not be opened or read.
+    Io { path: PathBuf, source: io::Error },
+    /// The file is not an MCAP file (or is damaged before its first record).
+    NotMcap { path: PathBuf, detail: String },
+    /// An MCAP file without the `dronecine.flight` metadata record: not a flight log (or one
+    /// cut before its header reached the disk).
+    NoHeader { path: PathBuf },
+    /// The `dronecine.flight` record is there but does not describe a flight.
+    BadHeader { path: PathBuf, detail: String },
+    /// A message in an intact chunk does not parse.
+    BadMessage {
+        path: PathBuf,
+        topic: &'static str,
+        /// Index of the message on its topic.
+        index: usize,
+        detail: String,
+    },
+}
+
+impl fmt::Display for LogError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LogError::Io { path, source } => {
+                write!(f, "cannot read flight log {}: {source}", path.display())
+            }
+            LogError::NotMcap { path, detail } => write!(
+                f,
+                "{} is not a flight log: not a readable MCAP file ({detail})",
+                path.display()
+            ),
+            LogError::NoHeader { path } => write!(
+                f,
+                "{} is not a flight log: no `{HEADER_METADATA}` metadata record",
+                path.display()
+            ),
+            LogError::BadHeader { path, detail } => write!(
+                f,
+                "flight log {}: bad `{HEADER_METADATA}` header: {detail}",
+                path.display()
+            ),
+            LogError::BadMessage {
+                path,
+                topic,
+                index,
+                detail,
+            } => write!(
+                f,
+                "flight log {}: message {index} on {topic} does not parse: {detail}",
+                path.display()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for LogError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            LogError::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
+/// Exact floats for `/servo/tick` and `/events`.
+mod exact {
+    use dronecine_compiler::output::json;
+    use serde::de::{self, Deserializer, Visitor};
+    use serde::Deserialize;
+    use std::fmt;
+
+    /// Appends `x` in its shortest round-trip form, or `"NaN"`, `"inf"`, `"-inf"`.
+    #[inline]
+    pub fn f64(out: &mut Vec<u8>, x: f64) {
+        if x.is_finite() {
+            json::f64(out, x);
+        } else if x.is_nan() {
+            out.extend_from_slice(b"\"NaN\"");
+        } else if x > 0.0 {
+            out.extend_from_slice(b"\"inf\"");
+        } else {
+            out.extend_from_slice(b"\"-inf\"");
+        }
+    }
+
+    /// A float as [`f64`] writes it (also `null`, read as NaN, and integers).
+    #[derive(Clone, Copy, Debug)]
+    pub struct Num(pub f64);
+
+    impl<'de> Deserialize<'de> for Num {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Num, D::Error> {
+            struct V;
+            impl Visitor<'_> for V {
+                type Value = Num;
+                fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                    f.write_str("a number, \"NaN\", \"inf\", \"-inf\" or null")
+                }
+                fn visit_f64<E>(self, x: f64) -> Result<Num, E> {
+                    Ok(Num(x))
+                }
+                fn visit_u64<E>(self, x: u64) -> Result<Num, E> {
+                    Ok(Num(x as f64))
+                }
+                fn visit_i64<E>(self, x: i64) -> Result<Num, E> {
+                    Ok(Num(x as f64))
+                }
+                fn visit_unit<E>(self) -> Result<Num, E> {
+                    Ok(Num(f64::NAN))
+                }
+                fn visit_none<E>(self) -> Result<Num, E> {
+                    Ok(Num(f64::NAN))
+                }
+                fn visit_str<E: de::Error>(self, s: &str) -> Result<Num, E> {
+                    match s {
+                        "NaN" => Ok(Num(f64::NAN)),
+                        "inf" => Ok(Num(f64::INFINITY)),
+                        "-inf" => Ok(Num(f64::NEG_INFINITY)),
+                        _ => Err(E::invalid_value(de::Unexpected::Str(s), &self)),
+                    }
+                }
+            }
+            d.deserialize_any(V)
+        }
+    }
+
+    pub fn vec3_of(v: [Num; 3]) -> [f64; 3] {
+        [v[0].0, v[1].0, v[2].0]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::exact;
+
+    fn round_trip(x: f64) -> f64 {
+        let mut out = Vec::new();
+        exact::f64(&mut out, x);
+        serde_json::from_slice::<exact::Num>(&out).unwrap().0
+    }
+
+    #[test]
+    fn exact_floats_keep_their_bits() {
+        for x in [
+            0.0,
+            -0.0,
+            0.1 + 0.2,
+            1.0,
+            -3.0,
+            5e-324,
+            -2.2250738585072014e-308,
+            f64::MAX,
+            f64::MIN,
+            1e21,
+            123456789012345680000.0,
+            std::f64::consts::PI,
+        ] {
+            assert_eq!(round_trip(x).to_bits(), x.to_bits(), "{x:e}");
+        }
+        assert!(round_trip(f64::NAN).is_nan());
+        assert_eq!(round_trip(f64::INFINITY), f64::INFINITY);
+        assert_eq!(round_trip(f64::NEG_INFINITY), f64::NEG_INFINITY);
+    }
+}

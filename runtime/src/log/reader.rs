@@ -1,0 +1,339 @@
+//! [`FlightLog`]: reads a flight log back for `dronecine replay`: the header, every tick of
+//! `/servo/tick` and every event, recovering what precedes any damage.
+//!
+//! The file is streamed through the mcap crate's sans-io linear reader (memory: one chunk at a
+//! time plus the decoded ticks). Chunk CRCs are checked before a chunk's records are used, so a
+//! damaged chunk is never half-read; reading stops at the first damage (a cut or a corrupt
+//! record) and [`FlightLog::truncated`] says so.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use mcap::records::Record;
+use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use mcap::McapError;
+use serde::Deserialize;
+
+use super::exact::{vec3_of, Num};
+use super::{topic, LogError, HEADER_METADATA};
+use crate::control::{Estimate, Measurement, Reference, TickFault, TickInput, TickOutput};
+use crate::frames::Command;
+use crate::record::{Event, FlightHeader, Phase};
+
+/// One tick as replay needs it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoggedTick {
+    pub phase: Phase,
+    pub shot: Option<usize>,
+    pub input: TickInput,
+    pub output: Result<TickOutput, TickFault>,
+    pub command_sent: Command,
+}
+
+/// A flight log, read back.
+#[derive(Clone, Debug)]
+pub struct FlightLog {
+    pub header: FlightHeader,
+    /// Every tick, in the order written.
+    pub ticks: Vec<LoggedTick>,
+    pub events: Vec<Event>,
+    /// The file ends before its footer (a crash, a cut copy) or is damaged: everything before
+    /// the damage was read.
+    pub truncated: bool,
+    /// What stopped the reading when `truncated` (for the user).
+    pub damage: Option<String>,
+}
+
+#[derive(Deserialize)]
+struct RawCommand {
+    roll_rad: Num,
+    pitch_rad: Num,
+    yaw_rate_radps: Num,
+    vz_mps: Num,
+}
+
+impl RawCommand {
+    fn command(&self) -> Command {
+        Command {
+            roll_rad: self.roll_rad.0,
+            pitch_rad: self.pitch_rad.0,
+            yaw_rate_radps: self.yaw_rate_radps.0,
+            vz_mps: self.vz_mps.0,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+struct RawMeasurement {
+    position_m: [Num; 3],
+    heading_rad: Num,
+}
+
+#[derive(Deserialize)]
+struct RawReference {
+    position_m: [Num; 3],
+    velocity_mps: [Num; 3],
+    acceleration_mps2: [Num; 3],
+    heading_rad: Num,
+    heading_rate_radps: Num,
+}
+
+#[derive(Deserialize)]
+struct RawInput {
+    t_s: Num,
+    dt_s: Num,
+    measurement: Option<RawMeasurement>,
+    reference: RawReference,
+}
+
+#[derive(Deserialize)]
+struct RawEstimate {
+    position_m: [Num; 3],
+    velocity_mps: [Num; 3],
+    heading_rad: Num,
+}
+
+#[derive(Deserialize)]
+struct RawOutput {
+    command: RawCommand,
+    estimate: RawEstimate,
+    saturated: bool,
+}
+
+#[derive(Deserialize)]
+struct RawTick {
+    phase: Phase,
+    shot: Option<usize>,
+    input: RawInput,
+    output: Option<RawOutput>,
+    fault: Option<TickFault>,
+    command_sent: RawCommand,
+}
+
+impl RawTick {
+    fn tick(self) -> Result<LoggedTick, String> {
+        let i = self.input;
+        let input = TickInput {
+            t_s: i.t_s.0,
+            dt_s: i.dt_s.0,
+            measurement: i.measurement.map(|m| Measurement {
+                position_m: vec3_of(m.position_m),
+                heading_rad: m.heading_rad.0,
+            }),
+            reference: Reference {
+                position_m: vec3_of(i.reference.position_m),
+                velocity_mps: vec3_of(i.reference.velocity_mps),
+                acceleration_mps2: vec3_of(i.reference.acceleration_mps2),
+                heading_rad: i.reference.heading_rad.0,
+                heading_rate_radps: i.reference.heading_rate_radps.0,
+            },
+        };
+        let output = match (self.output, self.fault) {
+            (Some(o), None) => Ok(TickOutput {
+                command: o.command.command(),
+                estimate: Estimate {
+                    position_m: vec3_of(o.estimate.position_m),
+                    velocity_mps: vec3_of(o.estimate.velocity_mps),
+                    heading_rad: o.estimate.heading_rad.0,
+                },
+                saturated: o.saturated,
+            }),
+            (None, Some(fault)) => Err(fault),
+            _ => return Err("exactly one of `output` and `fault` must be set".into()),
+        };
+        Ok(LoggedTick {
+            phase: self.phase,
+            shot: self.shot,
+            input,
+            output,
+            command_sent: self.command_sent.command(),
+        })
+    }
+}
+
+#[derive(Deserialize)]
+struct RawEvent {
+    t_s: Num,
+    level: String,
+    kind: String,
+    message: String,
+}
+
+/// Which channels the reader decodes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Wanted {
+    Tick,
+    Event,
+}
+
+/// Rebuilds the header from the metadata map (each value a field's JSON).
+fn parse_header(
+    metadata: &std::collections::BTreeMap<String, String>,
+) -> Result<FlightHeader, String> {
+    let mut object = serde_json::Map::new();
+    for (key, text) in metadata {
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| format!("field `{key}`: {e}"))?;
+        object.insert(key.clone(), value);
+    }
+    serde_json::from_value(serde_json::Value::Object(object)).map_err(|e| e.to_string())
+}
+
+impl FlightLog {
+    /// Reads the log at `path`. A cut or damaged file gives every tick and event before the
+    /// damage with `truncated` set; a file that is not MCAP, or has no flight header, is an
+    /// error.
+    pub fn open(path: &Path) -> Result<FlightLog, LogError> {
+        let io_err = |source| LogError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = File::open(path).map_err(io_err)?;
+        let len = file.metadata().map_err(io_err)?.len();
+        let mut reader = LinearReader::new_with_options(
+            LinearReaderOptions::default()
+                .with_validate_chunk_crcs(true)
+                .with_prevalidate_chunk_crcs(true)
+                .with_record_length_limit(usize::try_from(len).unwrap_or(usize::MAX)),
+        );
+        let mut state = ReadState {
+            path: path.to_path_buf(),
+            channels: HashMap::new(),
+            header: None,
+            ticks: Vec::new(),
+            events: Vec::new(),
+            records: 0,
+            footer: false,
+        };
+        let damage = loop {
+            let event = match reader.next_event() {
+                None => break None,
+                Some(Ok(event)) => event,
+                Some(Err(e)) => break Some(e),
+            };
+            match event {
+                LinearReadEvent::ReadRequest(need) => {
+                    let buf = reader.insert(need);
+                    let n = loop {
+                        match file.read(buf) {
+                            Ok(n) => break n,
+                            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                            Err(e) => return Err(io_err(e)),
+                        }
+                    };
+                    reader.notify_read(n);
+                }
+                LinearReadEvent::Record { opcode, data } => {
+                    let record = match mcap::parse_record(opcode, data) {
+                        Ok(record) => record,
+                        Err(e) => break Some(e),
+                    };
+                    state.records += 1;
+                    state.record(record)?;
+                }
+            }
+        };
+        let truncated = damage.is_some() || !state.footer;
+        if let Some(e) = &damage {
+            if state.records == 0 {
+                return Err(LogError::NotMcap {
+                    path: path.to_path_buf(),
+                    detail: describe(e),
+                });
+            }
+        }
+        let header = state.header.take().ok_or_else(|| LogError::NoHeader {
+            path: path.to_path_buf(),
+        })?;
+        let damage = match damage {
+            Some(e) => Some(describe(&e)),
+            None if truncated => Some("the file ends before its footer".to_string()),
+            None => None,
+        };
+        Ok(FlightLog {
+            header,
+            ticks: state.ticks,
+            events: state.events,
+            truncated,
+            damage,
+        })
+    }
+}
+
+fn describe(e: &McapError) -> String {
+    match e {
+        McapError::UnexpectedEof => "the file ends in the middle of a record".into(),
+        McapError::BadMagic => "no MCAP magic".into(),
+        other => other.to_string(),
+    }
+}
+
+struct ReadState {
+    path: PathBuf,
+    channels: HashMap<u16, Wanted>,
+    header: Option<FlightHeader>,
+    ticks: Vec<LoggedTick>,
+    events: Vec<Event>,
+    records: usize,
+    footer: bool,
+}
+
+impl ReadState {
+    fn record(&mut self, record: Record) -> Result<(), LogError> {
+        match record {
+            Record::Channel(channel) => {
+                let wanted = match channel.topic.as_str() {
+                    topic::SERVO_TICK => Some(Wanted::Tick),
+                    topic::EVENTS => Some(Wanted::Event),
+                    _ => None,
+                };
+                if let Some(w) = wanted {
+                    self.channels.insert(channel.id, w);
+                }
+            }
+            Record::Metadata(m) if m.name == HEADER_METADATA && self.header.is_none() => {
+                let header = parse_header(&m.metadata).map_err(|detail| LogError::BadHeader {
+                    path: self.path.clone(),
+                    detail,
+                })?;
+                self.header = Some(header);
+            }
+            Record::Message { header, data } => match self.channels.get(&header.channel_id) {
+                Some(Wanted::Tick) => {
+                    let tick = serde_json::from_slice::<RawTick>(&data)
+                        .map_err(|e| e.to_string())
+                        .and_then(RawTick::tick)
+                        .map_err(|detail| LogError::BadMessage {
+                            path: self.path.clone(),
+                            topic: topic::SERVO_TICK,
+                            index: self.ticks.len(),
+                            detail,
+                        })?;
+                    self.ticks.push(tick);
+                }
+                Some(Wanted::Event) => {
+                    let e = serde_json::from_slice::<RawEvent>(&data).map_err(|e| {
+                        LogError::BadMessage {
+                            path: self.path.clone(),
+                            topic: topic::EVENTS,
+                            index: self.events.len(),
+                            detail: e.to_string(),
+                        }
+                    })?;
+                    self.events.push(Event {
+                        t_s: e.t_s.0,
+                        level: e.level,
+                        kind: e.kind,
+                        message: e.message,
+                    });
+                }
+                None => {}
+            },
+            Record::Footer(_) => self.footer = true,
+            _ => {}
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,434 @@
+//! The JSON text of the flight log's per-tick messages, written into one reused buffer.
+//!
+//! A tick's numbers repeat across topics (the clock on every topic, the reference on
+//! `/reference` and `/servo/tick`, the estimate, the command…) and from tick to tick (zeros,
+//! constants). Formatting a float in its shortest round-trip form is the bulk of a tick's
+//! cost, so [`Text`] keeps the text of recently formatted floats in a small direct-mapped
+//! cache keyed by their bits: each distinct value is formatted once. The text is the
+//! compiler's `output::json::f64` (zmij), the same on every topic.
+
+use dronecine_compiler::output::json;
+
+use super::exact;
+use crate::backend::{BodyPose, FlightState, MocapFrame};
+use crate::control::{Estimate, Reference, TickFault, TickInput, TickOutput};
+use crate::frames::{ActorPose, Command, Sample};
+use crate::record::{FramingRecord, Phase, TickRecord};
+
+const SLOTS: usize = 256;
+/// Longest shortest-round-trip text of an f64 (`-2.2250738585072014e-308`: 24 bytes).
+const TEXT_MAX: usize = 32;
+
+#[derive(Clone, Copy)]
+struct Slot {
+    /// A NaN pattern while empty: never equal to a cached (finite) value.
+    bits: u64,
+    len: u8,
+    text: [u8; TEXT_MAX],
+}
+
+const EMPTY: Slot = Slot {
+    bits: u64::MAX,
+    len: 0,
+    text: [0; TEXT_MAX],
+};
+
+pub(super) struct Text {
+    pub(super) buf: Vec<u8>,
+    slots: Box<[Slot; SLOTS]>,
+    /// `/servo/tick`'s reference object body, copied from `/reference` when the two agree.
+    reference: Vec<u8>,
+    reference_valid: bool,
+}
+
+/// Bit-for-bit equal floats.
+fn same(a: f64, b: f64) -> bool {
+    a.to_bits() == b.to_bits()
+}
+
+fn same_vec3(a: &[f64; 3], b: &[f64; 3]) -> bool {
+    same(a[0], b[0]) && same(a[1], b[1]) && same(a[2], b[2])
+}
+
+/// Bit-for-bit equal commands.
+pub(super) fn same_command(a: &Command, b: &Command) -> bool {
+    same(a.roll_rad, b.roll_rad)
+        && same(a.pitch_rad, b.pitch_rad)
+        && same(a.yaw_rate_radps, b.yaw_rate_radps)
+        && same(a.vz_mps, b.vz_mps)
+}
+
+fn bool_json(b: bool) -> &'static [u8] {
+    if b {
+        b"true"
+    } else {
+        b"false"
+    }
+}
+
+fn phase_json(p: Phase) -> &'static [u8] {
+    match p {
+        Phase::TakeOff => b"\"TakeOff\"",
+        Phase::Approach => b"\"Approach\"",
+        Phase::Shots => b"\"Shots\"",
+        Phase::Landing => b"\"Landing\"",
+    }
+}
+
+fn state_json(s: FlightState) -> &'static [u8] {
+    match s {
+        FlightState::Landed => b"\"Landed\"",
+        FlightState::TakingOff => b"\"TakingOff\"",
+        FlightState::Flying => b"\"Flying\"",
+        FlightState::Landing => b"\"Landing\"",
+        FlightState::Emergency => b"\"Emergency\"",
+    }
+}
+
+fn fault_json(f: TickFault) -> &'static [u8] {
+    match f {
+        TickFault::NotFinite => b"\"NotFinite\"",
+        TickFault::TimeNotIncreasing => b"\"TimeNotIncreasing\"",
+    }
+}
+
+impl Text {
+    pub(super) fn new() -> Self {
+        Self {
+            buf: Vec::with_capacity(4096),
+            slots: Box::new([EMPTY; SLOTS]),
+            reference: Vec::with_capacity(512),
+            reference_valid: false,
+        }
+    }
+
+    #[inline]
+    pub(super) fn raw(&mut self, bytes: &[u8]) {
+        self.buf.extend_from_slice(bytes);
+    }
+
+    /// A finite float, through the cache.
+    #[inline]
+    fn finite(&mut self, x: f64) {
+        let bits = x.to_bits();
+        let h = (bits ^ (bits >> 32)).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56;
+        let i = h as usize % SLOTS;
+        let slot = &self.slots[i];
+        if slot.bits == bits {
+            // A fixed-size copy (no call to memcpy), then the excess cut off.
+            let end = self.buf.len() + slot.len as usize;
+            self.buf.extend_from_slice(&slot.text);
+            self.buf.truncate(end);
+            return;
+        }
+        let start = self.buf.len();
+        json::f64(&mut self.buf, x);
+        let text = &self.buf[start..];
+        if text.len() <= TEXT_MAX {
+            let slot = &mut self.slots[i];
+            slot.bits = bits;
+            slot.len = text.len() as u8;
+            slot.text[..text.len()].copy_from_slice(text);
+        }
+    }
+
+    /// A float, `null` if not finite (as compile's topics).
+    #[inline]
+    pub(super) fn num(&mut self, x: f64) {
+        if x.is_finite() {
+            self.finite(x);
+        } else {
+            self.raw(b"null");
+        }
+    }
+
+    /// A float, exact: non-finite as `"NaN"`, `"inf"`, `"-inf"`.
+    #[inline]
+    pub(super) fn exact(&mut self, x: f64) {
+        if x.is_finite() {
+            self.finite(x);
+        } else {
+            exact::f64(&mut self.buf, x);
+        }
+    }
+
+    fn vec3(&mut self, v: &[f64; 3]) {
+        self.raw(b"[");
+        self.num(v[0]);
+        self.raw(b",");
+        self.num(v[1]);
+        self.raw(b",");
+        self.num(v[2]);
+        self.raw(b"]");
+    }
+
+    fn exact_vec3(&mut self, v: &[f64; 3]) {
+        self.raw(b"[");
+        self.exact(v[0]);
+        self.raw(b",");
+        self.exact(v[1]);
+        self.raw(b",");
+        self.exact(v[2]);
+        self.raw(b"]");
+    }
+
+    fn shot(&mut self, shot: Option<usize>) {
+        match shot {
+            Some(s) => json::u64(&mut self.buf, s as u64),
+            None => self.raw(b"null"),
+        }
+    }
+
+    /// Called with compile's `/reference` message in `buf`: keeps the span
+    /// `"position_m":[…],…,"heading_rate_radps":…` when it is exactly the tick input's
+    /// reference (same bits, all finite), for `/servo/tick` to copy.
+    pub(super) fn keep_reference_span(&mut self, sample: &Sample, reference: &Reference) {
+        self.reference_valid = false;
+        let r = reference;
+        let agree = same_vec3(&sample.position_m, &r.position_m)
+            && same_vec3(&sample.velocity_mps, &r.velocity_mps)
+            && same_vec3(&sample.acceleration_mps2, &r.acceleration_mps2)
+            && same(sample.heading_rad, r.heading_rad)
+            && same(sample.heading_rate_radps, r.heading_rate_radps);
+        let finite = r.position_m.iter().all(|x| x.is_finite())
+            && r.velocity_mps.iter().all(|x| x.is_finite())
+            && r.acceleration_mps2.iter().all(|x| x.is_finite())
+            && r.heading_rad.is_finite()
+            && r.heading_rate_radps.is_finite();
+        if !(agree && finite) {
+            return;
+        }
+        const START: &[u8] = b"\"position_m\":";
+        const END: &[u8] = b",\"camera_pitch_rad\":";
+        let msg = &self.buf;
+        let start = msg.windows(START.len()).position(|w| w == START);
+        let end = msg.windows(END.len()).rposition(|w| w == END);
+        if let (Some(start), Some(end)) = (start, end) {
+            if start < end {
+                self.reference.clear();
+                self.reference.extend_from_slice(&msg[start..end]);
+                self.reference_valid = true;
+            }
+        }
+    }
+
+    /// `/actors`: the message compile writes (`prefixes`: `{"name":NAME,"position_m":`).
+    pub(super) fn actors(&mut self, t_s: f64, prefixes: &[Vec<u8>], actors: &[ActorPose]) {
+        self.buf.clear();
+        self.raw(b"{\"t_s\":");
+        self.num(t_s);
+        self.raw(b",\"actors\":[");
+        for (i, (prefix, a)) in prefixes.iter().zip(actors).enumerate() {
+            if i > 0 {
+                self.raw(b",");
+            }
+            self.raw(prefix);
+            self.vec3(&a.position_m);
+            self.raw(b",\"facing_rad\":");
+            self.num(a.facing_rad);
+            self.raw(b",\"height_m\":");
+            self.num(a.height_m);
+            self.raw(b"}");
+        }
+        self.raw(b"]}");
+    }
+
+    pub(super) fn estimate(&mut self, t_s: f64, e: &Estimate) {
+        self.buf.clear();
+        self.raw(b"{\"t_s\":");
+        self.num(t_s);
+        self.raw(b",\"position_m\":");
+        self.vec3(&e.position_m);
+        self.raw(b",\"velocity_mps\":");
+        self.vec3(&e.velocity_mps);
+        self.raw(b",\"heading_rad\":");
+        self.num(e.heading_rad);
+        self.raw(b"}");
+    }
+
+    fn pose(&mut self, pose: Option<&BodyPose>) {
+        match pose {
+            Some(p) => {
+                self.raw(b"{\"position_m\":");
+                self.vec3(&p.position_m);
+                self.raw(b",\"heading_rad\":");
+                self.num(p.heading_rad);
+                self.raw(b"}");
+            }
+            None => self.raw(b"null"),
+        }
+    }
+
+    pub(super) fn measurement(&mut self, frame: &MocapFrame) {
+        self.buf.clear();
+        self.raw(b"{\"t_s\":");
+        self.num(frame.t_s);
+        self.raw(b",\"frame\":");
+        json::u64(&mut self.buf, frame.frame);
+        self.raw(b",\"drone\":");
+        self.pose(frame.drone.as_ref());
+        self.raw(b",\"actors\":[");
+        for (i, a) in frame.actors.iter().enumerate() {
+            if i > 0 {
+                self.raw(b",");
+            }
+            self.pose(a.as_ref());
+        }
+        self.raw(b"]}");
+    }
+
+    /// `/command`: the command sent, and whether it is not the controller's.
+    pub(super) fn command(&mut self, t_s: f64, output: Option<&TickOutput>, c: &Command) {
+        let failsafe = output.is_none_or(|o| !same_command(&o.command, c));
+        self.buf.clear();
+        self.raw(b"{\"t_s\":");
+        self.num(t_s);
+        self.raw(b",\"roll_rad\":");
+        self.num(c.roll_rad);
+        self.raw(b",\"pitch_rad\":");
+        self.num(c.pitch_rad);
+        self.raw(b",\"yaw_rate_radps\":");
+        self.num(c.yaw_rate_radps);
+        self.raw(b",\"vz_mps\":");
+        self.num(c.vz_mps);
+        self.raw(b",\"saturated\":");
+        self.raw(bool_json(output.is_some_and(|o| o.saturated)));
+        self.raw(b",\"failsafe\":");
+        self.raw(bool_json(failsafe));
+        self.raw(b"}");
+    }
+
+    fn screen(&mut self, p: Option<[f64; 2]>) {
+        match p {
+            Some([x, y]) => {
+                self.raw(b"[");
+                self.num(x);
+                self.raw(b",");
+                self.num(y);
+                self.raw(b"]");
+            }
+            None => self.raw(b"null"),
+        }
+    }
+
+    /// `/framing` (`names`: `,"name":NAME,"screen":` per actor).
+    pub(super) fn framing(
+        &mut self,
+        t_s: f64,
+        shot: Option<usize>,
+        names: &[Vec<u8>],
+        framing: &[FramingRecord],
+    ) {
+        self.buf.clear();
+        self.raw(b"{\"t_s\":");
+        self.num(t_s);
+        self.raw(b",\"shot\":");
+        self.shot(shot);
+        self.raw(b",\"actors\":[");
+        for (i, f) in framing.iter().enumerate() {
+            if i > 0 {
+                self.raw(b",");
+            }
+            self.raw(b"{\"actor\":");
+            json::u64(&mut self.buf, f.actor as u64);
+            match names.get(f.actor) {
+                Some(name) => self.raw(name),
+                None => self.raw(b",\"name\":\"\",\"screen\":"),
+            }
+            self.screen(f.screen);
+            self.raw(b",\"requested\":");
+            self.screen(f.requested);
+            self.raw(b"}");
+        }
+        self.raw(b"]}");
+    }
+
+    fn exact_command(&mut self, c: &Command) {
+        self.raw(b"{\"roll_rad\":");
+        self.exact(c.roll_rad);
+        self.raw(b",\"pitch_rad\":");
+        self.exact(c.pitch_rad);
+        self.raw(b",\"yaw_rate_radps\":");
+        self.exact(c.yaw_rate_radps);
+        self.raw(b",\"vz_mps\":");
+        self.exact(c.vz_mps);
+        self.raw(b"}");
+    }
+
+    fn exact_input(&mut self, input: &TickInput) {
+        self.raw(b"{\"t_s\":");
+        self.exact(input.t_s);
+        self.raw(b",\"dt_s\":");
+        self.exact(input.dt_s);
+        self.raw(b",\"measurement\":");
+        match &input.measurement {
+            Some(m) => {
+                self.raw(b"{\"position_m\":");
+                self.exact_vec3(&m.position_m);
+                self.raw(b",\"heading_rad\":");
+                self.exact(m.heading_rad);
+                self.raw(b"}");
+            }
+            None => self.raw(b"null"),
+        }
+        self.raw(b",\"reference\":{");
+        if self.reference_valid {
+            self.buf.extend_from_slice(&self.reference);
+        } else {
+            let r = &input.reference;
+            self.raw(b"\"position_m\":");
+            self.exact_vec3(&r.position_m);
+            self.raw(b",\"velocity_mps\":");
+            self.exact_vec3(&r.velocity_mps);
+            self.raw(b",\"acceleration_mps2\":");
+            self.exact_vec3(&r.acceleration_mps2);
+            self.raw(b",\"heading_rad\":");
+            self.exact(r.heading_rad);
+            self.raw(b",\"heading_rate_radps\":");
+            self.exact(r.heading_rate_radps);
+        }
+        self.raw(b"}}");
+    }
+
+    fn exact_output(&mut self, out: &TickOutput) {
+        self.raw(b"{\"command\":");
+        self.exact_command(&out.command);
+        let e = &out.estimate;
+        self.raw(b",\"estimate\":{\"position_m\":");
+        self.exact_vec3(&e.position_m);
+        self.raw(b",\"velocity_mps\":");
+        self.exact_vec3(&e.velocity_mps);
+        self.raw(b",\"heading_rad\":");
+        self.exact(e.heading_rad);
+        self.raw(b"},\"saturated\":");
+        self.raw(bool_json(out.saturated));
+        self.raw(b"}");
+    }
+
+    /// `/servo/tick`: everything replay needs, floats exact.
+    pub(super) fn servo_tick(&mut self, tick: &TickRecord) {
+        self.buf.clear();
+        self.raw(b"{\"phase\":");
+        self.raw(phase_json(tick.phase));
+        self.raw(b",\"shot\":");
+        self.shot(tick.shot);
+        self.raw(b",\"input\":");
+        self.exact_input(&tick.input);
+        match &tick.output {
+            Ok(out) => {
+                self.raw(b",\"output\":");
+                self.exact_output(out);
+                self.raw(b",\"fault\":null");
+            }
+            Err(fault) => {
+                self.raw(b",\"output\":null,\"fault\":");
+                self.raw(fault_json(*fault));
+            }
+        }
+        self.raw(b",\"command_sent\":");
+        self.exact_command(&tick.command_sent);
+        self.raw(b",\"drone_state\":");
+        self.raw(state_json(tick.drone_state));
+        self.raw(b"}");
+    }
+}

@@ -1,0 +1,566 @@
+//! [`FlightLogWriter`]: streams the flight's ticks and events into the MCAP log (contents and
+//! crash behaviour in the module doc of `log`).
+//!
+//! Per tick the writer formats JSON into one reused buffer (`text.rs`, the compiler's
+//! hand-written JSON helpers behind a cache of float texts) and hands it to the MCAP writer,
+//! whose in-memory chunk buffer is reused from chunk to chunk; chunks carry no message
+//! indexes (readers scan the ≤ 1 s chunks). The only allocation on the per-tick path is the
+//! compiler's `foxglove::Frames::message` (a 40-byte time stamp, on `/tf` ticks, 30 Hz).
+
+use std::collections::BTreeMap;
+use std::fs::{File, OpenOptions};
+use std::io::{self, BufWriter};
+use std::path::{Path, PathBuf};
+
+use dronecine_compiler::camera::Lens;
+use dronecine_compiler::output::foxglove::{self, Frames};
+use dronecine_compiler::output::mcap::{
+    actors_schema, advance, camera_schema, reference_schema, write_reference, ACTORS_SCHEMA,
+    CAMERA_SCHEMA, REFERENCE_SCHEMA,
+};
+use dronecine_compiler::output::{json, ns_from_s};
+use mcap::records::{MessageHeader, Metadata};
+use mcap::{Attachment, McapError, WriteOptions, Writer};
+
+use super::text::Text;
+use super::{schema, topic, LogScene, HEADER_METADATA};
+use crate::record::{Event, FlightHeader, TickRecord};
+
+/// Chunk compression of the flight log.
+///
+/// Measured (`benches/log.rs`, CPU time of one core on the shared 2-core development machine,
+/// 100 Hz, two actors): no compression 3.8 µs and 3.15 kB a tick (an hour: 1.5 s, 1.1 GB);
+/// LZ4 8.3 µs and 0.8 kB a tick. The default is no compression: the flight loop's budget is
+/// CPU time per tick, and a flight of minutes is a few hundred megabytes at most.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LogCompression {
+    /// The default (see above).
+    None,
+    /// LZ4 frames: a quarter of the size for about twice the CPU time per tick.
+    Lz4,
+}
+
+/// Tuning of the flight log.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LogOptions {
+    pub compression: LogCompression,
+    /// Rate of `/tf` (Foxglove's 3D view).
+    pub tf_hz: f64,
+    /// Flight time between two chunk closes and flushes: what a crash may lose. Also closed
+    /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say.
+    pub flush_period_s: f64,
+}
+
+impl Default for LogOptions {
+    fn default() -> Self {
+        Self {
+            compression: LogCompression::None,
+            tf_hz: 30.0,
+            flush_period_s: 1.0,
+        }
+    }
+}
+
+/// A channel and its message sequence counter.
+#[derive(Clone, Copy)]
+struct Channel {
+    id: u16,
+    sequence: u32,
+}
+
+impl Channel {
+    fn header(&mut self, ns: u64) -> MessageHeader {
+        self.sequence = self.sequence.wrapping_add(1);
+        MessageHeader {
+            channel_id: self.id,
+            sequence: self.sequence,
+            log_time: ns,
+            publish_time: ns,
+        }
+    }
+}
+
+struct Channels {
+    reference: Channel,
+    actors: Channel,
+    camera: Channel,
+    estimate: Channel,
+    measurement: Channel,
+    command: Channel,
+    framing: Channel,
+    events: Channel,
+    servo_tick: Channel,
+    tf: Channel,
+    stage: Channel,
+    drone: Channel,
+    actor_scene: Channel,
+    calibration: Channel,
+}
+
+/// Writes a flight log, tick by tick (see the `log` module doc).
+///
+/// ```no_run
+/// # use dronecine_runtime::log::{FlightLogWriter, LogScene};
+/// # fn demo(header: &dronecine_runtime::record::FlightHeader, scene: &LogScene,
+/// #         ticks: &[dronecine_runtime::record::TickRecord]) -> std::io::Result<()> {
+/// let mut log = FlightLogWriter::create("flights/orbit.mcap".as_ref(), header, scene)?;
+/// for tick in ticks {
+///     log.write_tick(tick)?; // on disk within a second of flight time
+/// }
+/// log.finish()?; // the summary and the closing magic
+/// # Ok(()) }
+/// ```
+pub struct FlightLogWriter {
+    /// `None` once finished.
+    writer: Option<Writer<BufWriter<File>>>,
+    path: PathBuf,
+    channels: Channels,
+    options: LogOptions,
+    frames: Frames,
+    /// `{"name":"Ann","position_m":` per actor (`/actors`).
+    actor_prefixes: Vec<Vec<u8>>,
+    /// `,"name":"Ann","screen":` per actor (`/framing`).
+    framing_names: Vec<Vec<u8>>,
+    /// Quoted frame names of the reference transform.
+    world_frame: Vec<u8>,
+    reference_frame: Vec<u8>,
+    actor_names: Vec<String>,
+    /// Heights last published on `/scene/actors`.
+    heights_m: Vec<f64>,
+    /// The reused message buffer and float texts.
+    text: Text,
+    next_tf_s: f64,
+    next_flush_s: f64,
+    ticks_since_flush: u64,
+    flush_every_ticks: u64,
+    /// Where `/tf` puts the drone on ticks without an estimate.
+    last_estimate: Option<([f64; 3], f64)>,
+}
+
+fn mcap_err(path: &Path, e: McapError) -> io::Error {
+    match e {
+        McapError::Io(e) => annotate(path, e),
+        other => io::Error::other(format!("cannot write {}: {other}", path.display())),
+    }
+}
+
+fn annotate(path: &Path, e: io::Error) -> io::Error {
+    io::Error::new(e.kind(), format!("cannot write {}: {e}", path.display()))
+}
+
+impl FlightLogWriter {
+    /// Creates (truncating) the log at `path` and writes the header, the schemas and
+    /// channels, the `dronecine.flight` metadata, the script attachment and the static scene,
+    /// then flushes. The parent directory must exist (an error names the path otherwise).
+    pub fn create(
+        path: &Path,
+        header: &FlightHeader,
+        scene: &LogScene,
+    ) -> io::Result<FlightLogWriter> {
+        Self::create_with(path, header, scene, LogOptions::default())
+    }
+
+    pub fn create_with(
+        path: &Path,
+        header: &FlightHeader,
+        scene: &LogScene,
+        options: LogOptions,
+    ) -> io::Result<FlightLogWriter> {
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(path)
+            .map_err(|e| annotate(path, e))?;
+        let err = |e| mcap_err(path, e);
+        let compression = match options.compression {
+            LogCompression::None => None,
+            LogCompression::Lz4 => Some(mcap::Compression::Lz4),
+        };
+        let mut writer = WriteOptions::new()
+            .compression(compression)
+            .profile("dronecine.flight")
+            .library(format!("dronecine-runtime {}", env!("CARGO_PKG_VERSION")))
+            // Chunks are built in memory and written whole: the file never holds a chunk
+            // whose header is a placeholder.
+            .disable_seeking(true)
+            // Closed by the flush schedule only.
+            .chunk_size(None)
+            .compression_threads(0)
+            // A crash-cut log has no data-end record to hold it; the chunks' CRCs suffice.
+            .calculate_data_section_crc(false)
+            .emit_message_indexes(false)
+            .create(BufWriter::with_capacity(1 << 16, file))
+            .map_err(err)?;
+
+        let no_meta = BTreeMap::new();
+        let mut channel = |schema_name: &str, schema: String, topic: &str| {
+            let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes())?;
+            let id = writer.add_channel(schema_id, topic, "json", &no_meta)?;
+            Ok::<_, McapError>(Channel { id, sequence: 0 })
+        };
+        let scene_schema = foxglove::scene_update_schema();
+        let channels = Channels {
+            reference: channel(REFERENCE_SCHEMA, reference_schema(), topic::REFERENCE)
+                .map_err(err)?,
+            actors: channel(ACTORS_SCHEMA, actors_schema(), topic::ACTORS).map_err(err)?,
+            camera: channel(CAMERA_SCHEMA, camera_schema(), topic::CAMERA).map_err(err)?,
+            estimate: channel(schema::ESTIMATE, schema::estimate(), topic::ESTIMATE)
+                .map_err(err)?,
+            measurement: channel(
+                schema::MEASUREMENT,
+                schema::measurement(),
+                topic::MEASUREMENT,
+            )
+            .map_err(err)?,
+            command: channel(schema::COMMAND, schema::command(), topic::COMMAND).map_err(err)?,
+            framing: channel(schema::FRAMING, schema::framing(), topic::FRAMING).map_err(err)?,
+            events: channel(schema::EVENT, schema::event(), topic::EVENTS).map_err(err)?,
+            servo_tick: channel(schema::SERVO_TICK, schema::servo_tick(), topic::SERVO_TICK)
+                .map_err(err)?,
+            tf: channel(
+                foxglove::FRAME_TRANSFORMS,
+                foxglove::frame_transforms_schema(),
+                topic::TF,
+            )
+            .map_err(err)?,
+            stage: channel(
+                foxglove::SCENE_UPDATE,
+                scene_schema.clone(),
+                topic::SCENE_STAGE,
+            )
+            .map_err(err)?,
+            drone: channel(
+                foxglove::SCENE_UPDATE,
+                scene_schema.clone(),
+                topic::SCENE_DRONE,
+            )
+            .map_err(err)?,
+            actor_scene: channel(foxglove::SCENE_UPDATE, scene_schema, topic::SCENE_ACTORS)
+                .map_err(err)?,
+            calibration: channel(
+                foxglove::CAMERA_CALIBRATION,
+                foxglove::camera_calibration_schema(),
+                topic::CAMERA_CALIBRATION,
+            )
+            .map_err(err)?,
+        };
+
+        writer
+            .write_metadata(&Metadata {
+                name: HEADER_METADATA.to_string(),
+                metadata: header_metadata(header)
+                    .map_err(|e| annotate(path, io::Error::other(e)))?,
+            })
+            .map_err(err)?;
+        writer
+            .attach(&Attachment {
+                log_time: 0,
+                create_time: 0,
+                name: header.script_name.clone(),
+                media_type: "text/plain".to_string(),
+                data: header.script_text.as_bytes().into(),
+            })
+            .map_err(err)?;
+
+        let quote = |s: &str| {
+            let mut v = Vec::new();
+            json::string(&mut v, s);
+            v
+        };
+        let actor_prefixes = scene
+            .actor_names
+            .iter()
+            .map(|name| {
+                let mut p = b"{\"name\":".to_vec();
+                json::string(&mut p, name);
+                p.extend_from_slice(b",\"position_m\":");
+                p
+            })
+            .collect();
+        let framing_names = scene
+            .actor_names
+            .iter()
+            .map(|name| {
+                let mut p = b",\"name\":".to_vec();
+                json::string(&mut p, name);
+                p.extend_from_slice(b",\"screen\":");
+                p
+            })
+            .collect();
+        let rate_hz = if header.rate_hz.is_finite() && header.rate_hz > 0.0 {
+            header.rate_hz
+        } else {
+            100.0
+        };
+        let flush_every_ticks = (rate_hz * options.flush_period_s).floor().max(1.0) as u64;
+        let mut log = FlightLogWriter {
+            writer: Some(writer),
+            path: path.to_path_buf(),
+            channels,
+            options,
+            frames: Frames::new(scene.actor_names),
+            actor_prefixes,
+            framing_names,
+            world_frame: quote(foxglove::WORLD),
+            reference_frame: quote("reference"),
+            actor_names: scene.actor_names.to_vec(),
+            heights_m: Vec::new(),
+            text: Text::new(),
+            next_tf_s: f64::NEG_INFINITY,
+            next_flush_s: options.flush_period_s,
+            ticks_since_flush: 0,
+            flush_every_ticks,
+            last_estimate: None,
+        };
+        log.write_static(&scene.lens, &scene.stage, scene.actor_heights_m)?;
+        log.flush()?;
+        Ok(log)
+    }
+
+    fn put(
+        &mut self,
+        channel: fn(&mut Channels) -> &mut Channel,
+        ns: u64,
+        data: &[u8],
+    ) -> io::Result<()> {
+        let header = channel(&mut self.channels).header(ns);
+        let path = &self.path;
+        let writer = self.writer.as_mut().ok_or_else(|| {
+            io::Error::other(format!("cannot write {}: log finished", path.display()))
+        })?;
+        writer
+            .write_to_known_channel(&header, data)
+            .map_err(|e| mcap_err(path, e))
+    }
+
+    /// Puts the text buffer on a channel.
+    fn put_text(&mut self, channel: fn(&mut Channels) -> &mut Channel, ns: u64) -> io::Result<()> {
+        let header = channel(&mut self.channels).header(ns);
+        let path = &self.path;
+        let writer = self.writer.as_mut().ok_or_else(|| {
+            io::Error::other(format!("cannot write {}: log finished", path.display()))
+        })?;
+        writer
+            .write_to_known_channel(&header, &self.text.buf)
+            .map_err(|e| mcap_err(path, e))
+    }
+
+    /// The topics published once, at time 0.
+    fn write_static(
+        &mut self,
+        lens: &Lens,
+        stage: &dronecine_grammar::script::Stage,
+        heights_m: &[f64],
+    ) -> io::Result<()> {
+        let mut camera = b"{\"fov_x_rad\":".to_vec();
+        json::f64(&mut camera, lens.fov_x_rad);
+        camera.extend_from_slice(b",\"aspect\":");
+        json::f64(&mut camera, lens.aspect);
+        camera.push(b'}');
+        self.put(|c| &mut c.camera, 0, &camera)?;
+        self.put(|c| &mut c.stage, 0, &foxglove::stage_scene(0, stage))?;
+        self.put(|c| &mut c.drone, 0, &foxglove::drone_scene(0))?;
+        self.put(
+            |c| &mut c.calibration,
+            0,
+            &foxglove::camera_calibration(0, lens),
+        )?;
+        let mut heights = heights_m.to_vec();
+        heights.resize(self.actor_names.len(), 1.7);
+        self.write_actor_scene(0, heights)
+    }
+
+    fn write_actor_scene(&mut self, ns: u64, heights_m: Vec<f64>) -> io::Result<()> {
+        let scene = foxglove::actors_scene(ns, &self.actor_names, &heights_m);
+        self.heights_m = heights_m;
+        self.put(|c| &mut c.actor_scene, ns, &scene)
+    }
+
+    /// Closes the current chunk and flushes the file to the OS.
+    fn flush(&mut self) -> io::Result<()> {
+        let path = &self.path;
+        let writer = self.writer.as_mut().ok_or_else(|| {
+            io::Error::other(format!("cannot write {}: log finished", path.display()))
+        })?;
+        writer.flush().map_err(|e| mcap_err(path, e))?;
+        self.ticks_since_flush = 0;
+        Ok(())
+    }
+
+    /// Writes one tick on every per-tick topic, `/tf` when due, and closes the chunk when a
+    /// flush is due. `tick.actors` and `tick.framing` index the scene's actors.
+    pub fn write_tick(&mut self, tick: &TickRecord) -> io::Result<()> {
+        let t_s = tick.input.t_s;
+        let ns = ns_from_s(t_s);
+        let output = tick.output.as_ref().ok();
+        let text = &mut self.text;
+
+        // /reference, exactly as compile; its fields are also /servo/tick's reference.
+        text.buf.clear();
+        write_reference(&mut text.buf, tick.sample);
+        text.keep_reference_span(tick.sample, &tick.input.reference);
+        self.put_text(|c| &mut c.reference, ns)?;
+
+        self.text.actors(t_s, &self.actor_prefixes, tick.actors);
+        self.put_text(|c| &mut c.actors, ns)?;
+
+        if let Some(out) = output {
+            self.text.estimate(t_s, &out.estimate);
+            self.put_text(|c| &mut c.estimate, ns)?;
+            self.last_estimate = Some((out.estimate.position_m, out.estimate.heading_rad));
+        }
+
+        if let Some(frame) = tick.mocap {
+            self.text.measurement(frame);
+            self.put_text(|c| &mut c.measurement, ns)?;
+        }
+
+        self.text.command(t_s, output, &tick.command_sent);
+        self.put_text(|c| &mut c.command, ns)?;
+
+        if !tick.framing.is_empty() {
+            self.text
+                .framing(t_s, tick.shot, &self.framing_names, tick.framing);
+            self.put_text(|c| &mut c.framing, ns)?;
+        }
+
+        self.text.servo_tick(tick);
+        self.put_text(|c| &mut c.servo_tick, ns)?;
+
+        if t_s >= self.next_tf_s || !t_s.is_finite() {
+            self.next_tf_s = advance(self.next_tf_s, t_s, self.options.tf_hz);
+            self.write_tf(ns, tick)?;
+        }
+
+        self.ticks_since_flush += 1;
+        if (t_s.is_finite() && t_s >= self.next_flush_s)
+            || self.ticks_since_flush >= self.flush_every_ticks
+        {
+            if t_s.is_finite() {
+                // The next flush at most one period after this one.
+                let period = self.options.flush_period_s;
+                self.next_flush_s = (self.next_flush_s + period).clamp(t_s, t_s + period);
+            }
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    /// `/tf`: the drone at its estimate, the camera, the actors and the reference; and
+    /// `/scene/actors` again when an actor's height changed.
+    fn write_tf(&mut self, ns: u64, tick: &TickRecord) -> io::Result<()> {
+        if tick.actors.len() == self.heights_m.len()
+            && tick
+                .actors
+                .iter()
+                .zip(&self.heights_m)
+                .any(|(a, &h)| (a.height_m - h).abs() > 1e-3)
+        {
+            let heights = tick.actors.iter().map(|a| a.height_m).collect();
+            self.write_actor_scene(ns, heights)?;
+        }
+        let s = tick.sample;
+        let (position_m, heading_rad) = self.last_estimate.unwrap_or((s.position_m, s.heading_rad));
+        let buf = &mut self.text.buf;
+        buf.clear();
+        self.frames.message(
+            buf,
+            ns,
+            position_m,
+            heading_rad,
+            s.camera_pitch_rad,
+            tick.actors.iter().map(|a| (a.position_m, a.facing_rad)),
+        );
+        // Append world→reference inside the transforms array (`…]}` → `…,{…}]}`).
+        buf.truncate(buf.len() - 2);
+        buf.push(b',');
+        let mut stamp = [0u8; 48];
+        let stamp = stamp_json(&mut stamp, ns);
+        foxglove::transform(
+            buf,
+            stamp,
+            &self.world_frame,
+            &self.reference_frame,
+            s.position_m,
+            foxglove::yaw(s.heading_rad),
+        );
+        buf.extend_from_slice(b"]}");
+        self.put_text(|c| &mut c.tf, ns)
+    }
+
+    /// Writes an event on `/events` (its time exact, as on `/servo/tick`).
+    pub fn write_event(&mut self, event: &Event) -> io::Result<()> {
+        let text = &mut self.text;
+        text.buf.clear();
+        text.raw(b"{\"t_s\":");
+        text.exact(event.t_s);
+        text.raw(b",\"level\":");
+        json::string(&mut text.buf, &event.level);
+        text.raw(b",\"kind\":");
+        json::string(&mut text.buf, &event.kind);
+        text.raw(b",\"message\":");
+        json::string(&mut text.buf, &event.message);
+        text.raw(b"}");
+        self.put_text(|c| &mut c.events, ns_from_s(event.t_s))
+    }
+
+    /// Closes the last chunk and writes the summary and the closing magic.
+    pub fn finish(mut self) -> io::Result<()> {
+        let path = self.path.clone();
+        let mut writer = self.writer.take().ok_or_else(|| {
+            io::Error::other(format!("cannot write {}: log finished", path.display()))
+        })?;
+        writer.finish().map_err(|e| mcap_err(&path, e))?;
+        writer
+            .into_inner()
+            .into_inner()
+            .map_err(|e| annotate(&path, e.into_error()))?
+            .sync_all()
+            .map_err(|e| annotate(&path, e))
+    }
+
+    /// The log's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for FlightLogWriter {
+    fn drop(&mut self) {
+        // Dropped without `finish()` (an error path): close the last chunk and the summary
+        // so the file is whole; errors have nowhere to go.
+        if let Some(mut writer) = self.writer.take() {
+            let _ = writer.finish();
+            let _ = writer.into_inner().into_inner();
+        }
+    }
+}
+
+/// The metadata map: each field of the header under its name, its value the field's JSON.
+fn header_metadata(header: &FlightHeader) -> Result<BTreeMap<String, String>, String> {
+    let value = serde_json::to_value(header).map_err(|e| e.to_string())?;
+    let serde_json::Value::Object(fields) = value else {
+        return Err("the flight header is not a JSON object".into());
+    };
+    Ok(fields
+        .into_iter()
+        .map(|(k, v)| (k, v.to_string()))
+        .collect())
+}
+
+/// `{"sec":…,"nsec":…}` into a stack buffer.
+fn stamp_json(buf: &mut [u8; 48], ns: u64) -> &[u8] {
+    let mut n = 0;
+    let mut put = |bytes: &[u8]| {
+        buf[n..n + bytes.len()].copy_from_slice(bytes);
+        n += bytes.len();
+    };
+    let mut digits = itoa::Buffer::new();
+    put(b"{\"sec\":");
+    put(digits.format(ns / 1_000_000_000).as_bytes());
+    put(b",\"nsec\":");
+    put(digits.format(ns % 1_000_000_000).as_bytes());
+    put(b"}");
+    &buf[..n]
+}

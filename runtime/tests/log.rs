@@ -1,0 +1,696 @@
+//! The flight log: what is written is read back bit for bit, the file is a standard MCAP file
+//! whose `/reference`, `/actors` and `/camera` are compile's, a crash loses at most the last
+//! second, and no damaged or foreign file makes the reader panic.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+use std::sync::OnceLock;
+
+use dronecine_compiler::camera::Lens;
+use dronecine_compiler::output::{McapWriter, RunInfo};
+use dronecine_grammar::script::Stage;
+use dronecine_runtime::backend::{BodyPose, FlightState, MocapFrame};
+use dronecine_runtime::control::{
+    Estimate, Measurement, Reference, TickFault, TickInput, TickOutput,
+};
+use dronecine_runtime::frames::{ActorPose, Command, Sample};
+use dronecine_runtime::log::{FlightLog, FlightLogWriter, LogError, LogScene, LoggedTick};
+use dronecine_runtime::record::{
+    ControllerSetup, Event, FlightHeader, FramingRecord, Phase, TickRecord,
+};
+use proptest::prelude::*;
+
+fn names() -> Vec<String> {
+    vec!["Ann".to_string(), "Bo \"the\" Bear".to_string()]
+}
+
+const HEIGHTS: [f64; 2] = [1.7, 1.85];
+
+fn stage() -> Stage {
+    Stage {
+        size_m: [8.0, 6.0, 3.0],
+    }
+}
+
+fn lens() -> Lens {
+    Lens {
+        fov_x_rad: 84f64.to_radians(),
+        aspect: 16.0 / 9.0,
+    }
+}
+
+fn header() -> FlightHeader {
+    FlightHeader {
+        script_name: "orbit.psl".into(),
+        script_text: "stage 8m x 6m x 3m\ndrone ardrone2\n\"quoted\" — ünïcode\n".into(),
+        profile_name: "ardrone2".into(),
+        profile_toml: "[drone]\nname = \"ardrone2\"\n".into(),
+        controller: ControllerSetup {
+            kind: "lqg".into(),
+            paper_prefilter: false,
+            per_tick_solve: true,
+        },
+        backend: "sim".into(),
+        seed: Some(u64::MAX),
+        rate_hz: 100.0,
+        actor_names: names(),
+        dronecine_version: "0.1.0".into(),
+    }
+}
+
+/// Everything a `TickRecord` borrows, owned.
+#[derive(Clone, Debug)]
+struct Tick {
+    phase: Phase,
+    shot: Option<usize>,
+    sample: Sample,
+    input: TickInput,
+    output: Result<TickOutput, TickFault>,
+    command_sent: Command,
+    mocap: Option<MocapFrame>,
+    actors: Vec<ActorPose>,
+    framing: Vec<FramingRecord>,
+}
+
+impl Tick {
+    fn record(&self) -> TickRecord<'_> {
+        TickRecord {
+            phase: self.phase,
+            shot: self.shot,
+            sample: &self.sample,
+            input: self.input,
+            output: self.output,
+            command_sent: self.command_sent,
+            mocap: self.mocap.as_ref(),
+            actors: &self.actors,
+            framing: &self.framing,
+            drone_state: FlightState::Flying,
+        }
+    }
+
+    fn logged(&self) -> LoggedTick {
+        LoggedTick {
+            phase: self.phase,
+            shot: self.shot,
+            input: self.input,
+            output: self.output,
+            command_sent: self.command_sent,
+        }
+    }
+}
+
+/// A plausible tick at `t_s`, every number derived from `x` (so a test can vary them).
+fn tick(k: usize, t_s: f64, x: [f64; 8]) -> Tick {
+    let sample = Sample {
+        t_s,
+        position_m: [x[0], x[1], 1.5 + x[2]],
+        velocity_mps: [x[3], x[4], x[5]],
+        acceleration_mps2: [x[6], x[7], x[0] * x[1]],
+        heading_rad: x[2],
+        heading_rate_radps: x[3],
+        camera_pitch_rad: -0.2,
+        shot: k % 3,
+    };
+    let actors: Vec<ActorPose> = (0..2)
+        .map(|i| ActorPose {
+            position_m: [x[i] + i as f64, x[i + 1], 0.0],
+            velocity_mps: [x[4], x[5], 0.0],
+            facing_rad: x[6],
+            facing_rate_radps: 0.0,
+            height_m: HEIGHTS[i],
+        })
+        .collect();
+    let measurement = (k % 7 != 3).then_some(Measurement {
+        position_m: [x[1], x[0], x[7]],
+        heading_rad: x[5],
+    });
+    let output = if k % 11 == 5 {
+        Err(if k % 2 == 0 {
+            TickFault::NotFinite
+        } else {
+            TickFault::TimeNotIncreasing
+        })
+    } else {
+        Ok(TickOutput {
+            command: Command {
+                roll_rad: x[0],
+                pitch_rad: x[1],
+                yaw_rate_radps: x[2],
+                vz_mps: x[3],
+            },
+            estimate: Estimate {
+                position_m: [x[4], x[5], x[6]],
+                velocity_mps: [x[7], x[0], x[1]],
+                heading_rad: x[2],
+            },
+            saturated: k % 5 == 0,
+        })
+    };
+    let command_sent = match &output {
+        Ok(o) => o.command,
+        Err(_) => Command::HOVER,
+    };
+    Tick {
+        phase: [
+            Phase::TakeOff,
+            Phase::Approach,
+            Phase::Shots,
+            Phase::Landing,
+        ][k % 4],
+        shot: (k % 4 == 2).then_some(k % 3),
+        input: TickInput {
+            t_s,
+            dt_s: 0.01,
+            measurement,
+            reference: Reference::from(&sample),
+        },
+        sample,
+        output,
+        command_sent,
+        mocap: measurement.map(|m| MocapFrame {
+            t_s: t_s - 0.002,
+            frame: k as u64,
+            drone: Some(BodyPose {
+                position_m: m.position_m,
+                heading_rad: m.heading_rad,
+            }),
+            actors: vec![
+                Some(BodyPose {
+                    position_m: actors[0].position_m,
+                    heading_rad: actors[0].facing_rad,
+                }),
+                None,
+            ],
+        }),
+        framing: vec![
+            FramingRecord {
+                actor: 0,
+                screen: Some([x[0] * 0.1, x[1] * 0.1]),
+                requested: Some([-0.33, 0.1]),
+            },
+            FramingRecord {
+                actor: 1,
+                screen: None,
+                requested: None,
+            },
+        ],
+        actors,
+    }
+}
+
+/// Smooth, ordinary values for tick `k` of a flight at 100 Hz.
+fn flight_tick(k: usize) -> Tick {
+    let t = k as f64 * 0.01;
+    let x = [
+        t.sin(),
+        t.cos(),
+        (0.3 * t).sin(),
+        0.1 + 0.2,
+        -0.0,
+        t * 1e-3,
+        -t,
+        (t * 7.0).sin() * 1e-9,
+    ];
+    tick(k, t, x)
+}
+
+fn scene_of(names: &[String]) -> LogScene<'_> {
+    LogScene {
+        stage: stage(),
+        lens: lens(),
+        actor_names: names,
+        actor_heights_m: &HEIGHTS,
+    }
+}
+
+fn write_log(path: &Path, ticks: &[Tick], events: &[Event]) {
+    let names = names();
+    let mut w = FlightLogWriter::create(path, &header(), &scene_of(&names)).unwrap();
+    for (i, t) in ticks.iter().enumerate() {
+        w.write_tick(&t.record()).unwrap();
+        if let Some(e) = events.get(i) {
+            w.write_event(e).unwrap();
+        }
+    }
+    for e in events.iter().skip(ticks.len()) {
+        w.write_event(e).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+fn bits(x: f64) -> u64 {
+    // All NaNs are one NaN in the log.
+    if x.is_nan() {
+        f64::NAN.to_bits()
+    } else {
+        x.to_bits()
+    }
+}
+
+/// Every float of a logged tick, by bits, in a fixed order (plus the discrete fields).
+fn tick_bits(t: &LoggedTick) -> Vec<u64> {
+    let i = &t.input;
+    let r = &i.reference;
+    let mut v = vec![bits(i.t_s), bits(i.dt_s)];
+    match &i.measurement {
+        Some(m) => {
+            v.push(1);
+            v.extend(m.position_m.iter().map(|&x| bits(x)));
+            v.push(bits(m.heading_rad));
+        }
+        None => v.push(0),
+    }
+    v.extend(r.position_m.iter().map(|&x| bits(x)));
+    v.extend(r.velocity_mps.iter().map(|&x| bits(x)));
+    v.extend(r.acceleration_mps2.iter().map(|&x| bits(x)));
+    v.push(bits(r.heading_rad));
+    v.push(bits(r.heading_rate_radps));
+    let cmd = |c: &Command| {
+        [c.roll_rad, c.pitch_rad, c.yaw_rate_radps, c.vz_mps]
+            .map(bits)
+            .to_vec()
+    };
+    match &t.output {
+        Ok(o) => {
+            v.push(1);
+            v.extend(cmd(&o.command));
+            v.extend(o.estimate.position_m.iter().map(|&x| bits(x)));
+            v.extend(o.estimate.velocity_mps.iter().map(|&x| bits(x)));
+            v.push(bits(o.estimate.heading_rad));
+            v.push(o.saturated as u64);
+        }
+        Err(TickFault::NotFinite) => v.push(2),
+        Err(TickFault::TimeNotIncreasing) => v.push(3),
+    }
+    v.extend(cmd(&t.command_sent));
+    v.push(t.phase as u64);
+    v.push(t.shot.map_or(u64::MAX, |s| s as u64));
+    v
+}
+
+fn event_bits(e: &Event) -> (u64, String, String, String) {
+    (
+        bits(e.t_s),
+        e.level.clone(),
+        e.kind.clone(),
+        e.message.clone(),
+    )
+}
+
+fn events() -> Vec<Event> {
+    vec![
+        Event {
+            t_s: 0.0,
+            level: "info".into(),
+            kind: "take_off".into(),
+            message: "taking off".into(),
+        },
+        Event {
+            t_s: 0.1 + 0.2,
+            level: "warning".into(),
+            kind: "deadline_missed".into(),
+            message: "tick 30 late by 2.5 ms \"quoted\"\n\u{1F3AC}".into(),
+        },
+        Event {
+            t_s: f64::NAN,
+            level: "error".into(),
+            kind: "fault".into(),
+            message: String::new(),
+        },
+    ]
+}
+
+/// Any f64: random bits (so subnormals and huge values), plus the special values.
+fn any_f64() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        6 => any::<u64>().prop_map(f64::from_bits),
+        1 => prop::sample::select(vec![
+            0.0,
+            -0.0,
+            0.1 + 0.2,
+            5e-324,
+            f64::from_bits(0x800F_FFFF_FFFF_FFFF), // the largest negative subnormal
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ]),
+        3 => -1e3..1e3f64,
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Inputs, outputs and commands come back bit for bit, whatever their values (NaN is one
+    /// NaN, its payload not kept).
+    #[test]
+    fn ticks_round_trip_bit_for_bit(
+        values in prop::collection::vec((any_f64(), prop::array::uniform8(any_f64())), 1..40)
+    ) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("flight.mcap");
+        let ticks: Vec<Tick> = values
+            .iter()
+            .enumerate()
+            .map(|(k, (t, x))| {
+                let mut tick = tick(k, *t, *x);
+                // A command sent that differs from the controller's, with its own values.
+                if k % 3 == 1 {
+                    tick.command_sent = Command {
+                        roll_rad: x[7],
+                        pitch_rad: x[6],
+                        yaw_rate_radps: -x[5],
+                        vz_mps: x[4],
+                    };
+                }
+                tick.input.dt_s = x[3];
+                // A reference given to the controller that is not the sample's.
+                if k % 5 == 4 {
+                    tick.input.reference.heading_rad = x[1];
+                    tick.input.reference.velocity_mps[2] = *t;
+                }
+                tick
+            })
+            .collect();
+        let events = events();
+        write_log(&path, &ticks, &events);
+        let log = FlightLog::open(&path).unwrap();
+        prop_assert!(!log.truncated);
+        prop_assert_eq!(log.ticks.len(), ticks.len());
+        for (got, want) in log.ticks.iter().zip(&ticks) {
+            prop_assert_eq!(tick_bits(got), tick_bits(&want.logged()));
+        }
+        let got: Vec<_> = log.events.iter().map(event_bits).collect();
+        let want: Vec<_> = events.iter().map(event_bits).collect();
+        prop_assert_eq!(got, want);
+    }
+}
+
+#[test]
+fn a_finished_log_reads_back_whole_with_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flight.mcap");
+    let ticks: Vec<Tick> = (0..500).map(flight_tick).collect();
+    let events = events();
+    write_log(&path, &ticks, &events);
+    let log = FlightLog::open(&path).unwrap();
+    assert!(!log.truncated, "{:?}", log.damage);
+    assert_eq!(log.header, header());
+    let want: Vec<LoggedTick> = ticks.iter().map(Tick::logged).collect();
+    assert_eq!(log.ticks, want);
+    // Plain equality for the events but the NaN time.
+    assert_eq!(log.events.len(), 3);
+    assert_eq!(log.events[..2], events[..2]);
+    assert!(log.events[2].t_s.is_nan());
+    // -0.0 survives (PartialEq would not tell).
+    assert!(log.ticks[0].input.reference.velocity_mps[1].is_sign_negative());
+    assert_eq!(log.ticks[1].input.reference.velocity_mps[0], 0.1 + 0.2);
+}
+
+/// Every message of one topic, as (log_time, bytes), through the mcap crate's standard reader.
+fn messages(bytes: &[u8]) -> BTreeMap<String, Vec<(u64, Vec<u8>)>> {
+    let mut out: BTreeMap<String, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
+    for m in mcap::MessageStream::new(bytes).unwrap() {
+        let m = m.unwrap();
+        out.entry(m.channel.topic.clone())
+            .or_default()
+            .push((m.log_time, m.data.into_owned()));
+    }
+    out
+}
+
+#[test]
+fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flight.mcap");
+    let ticks: Vec<Tick> = (0..300).map(flight_tick).collect();
+    write_log(&path, &ticks, &events());
+    let bytes = std::fs::read(&path).unwrap();
+
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let topics: BTreeSet<&str> = summary
+        .channels
+        .values()
+        .map(|c| c.topic.as_str())
+        .collect();
+    let expected: BTreeSet<&str> = [
+        "/reference",
+        "/actors",
+        "/camera",
+        "/estimate",
+        "/measurement",
+        "/command",
+        "/framing",
+        "/events",
+        "/servo/tick",
+        "/tf",
+        "/scene/stage",
+        "/scene/drone",
+        "/scene/actors",
+        "/camera_calibration",
+    ]
+    .into_iter()
+    .collect();
+    assert_eq!(topics, expected);
+    for c in summary.channels.values() {
+        let schema = c
+            .schema
+            .as_ref()
+            .unwrap_or_else(|| panic!("{} has no schema", c.topic));
+        assert_eq!(schema.encoding, "jsonschema", "{}", c.topic);
+        assert_eq!(c.message_encoding, "json", "{}", c.topic);
+        let s: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+        assert_eq!(s["type"], "object", "{}", c.topic);
+    }
+
+    let by_topic = messages(&bytes);
+    for (topic, msgs) in &by_topic {
+        for (_, data) in msgs {
+            let v: serde_json::Value = serde_json::from_slice(data)
+                .unwrap_or_else(|e| panic!("{topic}: {e}: {}", String::from_utf8_lossy(data)));
+            assert!(v.is_object(), "{topic}");
+        }
+    }
+    let n = ticks.len();
+    assert_eq!(by_topic["/reference"].len(), n);
+    assert_eq!(by_topic["/servo/tick"].len(), n);
+    assert_eq!(by_topic["/command"].len(), n);
+    assert_eq!(by_topic["/events"].len(), 3);
+    // 30 Hz over 3 s.
+    let tf = by_topic["/tf"].len();
+    assert!((89..=91).contains(&tf), "{tf} /tf messages");
+    // The reference frame rides along the drone, camera and actors.
+    let v: serde_json::Value = serde_json::from_slice(&by_topic["/tf"][5].1).unwrap();
+    let children: Vec<&str> = v["transforms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["child_frame_id"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        children,
+        [
+            "drone",
+            "camera",
+            "actor/Ann",
+            "actor/Bo \"the\" Bear",
+            "reference"
+        ]
+    );
+    // The failsafe flag: set exactly on the faulted ticks (their sent command is HOVER).
+    for ((_, data), t) in by_topic["/command"].iter().zip(&ticks) {
+        let v: serde_json::Value = serde_json::from_slice(data).unwrap();
+        assert_eq!(v["failsafe"], t.output.is_err());
+    }
+    // The metadata record: every header field, as JSON.
+    let index = summary
+        .metadata_indexes
+        .iter()
+        .find(|m| m.name == "dronecine.flight")
+        .unwrap();
+    let meta = mcap::read::metadata(&bytes, index).unwrap();
+    assert_eq!(meta.metadata["script_name"], "\"orbit.psl\"");
+    assert_eq!(meta.metadata["seed"], u64::MAX.to_string());
+    let attachment = &summary.attachment_indexes[0];
+    assert_eq!(attachment.name, "orbit.psl");
+    let a = mcap::read::attachment(&bytes, attachment).unwrap();
+    assert_eq!(a.data.as_ref(), header().script_text.as_bytes());
+}
+
+#[test]
+fn reference_actors_and_camera_are_exactly_compiles() {
+    let dir = tempfile::tempdir().unwrap();
+    let flight = dir.path().join("flight.mcap");
+    let compiled = dir.path().join("compiled.mcap");
+    let ticks: Vec<Tick> = (0..120).map(flight_tick).collect();
+    write_log(&flight, &ticks, &[]);
+    let names = names();
+    let h = header();
+    let info = RunInfo {
+        script_name: &h.script_name,
+        script_text: &h.script_text,
+        profile_name: &h.profile_name,
+        rate_hz: 100.0,
+        lens: lens(),
+        stage: stage(),
+        actor_names: &names,
+    };
+    let mut w = McapWriter::create(&compiled, &info).unwrap();
+    for t in &ticks {
+        w.write(&t.sample, &t.actors).unwrap();
+    }
+    w.finish().unwrap();
+
+    let flown = messages(&std::fs::read(&flight).unwrap());
+    let compiled = messages(&std::fs::read(&compiled).unwrap());
+    for topic in ["/reference", "/actors", "/camera", "/camera_calibration"] {
+        let a: Vec<&Vec<u8>> = flown[topic].iter().map(|(_, d)| d).collect();
+        let b: Vec<&Vec<u8>> = compiled[topic].iter().map(|(_, d)| d).collect();
+        assert_eq!(a, b, "{topic}");
+    }
+    // Same log times too (the static topics: compile's first sample is at t = 0).
+    assert_eq!(flown["/reference"], compiled["/reference"]);
+}
+
+#[test]
+fn a_crash_loses_at_most_the_last_second() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    for n in [1usize, 99, 100, 101, 737, 1000, 1234] {
+        let path = dir.path().join(format!("crash-{n}.mcap"));
+        let ticks: Vec<Tick> = (0..n).map(flight_tick).collect();
+        let mut w = FlightLogWriter::create(&path, &header(), &scene_of(&names)).unwrap();
+        for t in &ticks {
+            w.write_tick(&t.record()).unwrap();
+        }
+        w.write_event(&events()[0]).unwrap();
+        let crash_s = ticks[n - 1].input.t_s;
+        // The process dies: no finish, no drop, nothing flushed.
+        std::mem::forget(w);
+
+        let log = FlightLog::open(&path).unwrap();
+        assert!(log.truncated, "{n} ticks");
+        assert!(log.damage.is_some());
+        assert_eq!(log.header, header());
+        let recovered = log.ticks.len();
+        let must = ticks
+            .iter()
+            .filter(|t| t.input.t_s <= crash_s - 1.0)
+            .count();
+        assert!(
+            recovered >= must,
+            "{n} ticks, crash at {crash_s} s: {recovered} recovered, {must} expected"
+        );
+        let want: Vec<LoggedTick> = ticks[..recovered].iter().map(Tick::logged).collect();
+        assert_eq!(log.ticks, want, "a prefix of what was written");
+    }
+}
+
+fn reference_log() -> &'static [u8] {
+    static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
+    BYTES.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("flight.mcap");
+        let ticks: Vec<Tick> = (0..250).map(flight_tick).collect();
+        write_log(&path, &ticks, &events());
+        std::fs::read(&path).unwrap()
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// A log cut anywhere reads without panicking: an error before the header, else the ticks
+    /// written before the cut, flagged as truncated.
+    #[test]
+    fn a_log_cut_anywhere_never_panics_the_reader(cut in 0.0..1.0f64) {
+        let bytes = reference_log();
+        let at = ((bytes.len() as f64) * cut) as usize;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cut.mcap");
+        std::fs::write(&path, &bytes[..at]).unwrap();
+        let whole: Vec<LoggedTick> = (0..250).map(|k| flight_tick(k).logged()).collect();
+        match FlightLog::open(&path) {
+            Ok(log) => {
+                prop_assert!(log.truncated);
+                prop_assert_eq!(&log.ticks[..], &whole[..log.ticks.len()]);
+            }
+            Err(e) => {
+                prop_assert!(
+                    matches!(e, LogError::NotMcap { .. } | LogError::NoHeader { .. }),
+                    "{e}"
+                );
+                prop_assert!(e.to_string().contains("cut.mcap"));
+            }
+        }
+    }
+
+    /// Flipped bytes never panic the reader either.
+    #[test]
+    fn a_corrupted_log_never_panics_the_reader(at in 0.0..1.0f64, byte in any::<u8>()) {
+        let mut bytes = reference_log().to_vec();
+        let i = ((bytes.len() as f64) * at) as usize;
+        bytes[i] ^= byte | 1;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("corrupt.mcap");
+        std::fs::write(&path, &bytes).unwrap();
+        let _ = FlightLog::open(&path);
+    }
+}
+
+#[test]
+fn foreign_files_are_errors_that_name_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let garbage = dir.path().join("garbage.mcap");
+    std::fs::write(
+        &garbage,
+        b"this is not an MCAP file at all, just text\n".repeat(50),
+    )
+    .unwrap();
+    let e = FlightLog::open(&garbage).unwrap_err();
+    assert!(matches!(e, LogError::NotMcap { .. }), "{e:?}");
+    assert!(e.to_string().contains("garbage.mcap"), "{e}");
+
+    let empty = dir.path().join("empty.mcap");
+    std::fs::write(&empty, b"").unwrap();
+    assert!(FlightLog::open(&empty).is_err());
+
+    let missing = dir.path().join("missing.mcap");
+    let e = FlightLog::open(&missing).unwrap_err();
+    assert!(matches!(e, LogError::Io { .. }), "{e:?}");
+    assert!(e.to_string().contains("missing.mcap"), "{e}");
+
+    // A compiled reference is MCAP but not a flight log.
+    let compiled = dir.path().join("compiled.mcap");
+    let names = names();
+    let info = RunInfo {
+        script_name: "orbit.psl",
+        script_text: "",
+        profile_name: "ardrone2",
+        rate_hz: 100.0,
+        lens: lens(),
+        stage: stage(),
+        actor_names: &names,
+    };
+    let mut w = McapWriter::create(&compiled, &info).unwrap();
+    w.write(&flight_tick(0).sample, &flight_tick(0).actors)
+        .unwrap();
+    w.finish().unwrap();
+    let e = FlightLog::open(&compiled).unwrap_err();
+    assert!(matches!(e, LogError::NoHeader { .. }), "{e:?}");
+    assert!(e.to_string().contains("dronecine.flight"), "{e}");
+}
+
+#[test]
+fn a_missing_directory_is_an_error_naming_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flights").join("orbit-1.mcap");
+    let names = names();
+    let e = match FlightLogWriter::create(&path, &header(), &scene_of(&names)) {
+        Ok(_) => panic!("created a log in a missing directory"),
+        Err(e) => e,
+    };
+    assert!(e.to_string().contains("orbit-1.mcap"), "{e}");
+}
