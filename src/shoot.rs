@@ -1,0 +1,356 @@
+//! `dronecine shoot`: fly a script. Checks and compiles it first (a script the drone cannot
+//! fly is refused, as `compile` refuses it), then flies it on the embedded simulator with the
+//! chosen controller, logging the flight to MCAP, and prints the report.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use dronecine_compiler::compile::{self, Options};
+use dronecine_compiler::director::Director;
+use dronecine_grammar::diag;
+use dronecine_runtime::flight::{FlightSink, Observer, Progress};
+use dronecine_runtime::log::{FlightLogWriter, LogScene};
+use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
+use dronecine_runtime::report::FlightReport;
+use dronecine_runtime::session::{self, SimFlight};
+use dronecine_runtime::sim::{Effects, SimConfig};
+
+use crate::check;
+
+pub struct Args<'a> {
+    pub file: &'a Path,
+    pub log: Option<&'a Path>,
+    pub seed: u64,
+    pub controller: &'a str,
+    pub paper_prefilter: bool,
+    pub per_tick_solve: bool,
+    pub realtime: bool,
+    pub rate_hz: f64,
+    pub json: bool,
+    pub quiet: bool,
+    pub ideal: bool,
+    pub color: bool,
+}
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::FAILURE
+}
+
+pub fn run(a: &Args) -> ExitCode {
+    if !(a.rate_hz.is_finite() && (10.0..=1000.0).contains(&a.rate_hz)) {
+        return fail(format!(
+            "--rate {} is outside 10–1000 Hz; the servo runs at 100 Hz (the default)",
+            a.rate_hz
+        ));
+    }
+    let r = check::check_file(a.file);
+    if r.checked.has_errors() || r.checked.script.is_none() {
+        eprint!(
+            "{}",
+            diag::render(&r.name, &r.text, &r.checked.diagnostics, a.color, 100)
+        );
+        eprintln!("error: `{}` has errors; nothing was flown", r.name);
+        return ExitCode::FAILURE;
+    }
+    let script = r.checked.script.as_ref().expect("checked above");
+    let Some(scene) = &script.scene else {
+        let d = compile::no_scene(script);
+        eprint!("{}", diag::render(&r.name, &r.text, &[d], a.color, 100));
+        return ExitCode::FAILURE;
+    };
+    let base = crate::files::base_dir(a.file);
+    let profile = match crate::compile::load_profile(scene, &base, &r.name, &r.text, a.color) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+
+    // The compiler's verdict first: a script the drone cannot fly is not flown.
+    let opts = Options { rate_hz: a.rate_hz };
+    let compiled =
+        match compile::compile(script, &profile, &opts, |_, _| Ok::<(), std::io::Error>(())) {
+            Ok(c) => c,
+            Err(e) => return fail(e),
+        };
+    if compiled.has_errors() {
+        eprint!(
+            "{}",
+            diag::render(&r.name, &r.text, &compiled.diagnostics, a.color, 100)
+        );
+        eprintln!(
+            "error: `{}` cannot be flown by {}; nothing was flown (`dronecine compile --preview` \
+             shows why)",
+            r.name, profile.name
+        );
+        return ExitCode::FAILURE;
+    }
+
+    let setup = ControllerSetup {
+        kind: a.controller.to_string(),
+        paper_prefilter: a.paper_prefilter,
+        per_tick_solve: a.per_tick_solve,
+    };
+    let script_name = a
+        .file
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "flight".into());
+    let log_path = match a.log {
+        Some(p) => p.to_path_buf(),
+        None => default_log_path(&script_name),
+    };
+    if let Some(dir) = log_path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            return fail(format!("cannot create `{}`: {e}", dir.display()));
+        }
+    }
+    let actor_names: Vec<String> = scene.actors.iter().map(|x| x.name.clone()).collect();
+    let heights: Vec<f64> = scene.actors.iter().map(|x| x.height_m).collect();
+    let header = FlightHeader {
+        script_name: script_name.clone(),
+        script_text: r.text.clone(),
+        profile_name: profile.name.clone(),
+        profile_toml: profile.to_toml(),
+        profile: profile.clone(),
+        controller: setup.clone(),
+        backend: "sim".into(),
+        seed: Some(a.seed),
+        rate_hz: a.rate_hz,
+        actor_names: actor_names.clone(),
+        dronecine_version: env!("CARGO_PKG_VERSION").into(),
+    };
+    let lens = *Director::new(script, scene, &profile).lens();
+    let log_scene = LogScene {
+        stage: scene.stage,
+        lens,
+        actor_names: &actor_names,
+        actor_heights_m: &heights,
+    };
+    let mut log = match FlightLogWriter::create(&log_path, &header, &log_scene) {
+        Ok(w) => w,
+        Err(e) => return fail(e),
+    };
+    let mut sim = SimConfig::new(a.seed);
+    if a.ideal {
+        sim.effects = Effects::none();
+    }
+    let flight = SimFlight {
+        script,
+        source: &r.text,
+        scene,
+        profile: &profile,
+        rate_hz: a.rate_hz,
+        controller: setup,
+        sim,
+        realtime: a.realtime,
+    };
+    let mut display = Display::new(a.quiet);
+    let result = session::fly_simulated(&flight, &mut LogSink(&mut log), &mut display);
+    display.finish();
+    let finished = log.finish();
+    let report = match result {
+        Ok(report) => report,
+        Err(e) => {
+            eprintln!("flight log: {}", log_path.display());
+            return fail(e);
+        }
+    };
+    if let Err(e) = finished {
+        return fail(format!(
+            "the flight log `{}` is incomplete: {e}",
+            log_path.display()
+        ));
+    }
+    if a.json {
+        match serde_json::to_string_pretty(&report) {
+            Ok(s) => println!("{s}"),
+            Err(e) => return fail(e),
+        }
+    } else {
+        print!("{}", render_report(&report, &profile.name, a.controller));
+    }
+    eprintln!("flight log: {}", log_path.display());
+    if report.completed {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+/// `flights/<script>-<UTC timestamp>.mcap`.
+fn default_log_path(script: &str) -> PathBuf {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let (days, rem) = (secs / 86_400, secs % 86_400);
+    let (y, m, d) = civil_from_days(days as i64);
+    PathBuf::from("flights").join(format!(
+        "{script}-{y:04}{m:02}{d:02}-{:02}{:02}{:02}.mcap",
+        rem / 3600,
+        rem / 60 % 60,
+        rem % 60
+    ))
+}
+
+/// Days since 1970-01-01 → (year, month, day), proleptic Gregorian (Howard Hinnant's
+/// algorithm).
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + i64::from(m <= 2), m, d)
+}
+
+struct LogSink<'a>(&'a mut FlightLogWriter);
+
+impl FlightSink for LogSink<'_> {
+    fn tick(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        self.0.write_tick(record)
+    }
+    fn event(&mut self, event: &Event) -> std::io::Result<()> {
+        self.0.write_event(event)
+    }
+}
+
+/// The terminal progress line (only when stderr is a terminal), refreshed at most 10 times a
+/// second of wall time, and warnings and errors as they happen.
+struct Display {
+    bar: Option<indicatif::ProgressBar>,
+    quiet: bool,
+}
+
+impl Display {
+    fn new(quiet: bool) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let bar = indicatif::ProgressBar::new(1000);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{bar:30} {msg}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            bar.enable_steady_tick(Duration::from_millis(100));
+            bar
+        });
+        Display { bar, quiet }
+    }
+
+    fn finish(&mut self) {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+impl Observer for Display {
+    fn progress(&mut self, p: &Progress) {
+        let Some(bar) = &self.bar else {
+            return;
+        };
+        let fraction = if p.script_duration_s > 0.0 {
+            (p.script_t_s / p.script_duration_s).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        bar.set_position((fraction * 1000.0) as u64);
+        let phase = match (p.phase, p.shot) {
+            (Phase::TakeOff, _) => "taking off".to_string(),
+            (Phase::Approach, _) => "approach".to_string(),
+            (Phase::Shots, Some(i)) => format!("shot {}/{}", i + 1, p.shots),
+            (Phase::Shots, None) => "shots".to_string(),
+            (Phase::Landing, _) => "landing".to_string(),
+        };
+        let error = p
+            .position_error_m
+            .map_or("—".to_string(), |e| format!("{:.1} cm", e * 100.0));
+        bar.set_message(format!(
+            "{phase} · t {:.1}/{:.1} s · tracking error {error}",
+            p.script_t_s, p.script_duration_s
+        ));
+    }
+
+    fn event(&mut self, e: &Event) {
+        if self.quiet || e.level == "info" {
+            return;
+        }
+        let line = format!("{} at {:.2} s: {}", e.level, e.t_s, e.message);
+        match &self.bar {
+            Some(bar) => bar.println(line),
+            None => eprintln!("{line}"),
+        }
+    }
+}
+
+pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let framing = |f: Option<f64>| f.map_or("—".to_string(), |x| format!("{x:.3}"));
+    let _ = writeln!(
+        s,
+        "{} flight with {} ({}): {:.1} s in the air, {:.1} s of shots",
+        if r.completed { "completed" } else { "ABORTED" },
+        profile_name,
+        controller,
+        r.flight_time_s,
+        r.shots_time_s
+    );
+    let _ = writeln!(
+        s,
+        "  position error  RMS {:.1} cm, max {:.1} cm; heading error RMS {:.2}°; framing error \
+         RMS {}; saturated {:.1}% of ticks",
+        r.figures.rms_position_error_m * 100.0,
+        r.figures.max_position_error_m * 100.0,
+        r.figures.rms_heading_error_rad.to_degrees(),
+        framing(r.figures.rms_framing_error),
+        r.figures.saturated_fraction * 100.0
+    );
+    if r.failsafes + r.faults + r.deadline_misses > 0 {
+        let _ = writeln!(
+            s,
+            "  {} failsafes, {} controller faults, {} missed deadlines (see the log's /events)",
+            r.failsafes, r.faults, r.deadline_misses
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  {:>4}  {:>8}  {:>8}  {:>8}  {:>8}  {:>7}  shot",
+        "#", "RMS cm", "max cm", "head °", "framing", "sat %"
+    );
+    for shot in &r.shots {
+        let f = &shot.figures;
+        let mut label = shot.label.clone();
+        if label.chars().count() > 60 {
+            label = label.chars().take(59).collect::<String>() + "…";
+        }
+        let _ = writeln!(
+            s,
+            "  {:>4}  {:>8.1}  {:>8.1}  {:>8.2}  {:>8}  {:>7.1}  {label}",
+            shot.index + 1,
+            f.rms_position_error_m * 100.0,
+            f.max_position_error_m * 100.0,
+            f.rms_heading_error_rad.to_degrees(),
+            framing(f.rms_framing_error),
+            f.saturated_fraction * 100.0
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::civil_from_days;
+
+    #[test]
+    fn civil_dates() {
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(19_723), (2024, 1, 1));
+        assert_eq!(civil_from_days(20_414), (2025, 11, 22));
+        assert_eq!(civil_from_days(11_016), (2000, 2, 29));
+    }
+}
