@@ -675,7 +675,12 @@ fn solve_together(
     // flicker with noise on live actors' poses.
     let symmetric = PI - alpha;
     let key = |c: &(f64, Primary)| {
-        (c.0 - symmetric).abs() + if matches!(c.1, Primary::B) { TIE_MARGIN_RAD } else { 0.0 }
+        (c.0 - symmetric).abs()
+            + if matches!(c.1, Primary::B) {
+                TIE_MARGIN_RAD
+            } else {
+                0.0
+            }
     };
     let (theta, primary) = candidates
         .into_iter()
