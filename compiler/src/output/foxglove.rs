@@ -10,7 +10,8 @@
 //!
 //! Topics (each topic's latest message is self-contained, so seeking in Foxglove, which
 //! back-fills the latest message of every topic, shows the whole scene):
-//! `/tf` (`foxglove.FrameTransforms`, every frame at each tick), `/scene/stage`,
+//! `/tf/drone`, `/tf/camera`, `/tf/actor/NAME` (`foxglove.FrameTransforms`, one topic per
+//! frame, published when the frame's transform changes: see [`FrameTopic`]), `/scene/stage`,
 //! `/scene/drone`, `/scene/actors`, `/scene/path` (`foxglove.SceneUpdate`) and
 //! `/camera_calibration` (`foxglove.CameraCalibration`).
 
