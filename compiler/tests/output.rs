@@ -38,8 +38,12 @@ fn info(names: &[String]) -> RunInfo<'_> {
     }
 }
 
+/// When actor B starts walking (it stands still before).
+const B_WALKS_S: f64 = 1.5;
+
 /// 2.5 s at 100 Hz over two shots, with full-precision values (including tiny and negative
-/// ones) so that exact equality after reading back means the numbers round-trip.
+/// ones, and halves of the resolution) so that reading back checks the quantisation; a fixed
+/// camera pitch, actor A always walking, actor B still until [`B_WALKS_S`].
 fn reference() -> Vec<(Sample, Vec<ActorPose>)> {
     (0..250)
         .map(|i| {
@@ -50,8 +54,8 @@ fn reference() -> Vec<(Sample, Vec<ActorPose>)> {
                 velocity_mps: [t.cos() * 2.0, 1.0, 1e-9],
                 acceleration_mps2: [-t.sin() * 2.0, 0.0, -1e-12],
                 heading_rad: (0.3 * t).sin() * 3.0,
-                heading_rate_radps: 0.9 * (0.3 * t).cos(),
-                camera_pitch_rad: -0.25 - 0.01 * t,
+                heading_rate_radps: 0.9 * (0.3 * t).cos() + 5e-7,
+                camera_pitch_rad: -0.25,
                 shot: if t < 1.2 { 0 } else { 1 },
             };
             let actors = vec![
@@ -62,12 +66,15 @@ fn reference() -> Vec<(Sample, Vec<ActorPose>)> {
                     facing_rate_radps: 0.0,
                     height_m: 1.8,
                 },
-                ActorPose {
-                    position_m: [2.5, -0.7 * t, 0.0],
-                    velocity_mps: [0.0, -0.7, 0.0],
-                    facing_rad: std::f64::consts::PI - 0.2 * t,
-                    facing_rate_radps: -0.2,
-                    height_m: 1.65,
+                {
+                    let walk_s = (t - B_WALKS_S).max(0.0);
+                    ActorPose {
+                        position_m: [2.5, -0.7 * walk_s, 0.0],
+                        velocity_mps: [0.0, -0.7, 0.0],
+                        facing_rad: std::f64::consts::PI - 0.2 * walk_s,
+                        facing_rate_radps: -0.2,
+                        height_m: 1.65,
+                    }
                 },
             ];
             (sample, actors)
@@ -91,6 +98,35 @@ fn ns(t_s: f64) -> u64 {
 fn vec3(v: &Value) -> [f64; 3] {
     let a: Vec<f64> = serde_json::from_value(v.clone()).unwrap();
     [a[0], a[1], a[2]]
+}
+
+/// The documented resolution of `/reference`, `/actors` and `/camera`.
+const RESOLUTION: f64 = 1e-6;
+
+/// `read` is `value` rounded to the resolution: within half a unit (and a hair for the
+/// decimal-to-binary conversion of both).
+fn quantised(read: f64, value: f64) -> bool {
+    (read - value).abs() <= RESOLUTION / 2.0 * (1.0 + 1e-9) + value.abs() * 1e-15
+}
+
+/// Every number in a message's text is plain decimal with at most six decimals (the keys
+/// and the actor names of these tests contain no digits, so every digit run is a number).
+fn assert_at_most_six_decimals(text: &str, topic: &str) {
+    let is_num = |c: char| c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E');
+    for token in text
+        .split(|c: char| !is_num(c))
+        .filter(|t| t.chars().any(|c| c.is_ascii_digit()))
+    {
+        assert!(
+            !token.contains(['e', 'E']),
+            "{topic}: {token} has an exponent"
+        );
+        let decimals = token.split_once('.').map_or(0, |(_, d)| d.len());
+        assert!(
+            decimals <= 6,
+            "{topic}: {token} has {decimals} decimals in {text}"
+        );
+    }
 }
 
 /// Every key of every object in `value` is a property of the matching (sub)schema, and
@@ -174,11 +210,21 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
             "{topic}"
         );
     }
-    // /tf at 30 Hz over 2.49 s.
-    let (tf_schema, _, _, tf_count) = topics["/tf"];
-    assert_eq!(tf_schema, "foxglove.FrameTransforms");
-    assert!((74..=76).contains(&tf_count), "{tf_count} transforms");
-    assert_eq!(topics.len(), expected.len() + 1);
+    // One transform topic per frame (their counts are checked below).
+    let tf_topics = [
+        "/tf/drone",
+        "/tf/camera",
+        "/tf/actor/A",
+        "/tf/actor/Bo \"B\"",
+    ];
+    for topic in tf_topics {
+        assert_eq!(
+            topics.get(topic).map(|t| t.0),
+            Some("foxglove.FrameTransforms"),
+            "{topic} in {topics:?}"
+        );
+    }
+    assert_eq!(topics.len(), expected.len() + tf_topics.len());
 
     // Metadata record and attachment.
     assert_eq!(summary.metadata_indexes.len(), 1);
@@ -220,6 +266,10 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
         assert_eq!(m.log_time, m.publish_time);
         match m.channel.topic.as_str() {
             "/reference" | "/actors" | "/camera" => {
+                assert_at_most_six_decimals(
+                    std::str::from_utf8(&m.data).unwrap(),
+                    &m.channel.topic,
+                );
                 // Our own schemas: the keys are exactly the properties.
                 let keys: BTreeSet<&String> = value.as_object().unwrap().keys().collect();
                 let props: BTreeSet<&String> =
@@ -238,21 +288,23 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
         }
     }
 
-    // The samples, exactly.
+    // The samples, each number rounded to the resolution (the times, exactly).
     assert_eq!(reference_msgs.len(), reference.len());
+    let close3 = |v: &Value, x: [f64; 3]| (0..3).all(|i| quantised(vec3(v)[i], x[i]));
     for ((log_time, v), (s, _)) in reference_msgs.iter().zip(&reference) {
         assert_eq!(*log_time, ns(s.t_s));
-        let back = Sample {
-            t_s: v["t_s"].as_f64().unwrap(),
-            position_m: vec3(&v["position_m"]),
-            velocity_mps: vec3(&v["velocity_mps"]),
-            acceleration_mps2: vec3(&v["acceleration_mps2"]),
-            heading_rad: v["heading_rad"].as_f64().unwrap(),
-            heading_rate_radps: v["heading_rate_radps"].as_f64().unwrap(),
-            camera_pitch_rad: v["camera_pitch_rad"].as_f64().unwrap(),
-            shot: v["shot"].as_u64().unwrap() as usize,
-        };
-        assert_eq!(&back, s);
+        assert_eq!(v["t_s"].as_f64().unwrap(), s.t_s);
+        assert!(close3(&v["position_m"], s.position_m), "{v}");
+        assert!(close3(&v["velocity_mps"], s.velocity_mps), "{v}");
+        assert!(close3(&v["acceleration_mps2"], s.acceleration_mps2), "{v}");
+        for (key, x) in [
+            ("heading_rad", s.heading_rad),
+            ("heading_rate_radps", s.heading_rate_radps),
+            ("camera_pitch_rad", s.camera_pitch_rad),
+        ] {
+            assert!(quantised(v[key].as_f64().unwrap(), x), "{key}: {v}");
+        }
+        assert_eq!(v["shot"].as_u64().unwrap() as usize, s.shot);
     }
     let names = names();
     for ((log_time, v), (s, actors)) in actor_msgs.iter().zip(&reference) {
@@ -262,37 +314,94 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
         assert_eq!(list.len(), actors.len());
         for ((a, pose), name) in list.iter().zip(actors).zip(&names) {
             assert_eq!(a["name"].as_str().unwrap(), name);
-            assert_eq!(vec3(&a["position_m"]), pose.position_m);
-            assert_eq!(a["facing_rad"].as_f64().unwrap(), pose.facing_rad);
-            assert_eq!(a["height_m"].as_f64().unwrap(), pose.height_m);
+            assert!(close3(&a["position_m"], pose.position_m), "{a}");
+            assert!(quantised(
+                a["facing_rad"].as_f64().unwrap(),
+                pose.facing_rad
+            ));
+            assert!(quantised(a["height_m"].as_f64().unwrap(), pose.height_m));
         }
     }
 
     let camera = &by_topic["/camera"][0].1;
-    assert_eq!(camera["fov_x_rad"].as_f64().unwrap(), 84f64.to_radians());
-    assert_eq!(camera["aspect"].as_f64().unwrap(), 16.0 / 9.0);
+    assert!(quantised(
+        camera["fov_x_rad"].as_f64().unwrap(),
+        84f64.to_radians()
+    ));
+    assert!(quantised(camera["aspect"].as_f64().unwrap(), 16.0 / 9.0));
 
-    // The transforms follow the samples (to the millimetre) and name every frame.
-    for (log_time, tf) in &by_topic["/tf"] {
-        let s = &reference
+    // The transforms: the drone (always moving) at every 30 Hz tick, actor A (walking) too,
+    // the fixed camera once at the first tick, actor B once at the first tick and then at
+    // every tick from when it walks. Each transform follows the samples to the millimetre
+    // and is stamped at its message's time, but for the one that holds B still until the
+    // tick before it starts walking.
+    let sample_at = |ns_: u64| {
+        reference
             .iter()
-            .find(|(s, _)| ns(s.t_s) == *log_time)
-            .unwrap()
-            .0;
-        let transforms = tf["transforms"].as_array().unwrap();
-        let children: Vec<&str> = transforms
-            .iter()
-            .map(|t| t["child_frame_id"].as_str().unwrap())
-            .collect();
-        assert_eq!(children, ["drone", "camera", "actor/A", "actor/Bo \"B\""]);
-        let drone = &transforms[0];
-        assert_eq!(drone["parent_frame_id"], "world");
-        for (axis, p) in ["x", "y", "z"].iter().zip(s.position_m) {
-            assert!((drone["translation"][axis].as_f64().unwrap() - p).abs() <= 5e-4);
+            .find(|(s, _)| ns(s.t_s) == ns_)
+            .unwrap_or_else(|| panic!("no sample at {ns_} ns"))
+    };
+    let stamp = |t: &Value| {
+        t["timestamp"]["sec"].as_u64().unwrap() * 1_000_000_000
+            + t["timestamp"]["nsec"].as_u64().unwrap()
+    };
+    let translation = |t: &Value| {
+        [
+            t["translation"]["x"].as_f64().unwrap(),
+            t["translation"]["y"].as_f64().unwrap(),
+            t["translation"]["z"].as_f64().unwrap(),
+        ]
+    };
+    let mm = |a: [f64; 3], b: [f64; 3]| (0..3).all(|i| (a[i] - b[i]).abs() <= 5e-4);
+    let ticks: Vec<u64> = by_topic["/tf/drone"].iter().map(|(t, _)| *t).collect();
+    assert!((74..=76).contains(&ticks.len()), "{} ticks", ticks.len());
+    assert!(ticks.windows(2).all(|w| {
+        let dt = (w[1] - w[0]) as f64 / 1e9;
+        (0.03..=0.04).contains(&dt)
+    }));
+    assert_eq!(ticks[0], 0);
+    let log_times = |topic: &str| -> Vec<u64> { by_topic[topic].iter().map(|(t, _)| *t).collect() };
+    assert_eq!(log_times("/tf/actor/A"), ticks);
+    assert_eq!(log_times("/tf/camera"), [ticks[0]]);
+    let b_ticks: Vec<u64> = std::iter::once(ticks[0])
+        .chain(
+            ticks
+                .iter()
+                .copied()
+                .filter(|&t| t as f64 / 1e9 > B_WALKS_S + 1e-9),
+        )
+        .collect();
+    assert_eq!(log_times("/tf/actor/Bo \"B\""), b_ticks);
+    for (topic, parent, child, index) in [
+        ("/tf/drone", "world", "drone", None),
+        ("/tf/camera", "drone", "camera", None),
+        ("/tf/actor/A", "world", "actor/A", Some(0)),
+        ("/tf/actor/Bo \"B\"", "world", "actor/Bo \"B\"", Some(1)),
+    ] {
+        for (log_time, tf) in &by_topic[topic] {
+            let transforms = tf["transforms"].as_array().unwrap();
+            let (s, actors) = sample_at(*log_time);
+            let last = transforms.last().unwrap();
+            assert_eq!(stamp(last), *log_time);
+            let expected = match index {
+                None if child == "drone" => s.position_m,
+                None => [0.0; 3],
+                Some(i) => actors[i].position_m,
+            };
+            assert!(mm(translation(last), expected), "{topic} at {log_time}");
+            for t in transforms {
+                assert_eq!(t["parent_frame_id"], parent);
+                assert_eq!(t["child_frame_id"], child);
+            }
+            // B's first step: held still at the previous tick, then where it is.
+            let held = *log_time == b_ticks[1] && index == Some(1);
+            assert_eq!(transforms.len(), if held { 2 } else { 1 }, "{topic}");
+            if held {
+                let previous = ticks[ticks.iter().position(|t| t == log_time).unwrap() - 1];
+                assert_eq!(stamp(&transforms[0]), previous);
+                assert!(mm(translation(&transforms[0]), [2.5, 0.0, 0.0]));
+            }
         }
-        let sec = drone["timestamp"]["sec"].as_u64().unwrap();
-        let nsec = drone["timestamp"]["nsec"].as_u64().unwrap();
-        assert_eq!(sec * 1_000_000_000 + nsec, *log_time);
     }
 
     // The path: one strip per shot, from the first position to the last, joined.

@@ -96,6 +96,21 @@ impl Tick {
             input: self.input,
             output: self.output,
             command_sent: self.command_sent,
+            // Read back with the tick it was written with (a finite time), screen points
+            // with a non-finite coordinate as none.
+            framing: if self.input.t_s.is_finite() {
+                let finite = |p: Option<[f64; 2]>| p.filter(|p| p.iter().all(|v| v.is_finite()));
+                self.framing
+                    .iter()
+                    .map(|f| FramingRecord {
+                        actor: f.actor,
+                        screen: finite(f.screen),
+                        requested: finite(f.requested),
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            },
         }
     }
 }
@@ -446,7 +461,11 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
         "/framing",
         "/events",
         "/servo/tick",
-        "/tf",
+        "/tf/drone",
+        "/tf/camera",
+        "/tf/actor/Ann",
+        "/tf/actor/Bo \"the\" Bear",
+        "/tf/reference",
         "/scene/stage",
         "/scene/drone",
         "/scene/actors",
@@ -479,27 +498,22 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
     assert_eq!(by_topic["/servo/tick"].len(), n);
     assert_eq!(by_topic["/command"].len(), n);
     assert_eq!(by_topic["/events"].len(), 3);
-    // 30 Hz over 3 s.
-    let tf = by_topic["/tf"].len();
-    assert!((89..=91).contains(&tf), "{tf} /tf messages");
-    // The reference frame rides along the drone, camera and actors.
-    let v: serde_json::Value = serde_json::from_slice(&by_topic["/tf"][5].1).unwrap();
-    let children: Vec<&str> = v["transforms"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|t| t["child_frame_id"].as_str().unwrap())
-        .collect();
-    assert_eq!(
-        children,
-        [
-            "drone",
-            "camera",
-            "actor/Ann",
-            "actor/Bo \"the\" Bear",
-            "reference"
-        ]
-    );
+    // One topic per frame, as compile writes them: a frame is published at a 30 Hz tick
+    // when it changed. The fixed camera (no gimbal pitch change) once; the drone's
+    // estimate, which moves, at every 30 Hz tick over 3 s.
+    assert_eq!(by_topic["/tf/camera"].len(), 1);
+    let drone = by_topic["/tf/drone"].len();
+    assert!((85..=91).contains(&drone), "{drone} /tf/drone messages");
+    for (topic, child) in [
+        ("/tf/drone", "drone"),
+        ("/tf/camera", "camera"),
+        ("/tf/actor/Ann", "actor/Ann"),
+        ("/tf/reference", "reference"),
+    ] {
+        let v: serde_json::Value = serde_json::from_slice(&by_topic[topic][0].1).unwrap();
+        let last = v["transforms"].as_array().unwrap().last().unwrap().clone();
+        assert_eq!(last["child_frame_id"], child, "{topic}");
+    }
     // The failsafe flag: set exactly on the faulted ticks (their sent command is HOVER).
     for ((_, data), t) in by_topic["/command"].iter().zip(&ticks) {
         let v: serde_json::Value = serde_json::from_slice(data).unwrap();

@@ -10,7 +10,8 @@
 //!
 //! Topics (each topic's latest message is self-contained, so seeking in Foxglove, which
 //! back-fills the latest message of every topic, shows the whole scene):
-//! `/tf` (`foxglove.FrameTransforms`, every frame at each tick), `/scene/stage`,
+//! `/tf/drone`, `/tf/camera`, `/tf/actor/NAME` (`foxglove.FrameTransforms`, one topic per
+//! frame, published when the frame's transform changes: see [`FrameTopic`]), `/scene/stage`,
 //! `/scene/drone`, `/scene/actors`, `/scene/path` (`foxglove.SceneUpdate`) and
 //! `/camera_calibration` (`foxglove.CameraCalibration`).
 
@@ -599,23 +600,75 @@ pub fn camera_calibration(ns: u64, lens: &Lens) -> Vec<u8> {
     .into_bytes()
 }
 
-/// Appends one `FrameTransform` object; `stamp` is the tick's `{"sec":…,"nsec":…}` and the
-/// frame names are quoted JSON strings.
-pub fn transform(
-    out: &mut Vec<u8>,
-    stamp: &[u8],
-    parent: &[u8],
-    child: &[u8],
-    t: [f64; 3],
-    q: Quat,
-) {
-    out.extend_from_slice(b"{\"timestamp\":");
-    out.extend_from_slice(stamp);
-    out.extend_from_slice(b",\"parent_frame_id\":");
-    out.extend_from_slice(parent);
-    out.extend_from_slice(b",\"child_frame_id\":");
-    out.extend_from_slice(child);
-    out.extend_from_slice(b",\"translation\":{\"x\":");
+/// One frame's transform topic: publishes the transform when it changes.
+///
+/// Each tick, [`FrameTopic::message`] formats the transform (millimetres, quaternion
+/// components to 1e-6) and compares the text with the last one published: unchanged, nothing
+/// is written. Changed after one or more silent ticks, the message holds two transforms: the
+/// unchanged value stamped at the previous tick, then the new one, so that Foxglove (which
+/// interpolates between a frame's stamped transforms) keeps the frame still until it moves
+/// instead of sliding it over the silent stretch. The topic's latest message is always the
+/// frame's current transform, which keeps seeking (Foxglove back-fills the latest message of
+/// each topic) exact; a frame that never moves is published once, at the first tick.
+pub struct FrameTopic {
+    /// `"parent_frame_id":"…","child_frame_id":"…"` (quoted).
+    names: Vec<u8>,
+    /// `"translation":{…},"rotation":{…}` last published (empty: never).
+    last: Vec<u8>,
+    /// Time of the last publication.
+    last_ns: u64,
+    scratch: Vec<u8>,
+}
+
+impl FrameTopic {
+    pub fn new(parent: &str, child: &str) -> Self {
+        let mut names = b"\"parent_frame_id\":".to_vec();
+        json::string(&mut names, parent);
+        names.extend_from_slice(b",\"child_frame_id\":");
+        json::string(&mut names, child);
+        Self {
+            names,
+            last: Vec::new(),
+            last_ns: 0,
+            scratch: Vec::with_capacity(128),
+        }
+    }
+
+    /// Writes into `out` (cleared) the `FrameTransforms` message for the tick at `ns` (the
+    /// previous tick at `prev_ns`) if the transform changed; returns whether it did.
+    pub fn message(
+        &mut self,
+        out: &mut Vec<u8>,
+        prev_ns: Option<u64>,
+        ns: u64,
+        t: [f64; 3],
+        q: Quat,
+    ) -> bool {
+        self.scratch.clear();
+        body(&mut self.scratch, t, q);
+        if !self.last.is_empty() && self.scratch == self.last {
+            return false;
+        }
+        out.clear();
+        out.extend_from_slice(b"{\"transforms\":[");
+        match prev_ns {
+            Some(prev) if !self.last.is_empty() && prev > self.last_ns && prev < ns => {
+                transform(out, prev, &self.names, &self.last);
+                out.push(b',');
+            }
+            _ => {}
+        }
+        transform(out, ns, &self.names, &self.scratch);
+        out.extend_from_slice(b"]}");
+        std::mem::swap(&mut self.last, &mut self.scratch);
+        self.last_ns = ns;
+        true
+    }
+}
+
+/// `"translation":{"x":…,"y":…,"z":…},"rotation":{"x":…,"y":…,"z":…,"w":…}`.
+fn body(out: &mut Vec<u8>, t: [f64; 3], q: Quat) {
+    out.extend_from_slice(b"\"translation\":{\"x\":");
     json::fixed(out, t[0], POS_DECIMALS);
     out.extend_from_slice(b",\"y\":");
     json::fixed(out, t[1], POS_DECIMALS);
@@ -629,74 +682,20 @@ pub fn transform(
     json::fixed(out, q[2], ROT_DECIMALS);
     out.extend_from_slice(b",\"w\":");
     json::fixed(out, q[3], ROT_DECIMALS);
-    out.extend_from_slice(b"}}");
+    out.push(b'}');
 }
 
-/// Pre-quoted frame names for the per-tick transforms.
-pub struct Frames {
-    world: Vec<u8>,
-    drone: Vec<u8>,
-    camera: Vec<u8>,
-    actors: Vec<Vec<u8>>,
-}
-
-impl Frames {
-    pub fn new(actor_names: &[String]) -> Self {
-        let quote = |s: &str| {
-            let mut v = Vec::new();
-            json::string(&mut v, s);
-            v
-        };
-        Self {
-            world: quote(WORLD),
-            drone: quote(DRONE),
-            camera: quote(CAMERA),
-            actors: actor_names.iter().map(|n| quote(&actor_frame(n))).collect(),
-        }
-    }
-
-    /// A `FrameTransforms` message: world→drone, drone→camera, world→each actor.
-    /// `actors` yields (feet position, facing) in the order of the names given to `new`.
-    pub fn message(
-        &self,
-        out: &mut Vec<u8>,
-        ns: u64,
-        position_m: [f64; 3],
-        heading_rad: f64,
-        pitch_rad: f64,
-        actors: impl Iterator<Item = ([f64; 3], f64)>,
-    ) {
-        let mut stamp = Vec::with_capacity(40);
-        stamp.extend_from_slice(b"{\"sec\":");
-        json::u64(&mut stamp, ns / 1_000_000_000);
-        stamp.extend_from_slice(b",\"nsec\":");
-        json::u64(&mut stamp, ns % 1_000_000_000);
-        stamp.push(b'}');
-
-        out.extend_from_slice(b"{\"transforms\":[");
-        transform(
-            out,
-            &stamp,
-            &self.world,
-            &self.drone,
-            position_m,
-            yaw(heading_rad),
-        );
-        out.push(b',');
-        transform(
-            out,
-            &stamp,
-            &self.drone,
-            &self.camera,
-            [0.0; 3],
-            camera_in_drone(pitch_rad),
-        );
-        for (frame, (feet_m, facing_rad)) in self.actors.iter().zip(actors) {
-            out.push(b',');
-            transform(out, &stamp, &self.world, frame, feet_m, yaw(facing_rad));
-        }
-        out.extend_from_slice(b"]}");
-    }
+/// Appends one `FrameTransform` object stamped at `ns`.
+fn transform(out: &mut Vec<u8>, ns: u64, names: &[u8], body: &[u8]) {
+    out.extend_from_slice(b"{\"timestamp\":{\"sec\":");
+    json::u64(out, ns / 1_000_000_000);
+    out.extend_from_slice(b",\"nsec\":");
+    json::u64(out, ns % 1_000_000_000);
+    out.extend_from_slice(b"},");
+    out.extend_from_slice(names);
+    out.push(b',');
+    out.extend_from_slice(body);
+    out.push(b'}');
 }
 
 #[cfg(test)]

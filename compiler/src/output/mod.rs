@@ -12,6 +12,11 @@
 //! `finish()` may lose the file, never leave a truncated one that claims to be whole (an MCAP
 //! file without its summary and closing magic is recognisably incomplete).
 //!
+//! The MCAP's own topics (`/reference`, `/actors`, `/camera`) write their numbers quantised
+//! to 1e-6 ([`json::micro`]: micrometres, micro-radians, 1e-6 m/s…, times at 100 Hz exact);
+//! Foxglove's visual topics to the millimetre (orientations to 1e-6); the CSV keeps every
+//! number exact (shortest round-trip).
+//!
 //! Errors are `std::io::Error`s whose message names the destination path, so that the CLI
 //! can show them as they are. Non-finite numbers are written as `null` in JSON (valid JSON;
 //! the runtime's flight logs may contain them) and as `NaN`/`inf` in CSV.
@@ -182,22 +187,69 @@ pub mod json {
         }
     }
 
+    /// Two-digit pairs `00`…`99`.
+    const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+        2021222324252627282930313233343536373839\
+        4041424344454647484950515253545556575859\
+        6061626364656667686970717273747576777879\
+        8081828384858687888990919293949596979899";
+
+    /// A number quantised to 1e-6 (six decimals, rounded half away from zero): integer
+    /// arithmetic, trailing zeros trimmed (`12.34`, `-0.000001`, `3`; never `-0`), `null` if
+    /// not finite. Magnitudes beyond 9·10⁹ (no longer exact at this resolution) are written
+    /// in their shortest round-trip form.
+    #[inline]
+    pub fn micro(out: &mut Vec<u8>, x: f64) {
+        let scaled = (x * 1e6).round();
+        // Also false for NaN.
+        if !(scaled.abs() < 9.0e15) {
+            f64(out, x);
+            return;
+        }
+        let n = scaled as i64;
+        if n < 0 {
+            out.push(b'-');
+        }
+        let n = n.unsigned_abs();
+        let mut b = itoa::Buffer::new();
+        out.extend_from_slice(b.format(n / 1_000_000).as_bytes());
+        let frac = (n % 1_000_000) as usize;
+        if frac != 0 {
+            let (hi, rest) = (frac / 10_000, frac % 10_000);
+            let (mid, lo) = (rest / 100, rest % 100);
+            let digits = [
+                b'.',
+                PAIRS[2 * hi],
+                PAIRS[2 * hi + 1],
+                PAIRS[2 * mid],
+                PAIRS[2 * mid + 1],
+                PAIRS[2 * lo],
+                PAIRS[2 * lo + 1],
+            ];
+            let mut len = digits.len();
+            while digits[len - 1] == b'0' {
+                len -= 1;
+            }
+            out.extend_from_slice(&digits[..len]);
+        }
+    }
+
+    /// `[x,y,z]`, each quantised by [`micro`].
+    #[inline]
+    pub fn vec3_micro(out: &mut Vec<u8>, v: &[f64; 3]) {
+        out.push(b'[');
+        micro(out, v[0]);
+        out.push(b',');
+        micro(out, v[1]);
+        out.push(b',');
+        micro(out, v[2]);
+        out.push(b']');
+    }
+
     #[inline]
     pub fn u64(out: &mut Vec<u8>, x: u64) {
         let mut b = itoa::Buffer::new();
         out.extend_from_slice(b.format(x).as_bytes());
-    }
-
-    /// `[x,y,z]`.
-    #[inline]
-    pub fn vec3(out: &mut Vec<u8>, v: &[f64; 3]) {
-        out.push(b'[');
-        f64(out, v[0]);
-        out.push(b',');
-        f64(out, v[1]);
-        out.push(b',');
-        f64(out, v[2]);
-        out.push(b']');
     }
 
     /// A JSON string literal (quotes included), escaped.
@@ -236,5 +288,52 @@ mod tests {
         let mut out = Vec::new();
         json::fixed(&mut out, f64::NAN, 3);
         assert_eq!(out, b"null");
+    }
+
+    #[test]
+    fn micro_numbers_are_the_value_rounded_to_six_decimals() {
+        let text = |x: f64| {
+            let mut out = Vec::new();
+            json::micro(&mut out, x);
+            String::from_utf8(out).unwrap()
+        };
+        let cases = [
+            (0.0, "0"),
+            (-0.0, "0"),
+            (-4e-7, "0"),
+            (5e-7, "0.000001"),
+            (-6e-7, "-0.000001"),
+            (3599.99, "3599.99"),
+            (1.8, "1.8"),
+            (-12.3456789, "-12.345679"),
+            (0.1000004, "0.1"),
+            (2.0000005, "2.000001"),
+            (1e9 + 0.25, "1000000000.25"),
+            (1e12, "1000000000000.0"),
+            (f64::NAN, "null"),
+            (f64::NEG_INFINITY, "null"),
+        ];
+        for (x, expected) in cases {
+            assert_eq!(text(x), expected, "{x}");
+        }
+        // Agrees with `fixed` at six decimals, within half a unit of the value.
+        for i in -20_000..20_000 {
+            let x = i as f64 * 0.012345678901 + 1e-9 * i as f64;
+            let t = text(x);
+            let mut f = Vec::new();
+            json::fixed(&mut f, x, 6);
+            assert_eq!(t.as_bytes(), &f[..], "{x}");
+            let back: f64 = t.parse().unwrap();
+            assert!((back - x).abs() <= 0.5e-6 + 1e-12, "{x} → {t}");
+            assert!(t
+                .split('.')
+                .nth(1)
+                .is_none_or(|d| d.len() <= 6 && !d.ends_with('0')));
+        }
+        // Every time of a 100 Hz reference is exact.
+        for k in 0..400_000u64 {
+            let t = k as f64 / 100.0;
+            assert_eq!(text(t).parse::<f64>().unwrap(), t);
+        }
     }
 }

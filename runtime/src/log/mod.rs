@@ -81,7 +81,9 @@ pub mod topic {
     pub const FRAMING: &str = "/framing";
     pub const EVENTS: &str = "/events";
     pub const SERVO_TICK: &str = "/servo/tick";
-    pub const TF: &str = "/tf";
+    /// Transforms: `/tf/drone` (the estimate), `/tf/camera`, `/tf/actor/NAME`,
+    /// `/tf/reference`, one topic per frame as `compile` writes them.
+    pub const TF_PREFIX: &str = "/tf/";
     pub const SCENE_STAGE: &str = "/scene/stage";
     pub const SCENE_DRONE: &str = "/scene/drone";
     pub const SCENE_ACTORS: &str = "/scene/actors";

@@ -158,7 +158,8 @@ impl RawTick {
 
 #[derive(Deserialize)]
 struct RawFraming {
-    t_s: Num,
+    /// A number, or null (a non-finite time): then the framing matches no tick.
+    t_s: serde_json::Value,
     actors: Vec<RawFramed>,
 }
 
@@ -366,7 +367,7 @@ impl ReadState {
                             requested: screen_point(a.requested),
                         })
                         .collect();
-                    self.pending_framing = Some((f.t_s.0.to_bits(), records));
+                    self.pending_framing = f.t_s.as_f64().map(|t| (t.to_bits(), records));
                 }
                 Some(Wanted::Event) => {
                     let e = serde_json::from_slice::<RawEvent>(&data).map_err(|e| {

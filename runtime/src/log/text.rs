@@ -11,8 +11,8 @@ use dronecine_compiler::output::json;
 
 use super::exact;
 use crate::backend::{BodyPose, FlightState, MocapFrame};
-use crate::control::{Estimate, Reference, TickFault, TickInput, TickOutput};
-use crate::frames::{ActorPose, Command, Sample};
+use crate::control::{Estimate, TickFault, TickInput, TickOutput};
+use crate::frames::Command;
 use crate::record::{FramingRecord, Phase, TickRecord};
 
 const SLOTS: usize = 256;
@@ -36,18 +36,11 @@ const EMPTY: Slot = Slot {
 pub(super) struct Text {
     pub(super) buf: Vec<u8>,
     slots: Box<[Slot; SLOTS]>,
-    /// `/servo/tick`'s reference object body, copied from `/reference` when the two agree.
-    reference: Vec<u8>,
-    reference_valid: bool,
 }
 
 /// Bit-for-bit equal floats.
 fn same(a: f64, b: f64) -> bool {
     a.to_bits() == b.to_bits()
-}
-
-fn same_vec3(a: &[f64; 3], b: &[f64; 3]) -> bool {
-    same(a[0], b[0]) && same(a[1], b[1]) && same(a[2], b[2])
 }
 
 /// Bit-for-bit equal commands.
@@ -97,8 +90,6 @@ impl Text {
         Self {
             buf: Vec::with_capacity(4096),
             slots: Box::new([EMPTY; SLOTS]),
-            reference: Vec::with_capacity(512),
-            reference_valid: false,
         }
     }
 
@@ -177,60 +168,6 @@ impl Text {
             Some(s) => json::u64(&mut self.buf, s as u64),
             None => self.raw(b"null"),
         }
-    }
-
-    /// Called with compile's `/reference` message in `buf`: keeps the span
-    /// `"position_m":[…],…,"heading_rate_radps":…` when it is exactly the tick input's
-    /// reference (same bits, all finite), for `/servo/tick` to copy.
-    pub(super) fn keep_reference_span(&mut self, sample: &Sample, reference: &Reference) {
-        self.reference_valid = false;
-        let r = reference;
-        let agree = same_vec3(&sample.position_m, &r.position_m)
-            && same_vec3(&sample.velocity_mps, &r.velocity_mps)
-            && same_vec3(&sample.acceleration_mps2, &r.acceleration_mps2)
-            && same(sample.heading_rad, r.heading_rad)
-            && same(sample.heading_rate_radps, r.heading_rate_radps);
-        let finite = r.position_m.iter().all(|x| x.is_finite())
-            && r.velocity_mps.iter().all(|x| x.is_finite())
-            && r.acceleration_mps2.iter().all(|x| x.is_finite())
-            && r.heading_rad.is_finite()
-            && r.heading_rate_radps.is_finite();
-        if !(agree && finite) {
-            return;
-        }
-        const START: &[u8] = b"\"position_m\":";
-        const END: &[u8] = b",\"camera_pitch_rad\":";
-        let msg = &self.buf;
-        let start = msg.windows(START.len()).position(|w| w == START);
-        let end = msg.windows(END.len()).rposition(|w| w == END);
-        if let (Some(start), Some(end)) = (start, end) {
-            if start < end {
-                self.reference.clear();
-                self.reference.extend_from_slice(&msg[start..end]);
-                self.reference_valid = true;
-            }
-        }
-    }
-
-    /// `/actors`: the message compile writes (`prefixes`: `{"name":NAME,"position_m":`).
-    pub(super) fn actors(&mut self, t_s: f64, prefixes: &[Vec<u8>], actors: &[ActorPose]) {
-        self.buf.clear();
-        self.raw(b"{\"t_s\":");
-        self.num(t_s);
-        self.raw(b",\"actors\":[");
-        for (i, (prefix, a)) in prefixes.iter().zip(actors).enumerate() {
-            if i > 0 {
-                self.raw(b",");
-            }
-            self.raw(prefix);
-            self.vec3(&a.position_m);
-            self.raw(b",\"facing_rad\":");
-            self.num(a.facing_rad);
-            self.raw(b",\"height_m\":");
-            self.num(a.height_m);
-            self.raw(b"}");
-        }
-        self.raw(b"]}");
     }
 
     pub(super) fn estimate(&mut self, t_s: f64, e: &Estimate) {
@@ -372,21 +309,18 @@ impl Text {
             None => self.raw(b"null"),
         }
         self.raw(b",\"reference\":{");
-        if self.reference_valid {
-            self.buf.extend_from_slice(&self.reference);
-        } else {
-            let r = &input.reference;
-            self.raw(b"\"position_m\":");
-            self.exact_vec3(&r.position_m);
-            self.raw(b",\"velocity_mps\":");
-            self.exact_vec3(&r.velocity_mps);
-            self.raw(b",\"acceleration_mps2\":");
-            self.exact_vec3(&r.acceleration_mps2);
-            self.raw(b",\"heading_rad\":");
-            self.exact(r.heading_rad);
-            self.raw(b",\"heading_rate_radps\":");
-            self.exact(r.heading_rate_radps);
-        }
+        // Exact (compile's `/reference` is quantised to 1e-6: replay needs the bits).
+        let r = &input.reference;
+        self.raw(b"\"position_m\":");
+        self.exact_vec3(&r.position_m);
+        self.raw(b",\"velocity_mps\":");
+        self.exact_vec3(&r.velocity_mps);
+        self.raw(b",\"acceleration_mps2\":");
+        self.exact_vec3(&r.acceleration_mps2);
+        self.raw(b",\"heading_rad\":");
+        self.exact(r.heading_rad);
+        self.raw(b",\"heading_rate_radps\":");
+        self.exact(r.heading_rate_radps);
         self.raw(b"}}");
     }
 

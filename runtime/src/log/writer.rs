@@ -13,10 +13,10 @@ use std::io::{self, BufWriter};
 use std::path::{Path, PathBuf};
 
 use dronecine_compiler::camera::Lens;
-use dronecine_compiler::output::foxglove::{self, Frames};
+use dronecine_compiler::output::foxglove::{self, FrameTopic};
 use dronecine_compiler::output::mcap::{
-    actors_schema, advance, camera_schema, reference_schema, write_reference, ACTORS_SCHEMA,
-    CAMERA_SCHEMA, REFERENCE_SCHEMA,
+    actor_prefix, actors_schema, advance, camera_message, camera_schema, reference_schema,
+    write_actors, write_reference, ACTORS_SCHEMA, CAMERA_SCHEMA, REFERENCE_SCHEMA,
 };
 use dronecine_compiler::output::{json, ns_from_s};
 use mcap::records::{MessageHeader, Metadata};
@@ -25,6 +25,9 @@ use mcap::{Attachment, McapError, WriteOptions, Writer};
 use super::text::Text;
 use super::{schema, topic, LogScene, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, TickRecord};
+
+/// The frame of the reference pose on `/tf/reference`.
+const REFERENCE_FRAME: &str = "reference";
 
 /// Chunk compression of the flight log.
 ///
@@ -90,7 +93,9 @@ struct Channels {
     framing: Channel,
     events: Channel,
     servo_tick: Channel,
-    tf: Channel,
+    /// `/tf/drone`, `/tf/camera`, `/tf/actor/NAME`…, `/tf/reference`: one per frame in
+    /// `FlightLogWriter::frames`' order.
+    tf: Vec<Channel>,
     stage: Channel,
     drone: Channel,
     actor_scene: Channel,
@@ -116,14 +121,15 @@ pub struct FlightLogWriter {
     path: PathBuf,
     channels: Channels,
     options: LogOptions,
-    frames: Frames,
+    /// The transform topics, as compile's: the drone (at its estimate), the camera, each
+    /// actor, and the reference; each published when it changes, at most at `tf_hz`.
+    frames: Vec<FrameTopic>,
+    /// Time of the last `/tf` tick.
+    last_tf_ns: Option<u64>,
     /// `{"name":"Ann","position_m":` per actor (`/actors`).
     actor_prefixes: Vec<Vec<u8>>,
     /// `,"name":"Ann","screen":` per actor (`/framing`).
     framing_names: Vec<Vec<u8>>,
-    /// Quoted frame names of the reference transform.
-    world_frame: Vec<u8>,
-    reference_frame: Vec<u8>,
     actor_names: Vec<String>,
     /// Heights last published on `/scene/actors`.
     heights_m: Vec<f64>,
@@ -218,12 +224,7 @@ impl FlightLogWriter {
             events: channel(schema::EVENT, schema::event(), topic::EVENTS).map_err(err)?,
             servo_tick: channel(schema::SERVO_TICK, schema::servo_tick(), topic::SERVO_TICK)
                 .map_err(err)?,
-            tf: channel(
-                foxglove::FRAME_TRANSFORMS,
-                foxglove::frame_transforms_schema(),
-                topic::TF,
-            )
-            .map_err(err)?,
+            tf: Vec::new(),
             stage: channel(
                 foxglove::SCENE_UPDATE,
                 scene_schema.clone(),
@@ -263,21 +264,7 @@ impl FlightLogWriter {
             })
             .map_err(err)?;
 
-        let quote = |s: &str| {
-            let mut v = Vec::new();
-            json::string(&mut v, s);
-            v
-        };
-        let actor_prefixes = scene
-            .actor_names
-            .iter()
-            .map(|name| {
-                let mut p = b"{\"name\":".to_vec();
-                json::string(&mut p, name);
-                p.extend_from_slice(b",\"position_m\":");
-                p
-            })
-            .collect();
+        let actor_prefixes = scene.actor_names.iter().map(|n| actor_prefix(n)).collect();
         let framing_names = scene
             .actor_names
             .iter()
@@ -293,17 +280,49 @@ impl FlightLogWriter {
         } else {
             100.0
         };
+        let mut channels = channels;
+        let tf_schema = writer
+            .add_schema(
+                foxglove::FRAME_TRANSFORMS,
+                "jsonschema",
+                foxglove::frame_transforms_schema().as_bytes(),
+            )
+            .map_err(err)?;
+        let mut frames = vec![
+            (
+                FrameTopic::new(foxglove::WORLD, foxglove::DRONE),
+                foxglove::DRONE.to_string(),
+            ),
+            (
+                FrameTopic::new(foxglove::DRONE, foxglove::CAMERA),
+                foxglove::CAMERA.to_string(),
+            ),
+        ];
+        for name in scene.actor_names {
+            let frame = foxglove::actor_frame(name);
+            frames.push((FrameTopic::new(foxglove::WORLD, &frame), frame));
+        }
+        frames.push((
+            FrameTopic::new(foxglove::WORLD, REFERENCE_FRAME),
+            REFERENCE_FRAME.to_string(),
+        ));
+        for (_, frame) in &frames {
+            let id = writer
+                .add_channel(tf_schema, &format!("/tf/{frame}"), "json", &no_meta)
+                .map_err(err)?;
+            channels.tf.push(Channel { id, sequence: 0 });
+        }
+        let frames: Vec<FrameTopic> = frames.into_iter().map(|(f, _)| f).collect();
         let flush_every_ticks = (rate_hz * options.flush_period_s).floor().max(1.0) as u64;
         let mut log = FlightLogWriter {
             writer: Some(writer),
             path: path.to_path_buf(),
             channels,
             options,
-            frames: Frames::new(scene.actor_names),
+            frames,
+            last_tf_ns: None,
             actor_prefixes,
             framing_names,
-            world_frame: quote(foxglove::WORLD),
-            reference_frame: quote("reference"),
             actor_names: scene.actor_names.to_vec(),
             heights_m: Vec::new(),
             text: Text::new(),
@@ -353,12 +372,7 @@ impl FlightLogWriter {
         stage: &dronecine_grammar::script::Stage,
         heights_m: &[f64],
     ) -> io::Result<()> {
-        let mut camera = b"{\"fov_x_rad\":".to_vec();
-        json::f64(&mut camera, lens.fov_x_rad);
-        camera.extend_from_slice(b",\"aspect\":");
-        json::f64(&mut camera, lens.aspect);
-        camera.push(b'}');
-        self.put(|c| &mut c.camera, 0, &camera)?;
+        self.put(|c| &mut c.camera, 0, &camera_message(lens))?;
         self.put(|c| &mut c.stage, 0, &foxglove::stage_scene(0, stage))?;
         self.put(|c| &mut c.drone, 0, &foxglove::drone_scene(0))?;
         self.put(
@@ -399,10 +413,10 @@ impl FlightLogWriter {
         // /reference, exactly as compile; its fields are also /servo/tick's reference.
         text.buf.clear();
         write_reference(&mut text.buf, tick.sample);
-        text.keep_reference_span(tick.sample, &tick.input.reference);
         self.put_text(|c| &mut c.reference, ns)?;
 
-        self.text.actors(t_s, &self.actor_prefixes, tick.actors);
+        self.text.buf.clear();
+        write_actors(&mut self.text.buf, t_s, &self.actor_prefixes, tick.actors);
         self.put_text(|c| &mut c.actors, ns)?;
 
         if let Some(out) = output {
@@ -462,31 +476,37 @@ impl FlightLogWriter {
         }
         let s = tick.sample;
         let (position_m, heading_rad) = self.last_estimate.unwrap_or((s.position_m, s.heading_rad));
-        let buf = &mut self.text.buf;
-        buf.clear();
-        self.frames.message(
-            buf,
-            ns,
-            position_m,
-            heading_rad,
-            s.camera_pitch_rad,
-            tick.actors.iter().map(|a| (a.position_m, a.facing_rad)),
-        );
-        // Append world→reference inside the transforms array (`…]}` → `…,{…}]}`).
-        buf.truncate(buf.len() - 2);
-        buf.push(b',');
-        let mut stamp = [0u8; 48];
-        let stamp = stamp_json(&mut stamp, ns);
-        foxglove::transform(
-            buf,
-            stamp,
-            &self.world_frame,
-            &self.reference_frame,
-            s.position_m,
-            foxglove::yaw(s.heading_rad),
-        );
-        buf.extend_from_slice(b"]}");
-        self.put_text(|c| &mut c.tf, ns)
+        let prev_ns = self.last_tf_ns.replace(ns);
+        let n_actors = tick.actors.len().min(self.frames.len().saturating_sub(3));
+        let poses = [
+            (position_m, foxglove::yaw(heading_rad)),
+            ([0.0; 3], foxglove::camera_in_drone(s.camera_pitch_rad)),
+        ]
+        .into_iter()
+        .chain(
+            tick.actors[..n_actors]
+                .iter()
+                .map(|a| (a.position_m, foxglove::yaw(a.facing_rad))),
+        )
+        .enumerate()
+        .chain(std::iter::once((
+            self.frames.len() - 1,
+            (s.position_m, foxglove::yaw(s.heading_rad)),
+        )));
+        for (i, (t, q)) in poses {
+            let buf = &mut self.text.buf;
+            if self.frames[i].message(buf, prev_ns, ns, t, q) {
+                let header = self.channels.tf[i].header(ns);
+                let path = &self.path;
+                let writer = self.writer.as_mut().ok_or_else(|| {
+                    io::Error::other(format!("cannot write {}: log finished", path.display()))
+                })?;
+                writer
+                    .write_to_known_channel(&header, &self.text.buf)
+                    .map_err(|e| mcap_err(path, e))?;
+            }
+        }
+        Ok(())
     }
 
     /// Writes an event on `/events` (its time exact, as on `/servo/tick`).
@@ -547,20 +567,4 @@ fn header_metadata(header: &FlightHeader) -> Result<BTreeMap<String, String>, St
         .into_iter()
         .map(|(k, v)| (k, v.to_string()))
         .collect())
-}
-
-/// `{"sec":…,"nsec":…}` into a stack buffer.
-fn stamp_json(buf: &mut [u8; 48], ns: u64) -> &[u8] {
-    let mut n = 0;
-    let mut put = |bytes: &[u8]| {
-        buf[n..n + bytes.len()].copy_from_slice(bytes);
-        n += bytes.len();
-    };
-    let mut digits = itoa::Buffer::new();
-    put(b"{\"sec\":");
-    put(digits.format(ns / 1_000_000_000).as_bytes());
-    put(b",\"nsec\":");
-    put(digits.format(ns % 1_000_000_000).as_bytes());
-    put(b"}");
-    &buf[..n]
 }
