@@ -70,8 +70,8 @@ fn json_has_the_documented_keys_and_shapes() {
     assert_eq!(poles.len(), 6);
     assert!(poles.iter().all(|&m| m > 0.0 && m < 1.0), "{poles:?}");
     assert!(v["residual"].as_f64().unwrap() < 1e-9);
-    // ardrone2: γ = 0.05, τ = 1 s, Δ = Δ̄ = 0.01 s.
-    let k2 = 0.05f64.powf(0.01 / 0.99);
+    // ardrone2: γ = 0.05, τ = 0.5 s, Δ = Δ̄ = 0.01 s.
+    let k2 = 0.05f64.powf(0.01 / 0.49);
     assert!((v["k2"].as_f64().unwrap() - k2).abs() < 1e-12);
 }
 
@@ -115,7 +115,7 @@ fn overrides_change_the_gains() {
         "15,17.5,1",
     ]);
     assert_ne!(other["P"], base["P"]);
-    let k2 = 0.05f64.powf(0.02 / 0.98);
+    let k2 = 0.05f64.powf(0.02 / 0.48);
     assert!((other["k2"].as_f64().unwrap() - k2).abs() < 1e-12);
 }
 

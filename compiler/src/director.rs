@@ -296,6 +296,28 @@ impl Director {
         !out.is_empty()
     }
 
+    /// The heading and camera pitch that frame the hold of the last [`Director::step`] from a
+    /// camera at `camera_m` — on set, where the drone really is rather than where it should
+    /// be — or `None` outside holds (as [`Director::hold_targets`]). `shoot` aims the camera
+    /// with it, so a position error does not also become a framing error.
+    pub fn hold_orientation(&self, actors: &[ActorPose], camera_m: &Vec3) -> Option<(f64, f64)> {
+        let Phase::Shot { index, start_s, .. } = self.phase else {
+            return None;
+        };
+        if !matches!(self.plans.get(index), Some(Plan::Hold(_)))
+            || self.last_t_s < start_s + SETTLE_S
+        {
+            return None;
+        }
+        let v = self.visual.as_ref()?;
+        let (heading, pitch, _) =
+            framing::orient_visual(v, actors, &self.lens, &self.gimbal, camera_m);
+        // Two actors: balance their screen-x errors rather than aim the primary exactly.
+        let heading =
+            framing::balanced_heading(v, actors, &self.lens, camera_m, pitch).unwrap_or(heading);
+        (heading.is_finite() && pitch.is_finite()).then_some((heading, pitch))
+    }
+
     /// Index of the shot being flown (or flown to), for the sample's `shot` field.
     fn shot_index(&self) -> usize {
         match self.phase {

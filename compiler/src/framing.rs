@@ -878,6 +878,41 @@ pub fn orient_visual(
     aim(lens, gimbal, c, &target, screen)
 }
 
+/// For a two-actor visual seen from `c` with camera pitch `pitch_rad`: the heading halfway
+/// between the two that put each actor's aim point at its screen x — the screen-x errors of
+/// the two actors then balance, where [`orient_visual`] puts all of it on the secondary.
+/// `None` for a one-actor visual or bad indices.
+pub fn balanced_heading(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    c: &Vec3,
+    pitch_rad: f64,
+) -> Option<f64> {
+    let Visual::Two(t) = v else {
+        return None;
+    };
+    if !valid_indices(v, actors.len()) {
+        return None;
+    }
+    let ha = orient_fixed_pitch(
+        lens,
+        c,
+        &band_centre(&actors[t.a], t.band_a_m),
+        t.screen_a[0],
+        pitch_rad,
+    );
+    let hb = orient_fixed_pitch(
+        lens,
+        c,
+        &band_centre(&actors[t.b], t.band_b_m),
+        t.screen_b[0],
+        pitch_rad,
+    );
+    let h = wrap_angle_rad(ha + wrap_angle_rad(hb - ha) / 2.0);
+    h.is_finite().then_some(h)
+}
+
 fn primary_target(t: &TwoVisual, actors: &[ActorPose]) -> (Vec3, [f64; 2]) {
     match t.primary {
         Primary::A => (band_centre(&actors[t.a], t.band_a_m), t.screen_a),

@@ -161,8 +161,8 @@ struct ActorTracker {
     last_t_s: Vec<Option<f64>>,
 }
 
-const TRACK_ALPHA: f64 = 0.4;
-const TRACK_BETA: f64 = 0.05;
+const TRACK_ALPHA: f64 = 0.7;
+const TRACK_BETA: f64 = 0.2;
 
 impl ActorTracker {
     fn new(scene: &Scene) -> Self {
@@ -333,6 +333,8 @@ struct Flight<'s, 'b> {
     actors: ActorTracker,
     targets: Vec<ScreenTarget>,
     framing: Vec<FramingRecord>,
+    /// The last heading aimed from the measured position (time, heading).
+    last_aim: Option<(f64, f64)>,
     last_tick_s: Option<f64>,
     controller_started: bool,
     metrics: Metrics,
@@ -389,6 +391,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             actors: ActorTracker::new(setup.scene),
             targets: Vec::with_capacity(4),
             framing: Vec::with_capacity(n_actors.max(2)),
+            last_aim: None,
             last_tick_s: None,
             controller_started: false,
             metrics: Metrics::new(setup.script.timeline.len()),
@@ -610,14 +613,41 @@ impl<'s, 'b> Flight<'s, 'b> {
                         ),
                     );
                 }
+                let mut world_sample = Sample { t_s: t, ..sample };
+                // Aim from where the drone is: in a hold, the heading (and gimbal pitch)
+                // that frame the live actors from the measured position.
+                let usable = self.measured.filter(|m| {
+                    m.position_m.iter().all(|x| x.is_finite()) && m.heading_rad.is_finite()
+                });
+                if let Some(m) = usable {
+                    if let Some((heading, pitch)) =
+                        director.hold_orientation(&self.actors.poses, &Vec3::from(m.position_m))
+                    {
+                        // Its rate from the previous aim (the director's rate is that of its
+                        // own, smoother heading).
+                        if let Some((t0, h0)) = self.last_aim {
+                            if t > t0 {
+                                world_sample.heading_rate_radps =
+                                    wrap_angle_rad(heading - h0) / (t - t0);
+                            }
+                        }
+                        self.last_aim = Some((t, heading));
+                        world_sample.heading_rad = heading;
+                        world_sample.camera_pitch_rad = pitch;
+                    } else {
+                        self.last_aim = None;
+                    }
+                } else {
+                    self.last_aim = None;
+                }
                 // The framing as the drone really films it: the measured pose, the camera
                 // pitch the reference asks of the gimbal (level without one).
                 self.framing.clear();
-                if let Some(m) = self.measured {
+                if let Some(m) = usable {
                     let camera = CameraPose {
                         position_m: Vec3::from(m.position_m),
                         heading_rad: m.heading_rad,
-                        pitch_rad: sample.camera_pitch_rad,
+                        pitch_rad: world_sample.camera_pitch_rad,
                     };
                     if director.hold_targets(
                         &self.actors.poses,
@@ -633,7 +663,6 @@ impl<'s, 'b> Flight<'s, 'b> {
                         }
                     }
                 }
-                let world_sample = Sample { t_s: t, ..sample };
                 last = world_sample;
                 if let Outcome::Land =
                     self.control(t, Phase::Shots, Some(sample.shot), &world_sample)?
@@ -772,7 +801,9 @@ impl<'s, 'b> Flight<'s, 'b> {
             self.hovering = false;
         }
         if let Some(m) = self.measured {
-            if !inside(&self.setup.scene.stage, &m.position_m, 0.0) {
+            // A non-finite pose is the controller's fault (hover for the tick), not a place.
+            let finite = m.position_m.iter().all(|x| x.is_finite());
+            if finite && !inside(&self.setup.scene.stage, &m.position_m, 0.0) {
                 self.failsafe(
                     t,
                     &format!(

@@ -108,7 +108,7 @@ impl Metrics {
         }
     }
 
-    /// The error of one tick: distance and wrapped heading error, when measured.
+    /// The error of one tick: distance and wrapped heading error, when measured (and finite).
     pub fn tracking_error(input: &TickInput) -> Option<(f64, f64)> {
         let m = input.measurement?;
         let r = &input.reference;
@@ -116,10 +116,9 @@ impl Metrics {
             .map(|i| (m.position_m[i] - r.position_m[i]).powi(2))
             .sum::<f64>()
             .sqrt();
-        Some((
-            d,
-            crate::frames::wrap_angle_rad(m.heading_rad - r.heading_rad),
-        ))
+        let h = crate::frames::wrap_angle_rad(m.heading_rad - r.heading_rad);
+        // A faulty (non-finite) tick is counted as a fault, not as an error of NaN metres.
+        (d.is_finite() && h.is_finite()).then_some((d, h))
     }
 
     pub fn record(
@@ -156,11 +155,14 @@ impl Metrics {
                 acc.sq_heading += h * h;
             }
             for f in framing {
-                acc.framing_n += 1;
-                acc.sq_framing += match (f.screen, f.requested) {
+                let sq = match (f.screen, f.requested) {
                     (Some(s), Some(r)) => (s[0] - r[0]).powi(2) + (s[1] - r[1]).powi(2),
                     _ => BEHIND_SQ,
                 };
+                if sq.is_finite() {
+                    acc.framing_n += 1;
+                    acc.sq_framing += sq;
+                }
             }
         }
     }

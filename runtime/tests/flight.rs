@@ -1,0 +1,337 @@
+//! The flight loop's failsafes and faults, on the embedded simulator wrapped to misbehave:
+//! the drone's body lost by the mocap, a NaN measurement, time going backward, the drone
+//! pushed out of the stage, and the pre-flight checks. Each ends in a defined, logged
+//! behaviour — never a panic.
+
+use dronecine_compiler::profile::Profile;
+use dronecine_grammar::Script;
+use dronecine_runtime::backend::{BackendError, Clock, Mocap, MocapFrame};
+use dronecine_runtime::flight::{
+    self, Backends, FlightError, FlightSetup, FlightSink, NoObserver, Safety,
+};
+use dronecine_runtime::record::ControllerSetup;
+use dronecine_runtime::record::{Event, Phase, TickRecord};
+use dronecine_runtime::report::FlightReport;
+use dronecine_runtime::session::{controller_for, start_pose};
+use dronecine_runtime::sim::{SimConfig, Simulator};
+
+const SCRIPT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
+                      actor A height 1.80m at (0, 0) facing 0deg\n\
+                      MS on A 34left for 6s\n";
+
+fn script() -> Script {
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    let checked = dronecine_grammar::check(SCRIPT, &opts);
+    checked.script.expect("valid script")
+}
+
+/// What a wrapper does to the mocap stream.
+#[derive(Clone, Copy, Default)]
+struct Faults {
+    /// From this time on, the drone's body is not tracked.
+    lose_drone_from_s: Option<f64>,
+    /// At the first frame after this time, the drone's x is NaN.
+    nan_at_s: Option<f64>,
+    /// From this time on, the drone is reported this much off in x.
+    shift_from_s: Option<(f64, f64)>,
+}
+
+struct Faulty<M: Mocap> {
+    inner: M,
+    faults: Faults,
+    nan_done: bool,
+}
+
+impl<M: Mocap> Mocap for Faulty<M> {
+    fn poll(&mut self, frame: &mut MocapFrame) -> Result<bool, BackendError> {
+        let fresh = self.inner.poll(frame)?;
+        if fresh {
+            if self
+                .faults
+                .lose_drone_from_s
+                .is_some_and(|t| frame.t_s >= t)
+            {
+                frame.drone = None;
+            }
+            if let (Some(t), false) = (self.faults.nan_at_s, self.nan_done) {
+                if frame.t_s >= t {
+                    if let Some(d) = frame.drone.as_mut() {
+                        d.position_m[0] = f64::NAN;
+                        self.nan_done = true;
+                    }
+                }
+            }
+            if let Some((t, dx)) = self.faults.shift_from_s {
+                if frame.t_s >= t {
+                    if let Some(d) = frame.drone.as_mut() {
+                        d.position_m[0] += dx;
+                    }
+                }
+            }
+        }
+        Ok(fresh)
+    }
+
+    fn action(&mut self, t_s: f64) {
+        self.inner.action(t_s);
+    }
+}
+
+/// A clock that jumps back once, at `at_s`, by `back_s`.
+struct Jumpy<C: Clock> {
+    inner: C,
+    at_s: f64,
+    back_s: f64,
+    jumped: bool,
+}
+
+impl<C: Clock> Clock for Jumpy<C> {
+    fn now_s(&mut self) -> f64 {
+        let t = self.inner.now_s();
+        if !self.jumped && t >= self.at_s {
+            self.jumped = true;
+            return t - self.back_s;
+        }
+        t
+    }
+    fn sleep_until(&mut self, t_s: f64) {
+        self.inner.sleep_until(t_s);
+    }
+}
+
+#[derive(Default)]
+struct Recorder {
+    events: Vec<Event>,
+    ticks: usize,
+    hover_ticks_in_shots: usize,
+}
+
+impl FlightSink for Recorder {
+    fn tick(&mut self, r: &TickRecord) -> std::io::Result<()> {
+        self.ticks += 1;
+        if r.phase == Phase::Shots && r.command_sent == dronecine_runtime::frames::Command::HOVER {
+            self.hover_ticks_in_shots += 1;
+        }
+        Ok(())
+    }
+    fn event(&mut self, e: &Event) -> std::io::Result<()> {
+        self.events.push(e.clone());
+        Ok(())
+    }
+}
+
+impl Recorder {
+    fn kinds(&self) -> Vec<&str> {
+        self.events.iter().map(|e| e.kind.as_str()).collect()
+    }
+    fn first(&self, kind: &str) -> Option<&Event> {
+        self.events.iter().find(|e| e.kind == kind)
+    }
+}
+
+fn fly_with(
+    faults: Faults,
+    clock_jump: Option<(f64, f64)>,
+    config: impl FnOnce(&mut SimConfig),
+) -> (Result<FlightReport, FlightError>, Recorder) {
+    let script = script();
+    let scene = script.scene.as_ref().unwrap();
+    let profile = Profile::builtin("ardrone2").unwrap();
+    let mut cfg = SimConfig::new(3);
+    (cfg.start_position_m, cfg.start_heading_rad) = start_pose(&script, scene, &profile);
+    cfg.wait_for_action = true;
+    config(&mut cfg);
+    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
+    let mut drone = sim.drone();
+    let mut mocap = Faulty {
+        inner: sim.mocap(),
+        faults,
+        nan_done: false,
+    };
+    let mut plain = sim.clock();
+    let mut jumpy;
+    let clock: &mut dyn Clock = match clock_jump {
+        Some((at_s, back_s)) => {
+            jumpy = Jumpy {
+                inner: sim.clock(),
+                at_s,
+                back_s,
+                jumped: false,
+            };
+            &mut jumpy
+        }
+        None => &mut plain,
+    };
+    let setup = ControllerSetup {
+        kind: "lqg".into(),
+        paper_prefilter: false,
+        per_tick_solve: false,
+    };
+    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
+    let mut rec = Recorder::default();
+    let result = flight::fly(
+        &FlightSetup {
+            script: &script,
+            source: SCRIPT,
+            scene,
+            profile: &profile,
+            rate_hz: 100.0,
+            safety: Safety::default(),
+        },
+        controller.as_mut(),
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock,
+        },
+        &mut rec,
+        &mut NoObserver,
+    );
+    (result, rec)
+}
+
+/// Time of the "action!" event (the shots start) in an undisturbed flight.
+fn action_s() -> f64 {
+    let (r, rec) = fly_with(Faults::default(), None, |_| {});
+    assert!(r.unwrap().completed);
+    rec.first("action").unwrap().t_s
+}
+
+#[test]
+fn an_undisturbed_flight_completes_without_failsafes() {
+    let (r, rec) = fly_with(Faults::default(), None, |_| {});
+    let r = r.unwrap();
+    assert!(r.completed, "{:?}", rec.kinds());
+    assert_eq!((r.failsafes, r.faults), (0, 0));
+    let kinds = rec.kinds();
+    for k in [
+        "take_off",
+        "approach",
+        "action",
+        "shot_start",
+        "landing",
+        "landed",
+        "flight_end",
+    ] {
+        assert!(kinds.contains(&k), "{k} missing from {kinds:?}");
+    }
+    assert!(r.figures.rms_framing_error.is_some());
+}
+
+#[test]
+fn losing_the_drone_hovers_then_lands() {
+    let lost_at = action_s() + 2.0;
+    let (r, rec) = fly_with(
+        Faults {
+            lose_drone_from_s: Some(lost_at),
+            ..Faults::default()
+        },
+        None,
+        |_| {},
+    );
+    let r = r.unwrap();
+    assert!(!r.completed);
+    let failsafes: Vec<&Event> = rec.events.iter().filter(|e| e.kind == "failsafe").collect();
+    assert!(failsafes.len() >= 2, "{:?}", rec.kinds());
+    // Hover after 0.5 s without the drone, land after 2 s.
+    let hover = failsafes[0];
+    assert!(hover.message.contains("hovering"), "{}", hover.message);
+    assert!(
+        (hover.t_s - (lost_at + 0.5)).abs() < 0.05,
+        "hover at {}",
+        hover.t_s
+    );
+    let land = failsafes
+        .iter()
+        .find(|e| e.message.contains("landing"))
+        .unwrap();
+    assert!(
+        (land.t_s - (lost_at + 2.0)).abs() < 0.05,
+        "land at {}",
+        land.t_s
+    );
+    assert!(
+        rec.hover_ticks_in_shots >= 140,
+        "{} hover ticks",
+        rec.hover_ticks_in_shots
+    );
+    assert!(rec.first("landed").is_some());
+}
+
+#[test]
+fn a_nan_measurement_is_a_logged_fault_and_the_flight_goes_on() {
+    let at = action_s() + 1.0;
+    let (r, rec) = fly_with(
+        Faults {
+            nan_at_s: Some(at),
+            ..Faults::default()
+        },
+        None,
+        |_| {},
+    );
+    let r = r.unwrap();
+    assert_eq!(r.faults, 1, "{:?}", rec.kinds());
+    let fault = rec.first("fault").unwrap();
+    assert!(fault.message.contains("NotFinite"), "{}", fault.message);
+    assert!(r.completed);
+    assert!(r.figures.rms_position_error_m < 0.1, "{:?}", r.figures);
+}
+
+#[test]
+fn time_going_backward_is_a_logged_fault() {
+    let at = action_s() + 1.0;
+    let (r, rec) = fly_with(Faults::default(), Some((at, 0.5)), |_| {});
+    let r = r.unwrap();
+    assert!(r.faults >= 1, "{:?}", rec.kinds());
+    assert!(rec
+        .first("fault")
+        .unwrap()
+        .message
+        .contains("TimeNotIncreasing"));
+}
+
+#[test]
+fn leaving_the_stage_lands() {
+    let at = action_s() + 1.0;
+    // The mocap says the drone is 10 m off: outside the 8 m stage.
+    let (r, rec) = fly_with(
+        Faults {
+            shift_from_s: Some((at, 10.0)),
+            ..Faults::default()
+        },
+        None,
+        |_| {},
+    );
+    let r = r.unwrap();
+    assert!(!r.completed);
+    let e = rec.first("failsafe").unwrap();
+    assert!(e.message.contains("left the stage"), "{}", e.message);
+    assert!(rec.first("landed").is_some());
+}
+
+#[test]
+fn preflight_refuses_an_untracked_drone_and_a_flat_battery() {
+    let (r, rec) = fly_with(
+        Faults {
+            lose_drone_from_s: Some(0.0),
+            ..Faults::default()
+        },
+        None,
+        |_| {},
+    );
+    match r {
+        Err(FlightError::Preflight(m)) => assert!(m.contains("not tracked"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(rec.first("take_off").is_none());
+
+    let (r, rec) = fly_with(Faults::default(), None, |c| c.battery_start_percent = 10.0);
+    match r {
+        Err(FlightError::Preflight(m)) => assert!(m.contains("battery"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(rec.first("take_off").is_none());
+}
