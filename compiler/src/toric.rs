@@ -139,29 +139,73 @@ pub fn inverse(a_m: &Vec3, b_m: &Vec3, c_m: &Vec3) -> Result<Toric, ToricError> 
 }
 
 /// Keep the θ candidates inside (0, 2(π − α)), without duplicates, ascending.
-fn keep_valid(alpha_rad: f64, mut thetas: Vec<f64>) -> Vec<f64> {
+/// Up to two roots θ, ascending, on the stack (the framing solve runs every tick: no heap).
+/// Reads as a slice.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Roots {
+    values: [f64; 2],
+    len: usize,
+}
+
+impl std::ops::Deref for Roots {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+}
+
+impl IntoIterator for Roots {
+    type Item = f64;
+    type IntoIter = std::iter::Take<std::array::IntoIter<f64, 2>>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.values.into_iter().take(self.len)
+    }
+}
+
+impl<'a> IntoIterator for &'a Roots {
+    type Item = &'a f64;
+    type IntoIter = std::slice::Iter<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+/// The candidates inside (0, 2(π − α)), finite, sorted, equal ones (within 1e-12) once.
+fn keep_valid(alpha_rad: f64, thetas: [f64; 2]) -> Roots {
     let max_theta = 2.0 * (PI - alpha_rad);
-    thetas.retain(|t| t.is_finite() && *t > 1e-12 && *t < max_theta - 1e-12);
-    thetas.sort_by(f64::total_cmp);
-    thetas.dedup_by(|x, y| (*x - *y).abs() < 1e-12);
-    thetas
+    let mut out = Roots::default();
+    for t in thetas {
+        if t.is_finite() && t > 1e-12 && t < max_theta - 1e-12 {
+            out.values[out.len] = t;
+            out.len += 1;
+        }
+    }
+    if out.len == 2 {
+        if out.values[1] < out.values[0] {
+            out.values.swap(0, 1);
+        }
+        if (out.values[1] - out.values[0]).abs() < 1e-12 {
+            out.len = 1;
+        }
+    }
+    out
 }
 
 /// Every θ at which the camera is `distance_m` from A: `sin(α + θ/2) = d/(2r)`,
 /// θ = π − 2α ± 2β' with β' = arccos(d/2r), kept in (0, 2(π − α)). Empty when no point of the
 /// torus is that far from A (d above 2r when α < π/2, above |AB| otherwise).
-pub fn theta_for_distance_to_a(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Vec<f64> {
+pub fn theta_for_distance_to_a(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Roots {
     if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(ab_m) {
-        return Vec::new();
+        return Roots::default();
     }
     let ratio = distance_m / (2.0 * radius_m(ab_m, alpha_rad));
     if ratio > 1.0 {
-        return Vec::new();
+        return Roots::default();
     }
     let bp = ratio.acos();
     keep_valid(
         alpha_rad,
-        vec![
+        [
             PI - 2.0 * alpha_rad + 2.0 * bp,
             PI - 2.0 * alpha_rad - 2.0 * bp,
         ],
@@ -170,16 +214,16 @@ pub fn theta_for_distance_to_a(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Ve
 
 /// Every θ at which the camera is `distance_m` from B: `sin(θ/2) = d/(2r)`, θ = π ∓ 2β',
 /// kept in (0, 2(π − α)).
-pub fn theta_for_distance_to_b(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Vec<f64> {
+pub fn theta_for_distance_to_b(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Roots {
     if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(ab_m) {
-        return Vec::new();
+        return Roots::default();
     }
     let ratio = distance_m / (2.0 * radius_m(ab_m, alpha_rad));
     if ratio > 1.0 {
-        return Vec::new();
+        return Roots::default();
     }
     let bp = ratio.acos();
-    keep_valid(alpha_rad, vec![PI - 2.0 * bp, PI + 2.0 * bp])
+    keep_valid(alpha_rad, [PI - 2.0 * bp, PI + 2.0 * bp])
 }
 
 /// Distance from X along the unit direction `u` at which the other actor Y and X are seen
