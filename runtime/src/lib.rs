@@ -14,7 +14,9 @@
 //! - `report`: the flight report's figures (shared by shoot and replay).
 //! - `log`: the flight log (MCAP), written incrementally and read back; `replay` re-runs it.
 //! - `session`: a whole flight on the simulator, and building a controller from its set-up.
+//! - `ardrone`, `natnet`: the AR.Drone 2.0 (AT commands, navdata) and NatNet wire codecs.
 
+pub mod ardrone;
 pub mod backend;
 pub mod clock;
 pub mod control;
@@ -24,6 +26,7 @@ pub mod frames;
 pub mod log;
 pub mod lqg;
 pub mod model;
+pub mod natnet;
 pub mod pid;
 pub mod record;
 pub mod replay;
