@@ -5,6 +5,7 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
 
 use dronecine_compiler::compile::{self, Options};
@@ -18,6 +19,9 @@ use dronecine_runtime::session::{self, SimFlight};
 use dronecine_runtime::sim::{Effects, SimConfig};
 
 use crate::check;
+
+/// Ctrl-C presses during the flight.
+static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
 
 pub struct Args<'a> {
     pub file: &'a Path,
@@ -145,7 +149,14 @@ pub fn run(a: &Args) -> ExitCode {
         controller: setup,
         sim,
         realtime: a.realtime,
+        interrupts: Some(&INTERRUPTS),
     };
+    // Ctrl-C lands, a second Ctrl-C cuts the motors (the flight loop reads the count).
+    if let Err(e) = ctrlc::set_handler(|| {
+        INTERRUPTS.fetch_add(1, Ordering::Relaxed);
+    }) {
+        eprintln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
+    }
     let mut display = Display::new(a.quiet);
     let result = session::fly_simulated(&flight, &mut LogSink(&mut log), &mut display);
     display.finish();

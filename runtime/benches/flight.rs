@@ -81,6 +81,7 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>) {
         },
         sim,
         realtime: false,
+        interrupts: None,
     };
     let report = match log {
         None => fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap(),

@@ -106,6 +106,7 @@ fn run() -> Result<(), String> {
                 },
                 sim,
                 realtime: false,
+                interrupts: None,
             };
             let r = fly_simulated(&flight, &mut NullSink, &mut NoObserver)
                 .map_err(|e| e.to_string())?;

@@ -124,6 +124,9 @@ pub struct FlightSetup<'a> {
     /// Control rate.
     pub rate_hz: f64,
     pub safety: Safety,
+    /// Interrupts (Ctrl-C) counted by the caller's signal handler: the first lands the
+    /// drone, the second cuts the motors.
+    pub interrupts: Option<&'a std::sync::atomic::AtomicU32>,
 }
 
 #[derive(Debug)]
@@ -342,6 +345,8 @@ struct Flight<'s, 'b> {
     faults: u64,
     deadline_misses: u64,
     hovering: bool,
+    /// The first interrupt was handled (landing).
+    interrupted: bool,
     log_error: Option<io::Error>,
     script_duration_s: f64,
 }
@@ -399,6 +404,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             faults: 0,
             deadline_misses: 0,
             hovering: false,
+            interrupted: false,
             log_error: None,
             script_duration_s,
         })
@@ -693,8 +699,14 @@ impl<'s, 'b> Flight<'s, 'b> {
         self.event(t, "info", "landing", "landing".into());
         self.drone.land()?;
         let deadline = t + self.setup.safety.landing_timeout_s;
+        let mut cut = false;
         loop {
             t = self.wait_tick(t + self.period_s)?;
+            if self.interrupts() >= 2 && !cut {
+                cut = true;
+                self.failsafe(t, "interrupted twice: emergency motor cut");
+                self.drone.emergency()?;
+            }
             let state = self.drone.telemetry().state;
             if matches!(state, FlightState::Landed | FlightState::Emergency) {
                 self.event(t, "info", "landed", format!("{state:?}").to_lowercase());
@@ -819,6 +831,24 @@ impl<'s, 'b> Flight<'s, 'b> {
             self.failsafe(t, &format!("battery at {battery:.0}%: landing"));
             outcome = Outcome::Land;
         }
+        match self.interrupts() {
+            0 => {}
+            1 => {
+                if !self.interrupted {
+                    self.interrupted = true;
+                    self.failsafe(
+                        t,
+                        "interrupted (Ctrl-C): landing; press Ctrl-C again to cut the motors",
+                    );
+                }
+                outcome = Outcome::Land;
+            }
+            _ => {
+                self.failsafe(t, "interrupted twice: emergency motor cut");
+                self.drone.emergency()?;
+                return Ok(Outcome::Land);
+            }
+        }
         if self.hovering || output.is_err() || matches!(outcome, Outcome::Land) {
             command_sent = Command::HOVER;
             self.drone.hover()?;
@@ -862,6 +892,12 @@ impl<'s, 'b> Flight<'s, 'b> {
             position_error_m: error.map(|e| e.0),
         });
         Ok(outcome)
+    }
+
+    fn interrupts(&self) -> u32 {
+        self.setup
+            .interrupts
+            .map_or(0, |n| n.load(std::sync::atomic::Ordering::Relaxed))
     }
 
     /// The first shot's framing against the actors as they stand now.

@@ -63,6 +63,8 @@ pub struct SimFlight<'a> {
     pub sim: SimConfig,
     /// Keep to the wall clock.
     pub realtime: bool,
+    /// Ctrl-C presses, counted by the caller's signal handler (see `FlightSetup`).
+    pub interrupts: Option<&'a std::sync::atomic::AtomicU32>,
 }
 
 #[derive(Debug)]
@@ -112,6 +114,7 @@ pub fn fly_simulated(
         profile: f.profile,
         rate_hz: f.rate_hz,
         safety: Safety::default(),
+        interrupts: f.interrupts,
     };
     flight::fly(
         &setup,

@@ -50,6 +50,7 @@ fn fly_text(text: &str, script: &Script, controller: &str, seed: u64) -> FlightR
         },
         sim: SimConfig::new(seed),
         realtime: false,
+        interrupts: None,
     };
     fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap()
 }

@@ -180,6 +180,7 @@ fn fly_with(
             profile: &profile,
             rate_hz: 100.0,
             safety: Safety::default(),
+            interrupts: None,
         },
         controller.as_mut(),
         Backends {
@@ -334,4 +335,111 @@ fn preflight_refuses_an_untracked_drone_and_a_flat_battery() {
         other => panic!("{other:?}"),
     }
     assert!(rec.first("take_off").is_none());
+}
+
+/// A clock that "presses Ctrl-C" at the given times.
+struct Presses<C: Clock> {
+    inner: C,
+    at_s: Vec<f64>,
+    count: &'static std::sync::atomic::AtomicU32,
+}
+
+impl<C: Clock> Clock for Presses<C> {
+    fn now_s(&mut self) -> f64 {
+        self.inner.now_s()
+    }
+    fn sleep_until(&mut self, t_s: f64) {
+        self.inner.sleep_until(t_s);
+        let pressed = self.at_s.iter().filter(|&&t| t <= t_s).count() as u32;
+        self.count
+            .store(pressed, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+fn fly_interrupted(
+    presses: Vec<f64>,
+    count: &'static std::sync::atomic::AtomicU32,
+) -> (
+    FlightReport,
+    Recorder,
+    dronecine_runtime::backend::FlightState,
+) {
+    use dronecine_runtime::backend::Drone;
+    let script = script();
+    let scene = script.scene.as_ref().unwrap();
+    let profile = Profile::builtin("ardrone2").unwrap();
+    let mut cfg = SimConfig::new(3);
+    (cfg.start_position_m, cfg.start_heading_rad) = start_pose(&script, scene, &profile);
+    cfg.wait_for_action = true;
+    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
+    let (mut drone, mut mocap) = (sim.drone(), sim.mocap());
+    let mut clock = Presses {
+        inner: sim.clock(),
+        at_s: presses,
+        count,
+    };
+    let setup = ControllerSetup {
+        kind: "lqg".into(),
+        paper_prefilter: false,
+        per_tick_solve: false,
+    };
+    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
+    let mut rec = Recorder::default();
+    let report = flight::fly(
+        &FlightSetup {
+            script: &script,
+            source: SCRIPT,
+            scene,
+            profile: &profile,
+            rate_hz: 100.0,
+            safety: Safety::default(),
+            interrupts: Some(count),
+        },
+        controller.as_mut(),
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock: &mut clock,
+        },
+        &mut rec,
+        &mut NoObserver,
+    )
+    .unwrap();
+    let state = drone.telemetry().state;
+    (report, rec, state)
+}
+
+#[test]
+fn ctrl_c_lands_and_a_second_one_cuts_the_motors() {
+    use dronecine_runtime::backend::FlightState;
+    use std::sync::atomic::AtomicU32;
+    static ONCE: AtomicU32 = AtomicU32::new(0);
+    static TWICE: AtomicU32 = AtomicU32::new(0);
+    let action = action_s();
+
+    let (r, rec, state) = fly_interrupted(vec![action + 1.0], &ONCE);
+    assert!(!r.completed);
+    let e = rec.first("failsafe").unwrap();
+    assert!(
+        e.message.contains("Ctrl-C") && e.message.contains("landing"),
+        "{}",
+        e.message
+    );
+    assert!((e.t_s - (action + 1.0)).abs() < 0.05);
+    assert_eq!(state, FlightState::Landed);
+    assert!(!rec.events.iter().any(|e| e.message.contains("motor cut")));
+
+    let (r, rec, state) = fly_interrupted(vec![action + 1.0, action + 1.5], &TWICE);
+    assert!(!r.completed);
+    let cut = rec
+        .events
+        .iter()
+        .find(|e| e.message.contains("emergency motor cut"))
+        .unwrap();
+    assert!(
+        cut.t_s >= action + 1.5 && cut.t_s < action + 1.6,
+        "{}",
+        cut.t_s
+    );
+    assert_eq!(state, FlightState::Emergency);
 }

@@ -75,6 +75,7 @@ fn fly_to_log(controller: &str, path: &std::path::Path) -> dronecine_runtime::re
             controller: setup,
             sim: SimConfig::new(9),
             realtime: false,
+            interrupts: None,
         },
         &mut log,
         &mut NoObserver,
