@@ -19,7 +19,8 @@
 //! Failsafes (each logged as an event): a controller fault (NaN, time not increasing) →
 //! hover for that tick; the drone's body not tracked for `mocap_hover_s` → hover, for
 //! `mocap_land_s` → land; the drone outside the stage → land; battery below
-//! `battery_land_percent` → land.
+//! `battery_land_percent` → land; no telemetry for `link_lost_s` → land; Ctrl-C → land, a
+//! second Ctrl-C → emergency motor cut.
 
 use std::io;
 
@@ -100,6 +101,8 @@ pub struct Safety {
     pub mocap_wait_s: f64,
     pub take_off_timeout_s: f64,
     pub landing_timeout_s: f64,
+    /// No telemetry from the drone for this long → land.
+    pub link_lost_s: f64,
 }
 
 impl Default for Safety {
@@ -111,6 +114,7 @@ impl Default for Safety {
             mocap_wait_s: 2.0,
             take_off_timeout_s: 10.0,
             landing_timeout_s: 15.0,
+            link_lost_s: 1.0,
         }
     }
 }
@@ -347,6 +351,8 @@ struct Flight<'s, 'b> {
     hovering: bool,
     /// The first interrupt was handled (landing).
     interrupted: bool,
+    /// The telemetry link was reported lost.
+    link_lost: bool,
     log_error: Option<io::Error>,
     script_duration_s: f64,
 }
@@ -405,6 +411,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             deadline_misses: 0,
             hovering: false,
             interrupted: false,
+            link_lost: false,
             log_error: None,
             script_duration_s,
         })
@@ -826,9 +833,26 @@ impl<'s, 'b> Flight<'s, 'b> {
                 outcome = Outcome::Land;
             }
         }
-        let battery = self.drone.telemetry().battery_percent;
+        let telemetry = self.drone.telemetry();
+        let battery = telemetry.battery_percent;
         if battery < self.setup.safety.battery_land_percent {
             self.failsafe(t, &format!("battery at {battery:.0}%: landing"));
+            outcome = Outcome::Land;
+        }
+        if telemetry.link_age_s >= self.setup.safety.link_lost_s {
+            // Nothing tells us what the drone does: ask it to land, and rely on its own
+            // watchdog (it hovers, then lands, without commands) if that does not get through.
+            if !self.link_lost {
+                self.link_lost = true;
+                self.failsafe(
+                    t,
+                    &format!(
+                        "no telemetry from the drone for {:.1} s: landing (the drone's watchdog \
+                         lands it if the command is lost too)",
+                        telemetry.link_age_s
+                    ),
+                );
+            }
             outcome = Outcome::Land;
         }
         match self.interrupts() {

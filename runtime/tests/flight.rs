@@ -443,3 +443,88 @@ fn ctrl_c_lands_and_a_second_one_cuts_the_motors() {
     );
     assert_eq!(state, FlightState::Emergency);
 }
+
+/// The drone's telemetry goes silent from `lost_from_s` on (its link age grows).
+struct Silent<D: dronecine_runtime::backend::Drone, C: Clock> {
+    inner: D,
+    clock: C,
+    lost_from_s: f64,
+}
+
+impl<D: dronecine_runtime::backend::Drone, C: Clock> dronecine_runtime::backend::Drone
+    for Silent<D, C>
+{
+    fn take_off(&mut self) -> Result<(), BackendError> {
+        self.inner.take_off()
+    }
+    fn land(&mut self) -> Result<(), BackendError> {
+        self.inner.land()
+    }
+    fn emergency(&mut self) -> Result<(), BackendError> {
+        self.inner.emergency()
+    }
+    fn send(&mut self, c: &dronecine_runtime::frames::Command) -> Result<(), BackendError> {
+        self.inner.send(c)
+    }
+    fn hover(&mut self) -> Result<(), BackendError> {
+        self.inner.hover()
+    }
+    fn telemetry(&mut self) -> dronecine_runtime::backend::Telemetry {
+        let mut t = self.inner.telemetry();
+        let now = self.clock.now_s();
+        if now >= self.lost_from_s {
+            t.link_age_s = now - self.lost_from_s;
+        }
+        t
+    }
+}
+
+#[test]
+fn losing_the_telemetry_lands() {
+    let lost = action_s() + 1.0;
+    let script = script();
+    let scene = script.scene.as_ref().unwrap();
+    let profile = Profile::builtin("ardrone2").unwrap();
+    let mut cfg = SimConfig::new(3);
+    (cfg.start_position_m, cfg.start_heading_rad) = start_pose(&script, scene, &profile);
+    cfg.wait_for_action = true;
+    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
+    let mut drone = Silent {
+        inner: sim.drone(),
+        clock: sim.clock(),
+        lost_from_s: lost,
+    };
+    let (mut mocap, mut clock) = (sim.mocap(), sim.clock());
+    let setup = ControllerSetup {
+        kind: "lqg".into(),
+        paper_prefilter: false,
+        per_tick_solve: false,
+    };
+    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
+    let mut rec = Recorder::default();
+    let r = flight::fly(
+        &FlightSetup {
+            script: &script,
+            source: SCRIPT,
+            scene,
+            profile: &profile,
+            rate_hz: 100.0,
+            safety: Safety::default(),
+            interrupts: None,
+        },
+        controller.as_mut(),
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock: &mut clock,
+        },
+        &mut rec,
+        &mut NoObserver,
+    )
+    .unwrap();
+    assert!(!r.completed);
+    let e = rec.first("failsafe").unwrap();
+    assert!(e.message.contains("no telemetry"), "{}", e.message);
+    assert!((e.t_s - (lost + 1.0)).abs() < 0.05, "{}", e.t_s);
+    assert!(rec.first("landing").unwrap().t_s >= e.t_s);
+}
