@@ -438,9 +438,9 @@ impl Director {
             return false;
         };
         matches!(self.plans.get(index), Some(Plan::Hold(_)))
-            && self.framed[index][0].iter().all(|&i| {
-                matches!((actors.get(i), ahead.get(i)), (Some(a), Some(b)) if same_pose(a, b))
-            })
+            && self.framed[index][0].iter().all(
+                |&i| matches!((actors.get(i), ahead.get(i)), (Some(a), Some(b)) if same_pose(a, b)),
+            )
     }
 
     /// Advance the phase to `t_s`. Returns false when the target jumps (a new segment that

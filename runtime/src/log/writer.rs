@@ -32,8 +32,8 @@ const REFERENCE_FRAME: &str = "reference";
 /// Chunk compression of the flight log.
 ///
 /// Measured (`benches/log.rs`, CPU time of one core on the shared 2-core development machine,
-/// 100 Hz, two actors): no compression 3.8 µs and 3.15 kB a tick (an hour: 1.5 s, 1.1 GB);
-/// LZ4 8.3 µs and 0.8 kB a tick. The default is no compression: the flight loop's budget is
+/// 100 Hz, two actors): no compression 3.6 µs a tick (an hour: 1.38 s; a simulated flight
+/// logs 2.4 kB a tick, 850 MB an hour); LZ4 7.4 µs a tick, about a quarter of the size. The default is no compression: the flight loop's budget is
 /// CPU time per tick, and a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
