@@ -352,7 +352,12 @@ impl Director {
         let mut ahead = std::mem::take(&mut self.ahead);
         ahead.clear();
         ahead.extend(actors.iter().map(|a| extrapolate(a, EPS_S)));
-        let target_ahead = self.target(t_s + EPS_S, &ahead, false);
+        let target_ahead = if self.hold_stands_still(actors, &ahead) {
+            // The same solve against the same poses: the same target, bit for bit.
+            target
+        } else {
+            self.target(t_s + EPS_S, &ahead, false)
+        };
         self.ahead = ahead;
         let v_t = (target_ahead - target) / EPS_S;
         let a_t = match self.last_target {
@@ -423,6 +428,19 @@ impl Director {
         let in_shot = matches!(self.phase, Phase::Shot { .. });
         self.monitor.record(&sample, &goal, actors, in_shot);
         sample
+    }
+
+    /// Whether the target 1 ms ahead is the target now: in a hold (which depends on the
+    /// poses of the actors it frames, not on the time) whose framed actors extrapolate to
+    /// their own poses, bit for bit (they stand still).
+    fn hold_stands_still(&self, actors: &[ActorPose], ahead: &[ActorPose]) -> bool {
+        let Phase::Shot { index, .. } = self.phase else {
+            return false;
+        };
+        matches!(self.plans.get(index), Some(Plan::Hold(_)))
+            && self.framed[index][0].iter().all(
+                |&i| matches!((actors.get(i), ahead.get(i)), (Some(a), Some(b)) if same_pose(a, b)),
+            )
     }
 
     /// Advance the phase to `t_s`. Returns false when the target jumps (a new segment that

@@ -607,6 +607,8 @@ impl Pair {
                 .into_iter()
                 .min_by(|x, y| (x - theta).abs().total_cmp(&(y - theta).abs()))
             {
+                // A fixed point, bit for bit: the remaining steps would repeat this one.
+                Some(t) if t.to_bits() == theta.to_bits() => break,
                 Some(t) => theta = t,
                 None => break,
             }

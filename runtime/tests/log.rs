@@ -496,7 +496,18 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
     let n = ticks.len();
     assert_eq!(by_topic["/reference"].len(), n);
     assert_eq!(by_topic["/servo/tick"].len(), n);
-    assert_eq!(by_topic["/command"].len(), n);
+    // The plot topics at 30 Hz over 3 s (/command also on every failsafe tick and the one
+    // after; /measurement on ticks with a mocap frame); /servo/tick has every tick exactly.
+    for topic in ["/estimate", "/measurement"] {
+        let m = by_topic[topic].len();
+        assert!((85..=91).contains(&m), "{m} {topic} messages");
+    }
+    let faulted = ticks.iter().filter(|t| t.output.is_err()).count();
+    let commands = by_topic["/command"].len();
+    assert!(
+        commands > faulted && commands <= 91 + 2 * faulted,
+        "{commands} /command messages"
+    );
     assert_eq!(by_topic["/events"].len(), 3);
     // One topic per frame, as compile writes them: a frame is published at a 30 Hz tick
     // when it changed. The fixed camera (no gimbal pitch change) once; the drone's
@@ -514,10 +525,23 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
         let last = v["transforms"].as_array().unwrap().last().unwrap().clone();
         assert_eq!(last["child_frame_id"], child, "{topic}");
     }
-    // The failsafe flag: set exactly on the faulted ticks (their sent command is HOVER).
-    for ((_, data), t) in by_topic["/command"].iter().zip(&ticks) {
-        let v: serde_json::Value = serde_json::from_slice(data).unwrap();
-        assert_eq!(v["failsafe"], t.output.is_err());
+    // The failsafe flag: set exactly on the faulted ticks (their sent command is HOVER),
+    // every one of which is written, with the tick after it.
+    let by_time: BTreeMap<u64, &Vec<u8>> = by_topic["/command"]
+        .iter()
+        .map(|(ns, data)| (*ns, data))
+        .collect();
+    assert_eq!(by_time.len(), commands);
+    for (k, t) in ticks.iter().enumerate() {
+        let ns = (t.input.t_s * 1e9).round() as u64;
+        let data = by_time.get(&ns);
+        if t.output.is_err() || (k > 0 && ticks[k - 1].output.is_err()) {
+            assert!(data.is_some(), "tick {k}: no /command");
+        }
+        if let Some(data) = data {
+            let v: serde_json::Value = serde_json::from_slice(data).unwrap();
+            assert_eq!(v["failsafe"], t.output.is_err(), "tick {k}");
+        }
     }
     // The metadata record: every header field, as JSON.
     let index = summary

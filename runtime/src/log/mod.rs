@@ -14,15 +14,20 @@
 //! | `/reference` | `dronecine.Reference` | every tick | exactly as `dronecine compile` writes it (the tick's [`Sample`](crate::frames::Sample)) |
 //! | `/actors` | `dronecine.Actors` | every tick | exactly as compile: `t_s`, `actors[] {name, position_m, facing_rad, height_m}` |
 //! | `/camera` | `dronecine.Camera` | once (t = 0) | `fov_x_rad`, `aspect` |
-//! | `/estimate` | `dronecine.Estimate` | ticks whose controller answered | `t_s`, `position_m`, `velocity_mps`, `heading_rad` |
-//! | `/measurement` | `dronecine.Measurement` | ticks with a new mocap frame | `t_s` (capture), `frame`, `drone {position_m, heading_rad}` or null, `actors[]` (same, or null) |
-//! | `/command` | `dronecine.Command` | every tick | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
+//! | `/estimate` | `dronecine.Estimate` | 30 Hz: ticks whose controller answered | `t_s`, `position_m`, `velocity_mps`, `heading_rad` |
+//! | `/measurement` | `dronecine.Measurement` | 30 Hz: ticks with a new mocap frame | `t_s` (capture), `frame`, `drone {position_m, heading_rad}` or null, `actors[]` (same, or null) |
+//! | `/command` | `dronecine.Command` | 30 Hz, and every tick whose `failsafe` is set (and the first after) | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
 //! | `/framing` | `dronecine.Framing` | ticks with framing records | `t_s`, `shot`, `actors[] {actor, name, screen, requested}` (`[x, y]` or null) |
 //! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message` |
 //! | `/servo/tick` | `dronecine.ServoTick` | every tick | `phase`, `shot`, `input` (the [`TickInput`](crate::control::TickInput)), `output` or null, `fault` or null, `command_sent`, `drone_state` |
-//! | `/tf` | `foxglove.FrameTransforms` | 30 Hz | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
+//! | `/tf` | `foxglove.FrameTransforms` | 30 Hz (a frame when it moved) | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
 //! | `/scene/stage`, `/scene/drone`, `/scene/actors` | `foxglove.SceneUpdate` | once (actors again when a height changes) | as compile |
 //! | `/camera_calibration` | `foxglove.CameraCalibration` | once | as compile |
+//!
+//! The 30 Hz topics (rates in [`LogOptions`]) are for Foxglove's plots and 3D view: every
+//! tick's exact estimate, drone measurement and commands are on `/servo/tick`, and that (with
+//! `/events` and `/framing`) is all replay reads; the actors' raw measured poses are kept at
+//! 30 Hz only. A 30 Hz topic is written on the first tick that has one when it is due.
 //!
 //! # Numbers
 //!

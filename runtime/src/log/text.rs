@@ -215,8 +215,13 @@ impl Text {
     }
 
     /// `/command`: the command sent, and whether it is not the controller's.
-    pub(super) fn command(&mut self, t_s: f64, output: Option<&TickOutput>, c: &Command) {
-        let failsafe = output.is_none_or(|o| !same_command(&o.command, c));
+    pub(super) fn command(
+        &mut self,
+        t_s: f64,
+        output: Option<&TickOutput>,
+        c: &Command,
+        failsafe: bool,
+    ) {
         self.buf.clear();
         self.raw(b"{\"t_s\":");
         self.num(t_s);

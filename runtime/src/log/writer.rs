@@ -22,7 +22,7 @@ use dronecine_compiler::output::{json, ns_from_s};
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Attachment, McapError, WriteOptions, Writer};
 
-use super::text::Text;
+use super::text::{same_command, Text};
 use super::{schema, topic, LogScene, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, TickRecord};
 
@@ -32,8 +32,8 @@ const REFERENCE_FRAME: &str = "reference";
 /// Chunk compression of the flight log.
 ///
 /// Measured (`benches/log.rs`, CPU time of one core on the shared 2-core development machine,
-/// 100 Hz, two actors): no compression 3.8 µs and 3.15 kB a tick (an hour: 1.5 s, 1.1 GB);
-/// LZ4 8.3 µs and 0.8 kB a tick. The default is no compression: the flight loop's budget is
+/// 100 Hz, two actors): no compression 3.6 µs a tick (an hour: 1.38 s; a simulated flight
+/// logs 2.4 kB a tick, 850 MB an hour); LZ4 7.4 µs a tick, about a quarter of the size. The default is no compression: the flight loop's budget is
 /// CPU time per tick, and a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
@@ -49,6 +49,10 @@ pub struct LogOptions {
     pub compression: LogCompression,
     /// Rate of `/tf` (Foxglove's 3D view).
     pub tf_hz: f64,
+    /// Rate of `/estimate`, `/measurement` and `/command` (Foxglove's plots; `/servo/tick`
+    /// holds every tick's exact controller input and output). A `/command` whose `failsafe`
+    /// flag is set, and the first after it, are written whatever the rate.
+    pub plot_hz: f64,
     /// Flight time between two chunk closes and flushes: what a crash may lose. Also closed
     /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say.
     pub flush_period_s: f64,
@@ -59,6 +63,7 @@ impl Default for LogOptions {
         Self {
             compression: LogCompression::None,
             tf_hz: 30.0,
+            plot_hz: 30.0,
             flush_period_s: 1.0,
         }
     }
@@ -136,6 +141,12 @@ pub struct FlightLogWriter {
     /// The reused message buffer and float texts.
     text: Text,
     next_tf_s: f64,
+    /// When `/estimate`, `/measurement` and `/command` are next due (`plot_hz`).
+    next_estimate_s: f64,
+    next_measurement_s: f64,
+    next_command_s: f64,
+    /// The last `/command` written had its `failsafe` flag set.
+    command_failsafe: bool,
     next_flush_s: f64,
     ticks_since_flush: u64,
     flush_every_ticks: u64,
@@ -327,6 +338,10 @@ impl FlightLogWriter {
             heights_m: Vec::new(),
             text: Text::new(),
             next_tf_s: f64::NEG_INFINITY,
+            next_estimate_s: f64::NEG_INFINITY,
+            next_measurement_s: f64::NEG_INFINITY,
+            next_command_s: f64::NEG_INFINITY,
+            command_failsafe: false,
             next_flush_s: options.flush_period_s,
             ticks_since_flush: 0,
             flush_every_ticks,
@@ -419,19 +434,33 @@ impl FlightLogWriter {
         write_actors(&mut self.text.buf, t_s, &self.actor_prefixes, tick.actors);
         self.put_text(|c| &mut c.actors, ns)?;
 
+        // The plot topics at `plot_hz` (each on the first tick that has one when due).
+        let hz = self.options.plot_hz;
+        let due = |next_s: f64| t_s >= next_s || !t_s.is_finite();
         if let Some(out) = output {
-            self.text.estimate(t_s, &out.estimate);
-            self.put_text(|c| &mut c.estimate, ns)?;
+            if due(self.next_estimate_s) {
+                self.next_estimate_s = advance(self.next_estimate_s, t_s, hz);
+                self.text.estimate(t_s, &out.estimate);
+                self.put_text(|c| &mut c.estimate, ns)?;
+            }
             self.last_estimate = Some((out.estimate.position_m, out.estimate.heading_rad));
         }
 
         if let Some(frame) = tick.mocap {
-            self.text.measurement(frame);
-            self.put_text(|c| &mut c.measurement, ns)?;
+            if due(self.next_measurement_s) {
+                self.next_measurement_s = advance(self.next_measurement_s, t_s, hz);
+                self.text.measurement(frame);
+                self.put_text(|c| &mut c.measurement, ns)?;
+            }
         }
 
-        self.text.command(t_s, output, &tick.command_sent);
-        self.put_text(|c| &mut c.command, ns)?;
+        let failsafe = output.is_none_or(|o| !same_command(&o.command, &tick.command_sent));
+        if due(self.next_command_s) || failsafe || self.command_failsafe {
+            self.next_command_s = advance(self.next_command_s, t_s, hz);
+            self.command_failsafe = failsafe;
+            self.text.command(t_s, output, &tick.command_sent, failsafe);
+            self.put_text(|c| &mut c.command, ns)?;
+        }
 
         if !tick.framing.is_empty() {
             self.text
