@@ -121,6 +121,8 @@ pub struct Director {
     framed: Vec<[Vec<usize>; 2]>,
     /// The last few composition solves (see [`Solved`]), replaced round robin.
     solved: Vec<Solved>,
+    /// The boxes of the last tick's blended visual, reused by the next one.
+    blend_spare: Option<(Box<framing::Visual>, Box<framing::Visual>)>,
     next_solved: usize,
 }
 
@@ -251,6 +253,7 @@ impl Director {
             axes: Vec::with_capacity(scene.actors.len()),
             framed,
             solved: Vec::with_capacity(SOLVED_SLOTS),
+            blend_spare: None,
             next_solved: 0,
         }
     }
@@ -346,7 +349,10 @@ impl Director {
         }
 
         // The target and its velocity (forward difference with the actors extrapolated).
-        self.visual = None;
+        // A blend's two boxes are kept for the next tick's blend (no allocation per tick).
+        if let Some(framing::Visual::Blend { from, to, .. }) = self.visual.take() {
+            self.blend_spare = Some((from, to));
+        }
         let target = self.target(t_s, actors, true);
         // Reused buffers: the sampling loop allocates nothing per tick.
         let mut ahead = std::mem::take(&mut self.ahead);
@@ -702,19 +708,30 @@ impl Director {
         };
         let result = framing::solve(comp, &self.names, actors, &self.lens, &self.gimbal);
         if known {
-            let entry = Solved {
-                plan: index,
-                end,
-                actor_count: actors.len(),
-                poses: framed.iter().map(|&i| actors[i]).collect(),
-                result: result.clone(),
-            };
-            if self.solved.len() < SOLVED_SLOTS {
-                self.solved.push(entry);
+            // A full memo reuses the oldest slot and its pose buffer: no allocation per tick.
+            let slot = if self.solved.len() < SOLVED_SLOTS {
+                self.solved.push(Solved {
+                    plan: index,
+                    end,
+                    actor_count: actors.len(),
+                    poses: Vec::with_capacity(framed.len()),
+                    result: result.clone(),
+                });
+                self.solved.len() - 1
             } else {
-                self.solved[self.next_solved] = entry;
+                let k = self.next_solved;
                 self.next_solved = (self.next_solved + 1) % SOLVED_SLOTS;
-            }
+                let entry = &mut self.solved[k];
+                entry.plan = index;
+                entry.end = end;
+                entry.actor_count = actors.len();
+                entry.result = result.clone();
+                k
+            };
+            let framed = &self.framed[index][end];
+            let poses = &mut self.solved[slot].poses;
+            poses.clear();
+            poses.extend(framed.iter().map(|&i| actors[i]));
         }
         result
     }
@@ -775,7 +792,9 @@ impl Director {
                     self.check_clearance(index, &p, actors);
                     self.visual = Some(match b {
                         None => a,
-                        Some((b, s)) => framing::interpolate(&a, &b, s),
+                        Some((b, s)) => {
+                            framing::interpolate_reusing(&a, &b, s, &mut self.blend_spare)
+                        }
                     });
                 }
                 p

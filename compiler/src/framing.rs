@@ -657,21 +657,26 @@ fn solve_together(
     let alpha = pair.alpha;
     let dist_a = |th: f64| 2.0 * r * (alpha + th / 2.0).sin();
     let dist_b = |th: f64| 2.0 * r * (th / 2.0).sin();
-    let mut candidates: Vec<(f64, Primary)> = Vec::new();
+    // At most two roots each: on the stack (this runs every tick).
+    let mut candidates = [(0.0, Primary::A); 4];
+    let mut count = 0;
     if let Some(d) = pair.distance_a(lens) {
         for th in toric::theta_for_distance_to_a(alpha, ab, d) {
             if dist_a(th) <= dist_b(th) + 1e-9 {
-                candidates.push((th, Primary::A));
+                candidates[count] = (th, Primary::A);
+                count += 1;
             }
         }
     }
     if let Some(d) = pair.distance_b(lens) {
         for th in toric::theta_for_distance_to_b(alpha, ab, d) {
             if dist_b(th) <= dist_a(th) + 1e-9 {
-                candidates.push((th, Primary::B));
+                candidates[count] = (th, Primary::B);
+                count += 1;
             }
         }
     }
+    let candidates = &candidates[..count];
     // The root nearest the symmetric θ = π − α; on a near tie (equal sizes and heights give
     // mirror-image roots) the first subject keeps its size, so that the choice does not
     // flicker with noise on live actors' poses.
@@ -685,7 +690,8 @@ fn solve_together(
             }
     };
     let (theta, primary) = candidates
-        .into_iter()
+        .iter()
+        .copied()
         .min_by(|x, y| key(x).total_cmp(&key(y)))
         .ok_or(FramingError::SizeUnreachable { size: size_ })?;
     let theta = pair.refine_theta(lens, theta, phi, primary);
@@ -1294,20 +1300,46 @@ fn toric_blend_position(from: &Visual, to: &Visual, s: f64, actors: &[ActorPose]
 ///   interpolation of their screen points (continuous; exact for an actor aimed at both ends),
 ///   and the flags are those of both ends plus the blend's own.
 pub fn interpolate(a: &Visual, b: &Visual, s: f64) -> Visual {
+    interpolate_reusing(a, b, s, &mut None)
+}
+
+/// [`interpolate`], building a blend in the two boxes of `spare` when it holds some (taken):
+/// the same visual, without allocating once a blend has been made.
+pub fn interpolate_reusing(
+    a: &Visual,
+    b: &Visual,
+    s: f64,
+    spare: &mut Option<(Box<Visual>, Box<Visual>)>,
+) -> Visual {
+    let v = interpolate_shortcut(a, b, s);
+    match v {
+        Ok(v) => v,
+        Err(s) => {
+            let (mut from, mut to) = match spare.take() {
+                Some(boxes) => boxes,
+                None => (Box::new(a.clone()), Box::new(b.clone())),
+            };
+            (*from).clone_from(a);
+            (*to).clone_from(b);
+            Visual::Blend { from, to, s }
+        }
+    }
+}
+
+/// The cases of [`interpolate`] that need no blend (`Ok`), or the clamped `s` of a blend.
+fn interpolate_shortcut(a: &Visual, b: &Visual, s: f64) -> Result<Visual, f64> {
     let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
     if s == 0.0 {
-        return a.clone();
+        return Ok(a.clone());
     }
     if s == 1.0 {
-        return b.clone();
+        return Ok(b.clone());
     }
     match (a, b) {
-        (Visual::One(x), Visual::One(y)) if x.actor == y.actor => Visual::One(lerp_one(x, y, s)),
-        _ => Visual::Blend {
-            from: Box::new(a.clone()),
-            to: Box::new(b.clone()),
-            s,
-        },
+        (Visual::One(x), Visual::One(y)) if x.actor == y.actor => {
+            Ok(Visual::One(lerp_one(x, y, s)))
+        }
+        _ => Err(s),
     }
 }
 

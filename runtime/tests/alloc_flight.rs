@@ -1,0 +1,190 @@
+//! The whole control loop allocates nothing per tick once it runs: a counting global
+//! allocator around a simulated two-actor flight (director re-framing live actors, LQG servo,
+//! simulator), checked between consecutive ticks of the shots. Ticks that raise an event (a
+//! new shot, a failsafe) may allocate its message and are left out. The count is per thread.
+//!
+//! With the MCAP flight log on, the `mcap` crate's chunk writer grows a fresh buffer for each
+//! chunk (one a second) and its record encoder allocates now and then: a handful of
+//! allocations a second, bounded here; dronecine's own log code reuses its buffers.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use dronecine_compiler::profile::Profile;
+use dronecine_runtime::flight::{FlightSink, Observer, Progress};
+use dronecine_runtime::log::{FlightLogWriter, LogScene};
+use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
+use dronecine_runtime::session::{fly_simulated, SimFlight};
+use dronecine_runtime::sim::SimConfig;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+const SCRIPT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
+                      actor A height 1.80m at (-1, 0) facing 0deg\n\
+                      actor B height 1.75m at (1, 0) facing 180deg\n\
+                      at 1s A walks to (-0.5, 1) over 5s\n\
+                      at 2s B walks to (1.5, 0.5) over 5s\n\
+                      MS on A and B for 12s\n\
+                      then dolly to MS on A screen (-0.2, 0) and B screen (0.2, 0) over 4s\n";
+
+/// Counts allocations between consecutive shot ticks.
+#[derive(Default)]
+struct Watch {
+    first_shot_s: Option<f64>,
+    last: Option<usize>,
+    event_since: bool,
+    intervals: usize,
+    allocating: Vec<(f64, usize)>,
+}
+
+impl Observer for Watch {
+    fn progress(&mut self, p: &Progress) {
+        let now = count();
+        if p.phase == Phase::Shots {
+            self.first_shot_s.get_or_insert(p.t_s);
+            if let (Some(before), false) = (self.last, self.event_since) {
+                self.intervals += 1;
+                if now > before {
+                    // Recording allocates: note it, then re-read the counter.
+                    self.allocating.push((p.t_s, now - before));
+                }
+            }
+        }
+        self.event_since = false;
+        self.last = Some(count());
+    }
+    fn event(&mut self, _: &Event) {
+        self.event_since = true;
+    }
+}
+
+struct Log(FlightLogWriter);
+
+impl FlightSink for Log {
+    fn tick(&mut self, r: &TickRecord) -> std::io::Result<()> {
+        self.0.write_tick(r)
+    }
+    fn event(&mut self, e: &Event) -> std::io::Result<()> {
+        self.0.write_event(e)
+    }
+}
+
+/// Flies the script; returns (shot-tick intervals, allocating intervals after warm-up as
+/// (time, count)).
+fn fly(with_log: bool) -> (usize, Vec<(f64, usize)>) {
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    let script = dronecine_grammar::check(SCRIPT, &opts).script.unwrap();
+    let scene = script.scene.as_ref().unwrap();
+    let profile = Profile::builtin("ardrone2").unwrap();
+    let setup = ControllerSetup {
+        kind: "lqg".into(),
+        paper_prefilter: false,
+        per_tick_solve: false,
+    };
+    let names: Vec<String> = vec!["A".into(), "B".into()];
+    let dir = tempfile::tempdir().unwrap();
+    let writer = FlightLogWriter::create(
+        &dir.path().join("f.mcap"),
+        &FlightHeader {
+            script_name: "a.psl".into(),
+            script_text: SCRIPT.into(),
+            profile_name: profile.name.clone(),
+            profile_toml: String::new(),
+            profile: profile.clone(),
+            controller: setup.clone(),
+            backend: "sim".into(),
+            seed: Some(2),
+            rate_hz: 100.0,
+            actor_names: names.clone(),
+            dronecine_version: "test".into(),
+        },
+        &LogScene {
+            stage: scene.stage,
+            lens: *dronecine_compiler::director::Director::new(&script, scene, &profile).lens(),
+            actor_names: &names,
+            actor_heights_m: &[1.8, 1.75],
+        },
+    )
+    .unwrap();
+    let mut log = Log(writer);
+    let mut null = dronecine_runtime::flight::NullSink;
+    let sink: &mut dyn FlightSink = if with_log { &mut log } else { &mut null };
+    let mut watch = Watch::default();
+    let report = fly_simulated(
+        &SimFlight {
+            script: &script,
+            source: SCRIPT,
+            scene,
+            profile: &profile,
+            rate_hz: 100.0,
+            controller: setup,
+            sim: SimConfig::new(2),
+            realtime: false,
+            interrupts: None,
+        },
+        sink,
+        &mut watch,
+    )
+    .unwrap();
+    log.0.finish().unwrap();
+    assert!(report.completed);
+    // The first second of the shots warms the buffers up.
+    let start = watch.first_shot_s.unwrap();
+    let late = watch
+        .allocating
+        .into_iter()
+        .filter(|(t, _)| *t > start + 1.0)
+        .collect();
+    (watch.intervals, late)
+}
+
+#[test]
+fn a_flight_tick_allocates_nothing() {
+    let (intervals, late) = fly(false);
+    assert!(intervals > 1500, "{intervals} intervals");
+    assert!(
+        late.is_empty(),
+        "{} of {intervals} shot ticks allocated after warm-up: {:?}",
+        late.len(),
+        &late[..late.len().min(10)]
+    );
+}
+
+#[test]
+fn with_the_flight_log_only_the_mcap_chunks_allocate() {
+    let (intervals, late) = fly(true);
+    let total: usize = late.iter().map(|(_, n)| n).sum();
+    // ~16 s of shots: a chunk a second, a few allocations each.
+    assert!(
+        total < 40 * 16,
+        "{total} allocations over {intervals} ticks"
+    );
+}
