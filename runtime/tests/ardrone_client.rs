@@ -599,9 +599,19 @@ fn telemetry_skips_malformed_and_old_navdata() {
 fn monitoring_writes_no_limits_and_refuses_to_fly() {
     let fake = FakeDrone::start(NORMAL);
     let mut client = ArDroneClient::monitor(&fake.url(), &fast()).unwrap();
-    assert!(configs(&fake.records())
+    for _ in 0..30 {
+        client.status();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let recs = fake.records();
+    assert!(configs(&recs)
         .iter()
         .all(|(k, _)| k == "general:navdata_demo"));
+    // Someone else may be flying the drone: a monitor sends no REF (no "land").
+    assert!(
+        !recs.iter().any(|r| matches!(r.cmd, Cmd::Ref(_))),
+        "{recs:?}"
+    );
     assert!(matches!(
         client.send(&Command::HOVER),
         Err(BackendError::Refused(_))

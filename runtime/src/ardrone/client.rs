@@ -22,7 +22,8 @@
 //! had the com-watchdog bit. [`Drone::take_off`] sends `AT*FTRIM` first when the drone is on
 //! the ground. [`Drone::telemetry`] drains navdata and, when no datagram went out for 30 ms,
 //! sends a keep-alive (the REF, and COMWDG when asked), so the take-off and landing waits of
-//! the flight loop, which only read telemetry, keep the REF going at ≥ 30 Hz.
+//! the flight loop, which only read telemetry, keep the REF going at ≥ 30 Hz. A client opened
+//! with [`ArDroneClient::monitor`] sends no REF until asked to fly (only COMWDG).
 //!
 //! One [`AtEncoder`]: one global, strictly increasing sequence number, starting at 1.
 //! Navdata: packets from another address, malformed ones (checksum, layout) and old ones
@@ -381,12 +382,8 @@ impl ArDroneClient {
     /// Reads every waiting navdata packet; returns how many were used.
     fn drain_navdata(&mut self) -> usize {
         let mut used = 0;
-        loop {
-            let (n, from) = match self.nav_socket.recv_from(&mut self.rx_buf[..]) {
-                Ok(r) => r,
-                // Nothing more (or an ICMP error of an earlier send): done for now.
-                Err(_) => break,
-            };
+        // Until WouldBlock (or an ICMP error of an earlier send: read again next call).
+        while let Ok((n, from)) = self.nav_socket.recv_from(&mut self.rx_buf[..]) {
             if from.ip() != self.nav_addr.ip() {
                 self.stats.foreign += 1;
                 continue;
@@ -573,8 +570,15 @@ impl ArDroneClient {
         }
     }
 
-    /// The REF of the current goal, at once.
+    /// The REF of the current goal, at once. A monitoring client (no limits) never sends a
+    /// REF of its own (another pilot may be flying the drone): only COMWDG when asked.
     fn keep_alive_now(&mut self) -> Result<(), BackendError> {
+        if self.limits.is_none() && self.goal == RefGoal::Land {
+            if self.navdata.state.com_watchdog() {
+                return self.send_commands(&[]);
+            }
+            return Ok(());
+        }
         let r = self.ref_command();
         self.send_commands(&[r])
     }
