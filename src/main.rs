@@ -9,6 +9,7 @@ mod fmt;
 mod gains;
 mod replay;
 mod shoot;
+mod status;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -128,6 +129,29 @@ enum Command {
         #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
         report: ReportFormat,
     },
+    /// Connect to a drone and print its state: what to check before a flight.
+    ///
+    /// Starts the drone's navdata and prints the control state, battery, angles, altitude,
+    /// velocities and the set state flags, once or continuously. Only reads: writes no
+    /// limits and sends no take-off or landing command.
+    Status {
+        /// The drone: ardrone://HOST[:AT_PORT[:NAVDATA_PORT]] (its Wi-Fi: ardrone://192.168.1.1).
+        #[arg(long, value_name = "URL")]
+        drone: String,
+        /// Keep printing (every --interval) until interrupted.
+        #[arg(long)]
+        watch: bool,
+        /// One JSON object per line (keys ctrl_state, battery_percent, theta_deg, phi_deg,
+        /// psi_deg, altitude_m, velocity_mps, flags, …).
+        #[arg(long)]
+        json: bool,
+        /// Seconds to wait for the drone's navdata before giving up.
+        #[arg(long, value_name = "SECONDS", default_value_t = 3.0)]
+        timeout: f64,
+        /// Seconds between two prints with --watch.
+        #[arg(long, value_name = "SECONDS", default_value_t = 0.5)]
+        interval: f64,
+    },
     /// Print a shell completion script.
     Completions {
         /// The shell to complete for.
@@ -225,6 +249,19 @@ fn main() -> ExitCode {
             color,
         }),
         Command::Replay { file, report } => replay::run(&file, report == ReportFormat::Json),
+        Command::Status {
+            drone,
+            watch,
+            json,
+            timeout,
+            interval,
+        } => status::run(&status::Args {
+            drone: &drone,
+            watch,
+            json,
+            timeout_s: timeout,
+            interval_s: interval,
+        }),
         Command::Completions { shell } => {
             clap_complete::generate(
                 shell,

@@ -33,3 +33,4 @@ pub mod replay;
 pub mod report;
 pub mod session;
 pub mod sim;
+pub mod url;

@@ -11,4 +11,5 @@
 //! watchdog) lives elsewhere.
 
 pub mod at;
+pub mod client;
 pub mod navdata;

@@ -7,4 +7,6 @@
 //! The backend that wires these to sockets (command port 1510, data port 1511, multicast
 //! group 239.255.42.99 or unicast, keep-alives) lives elsewhere.
 
+pub mod client;
 pub mod frame;
+pub mod rig;

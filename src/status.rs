@@ -1,0 +1,135 @@
+//! `dronecine status`: connect to a drone, start its navdata, and print what a person checks
+//! before a flight — control state, battery, angles, altitude, velocities, the set state
+//! flags — once or continuously (`--watch`), as text or JSON (one object per line).
+//!
+//! The drone is only read: no limits are written and no take-off / land command is sent
+//! (`ArDroneClient::monitor`), so it is safe to watch a drone another program flies.
+
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use dronecine_runtime::ardrone::client::{ArDroneClient, ArDroneOptions, ArDroneStatus};
+use dronecine_runtime::backend::Drone;
+use dronecine_runtime::url::ArDroneUrl;
+
+pub struct Args<'a> {
+    pub drone: &'a str,
+    pub watch: bool,
+    pub json: bool,
+    pub timeout_s: f64,
+    pub interval_s: f64,
+}
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::FAILURE
+}
+
+fn text(url: &ArDroneUrl, s: &ArDroneStatus) -> String {
+    let mut warnings = Vec::new();
+    for (flag, what) in [
+        ("emergency", "EMERGENCY: restart the drone"),
+        ("battery_low", "battery low"),
+        ("motors_problem", "motor problem"),
+        ("cutout_detected", "motor cut-out detected"),
+        ("com_watchdog", "communication watchdog"),
+        (
+            "magnetometer_needs_calibration",
+            "magnetometer needs calibration",
+        ),
+    ] {
+        if s.flags.contains(&flag) {
+            warnings.push(what);
+        }
+    }
+    format!(
+        "{url}\n  control state  {} (minor {})\n  battery        {} %\n  angles         \
+         θ {:.1}°  φ {:.1}°  ψ {:.1}°\n  altitude       {:.3} m\n  velocity       \
+         {:.3} {:.3} {:.3} m/s\n  flags          {}\n  navdata        #{} ({:.0} ms ago)\n{}",
+        s.ctrl_state,
+        s.ctrl_minor,
+        s.battery_percent,
+        s.theta_deg,
+        s.phi_deg,
+        s.psi_deg,
+        s.altitude_m,
+        s.velocity_mps[0],
+        s.velocity_mps[1],
+        s.velocity_mps[2],
+        if s.flags.is_empty() {
+            "none".to_string()
+        } else {
+            s.flags.join(", ")
+        },
+        s.navdata_sequence,
+        s.link_age_s * 1000.0,
+        if warnings.is_empty() {
+            String::new()
+        } else {
+            format!("  warning        {}\n", warnings.join("; "))
+        }
+    )
+}
+
+fn print(url: &ArDroneUrl, s: &ArDroneStatus, json: bool) -> Result<(), String> {
+    if json {
+        let line = serde_json::to_string(s).map_err(|e| e.to_string())?;
+        println!("{line}");
+    } else {
+        print!("{}", text(url, s));
+    }
+    Ok(())
+}
+
+pub fn run(a: &Args) -> ExitCode {
+    let url = match ArDroneUrl::parse(a.drone) {
+        Ok(u) => u,
+        Err(e) => return fail(format!("--drone: {e}")),
+    };
+    if !(a.timeout_s.is_finite() && a.timeout_s > 0.0 && a.timeout_s <= 60.0) {
+        return fail(format!(
+            "--timeout {} must be in (0, 60] seconds",
+            a.timeout_s
+        ));
+    }
+    if !(a.interval_s.is_finite() && (0.05..=60.0).contains(&a.interval_s)) {
+        return fail(format!(
+            "--interval {} must be in [0.05, 60] seconds",
+            a.interval_s
+        ));
+    }
+    let timeout = Duration::from_secs_f64(a.timeout_s);
+    let options = ArDroneOptions {
+        navdata_timeout: timeout,
+        ack_timeout: timeout,
+        config_ids: None,
+    };
+    let mut client = match ArDroneClient::monitor(&url, &options) {
+        Ok(c) => c,
+        Err(e) => return fail(e),
+    };
+    let status = client.status();
+    if let Err(e) = print(&url, &status, a.json) {
+        return fail(e);
+    }
+    if !a.watch {
+        return ExitCode::SUCCESS;
+    }
+    let interval = Duration::from_secs_f64(a.interval_s);
+    let mut next = Instant::now() + interval;
+    loop {
+        // Drain navdata (and answer the watchdog) between prints.
+        while Instant::now() < next {
+            client.telemetry();
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        next += interval;
+        let status = client.status();
+        if !a.json {
+            println!();
+        }
+        if let Err(e) = print(&url, &status, a.json) {
+            return fail(e);
+        }
+    }
+}
