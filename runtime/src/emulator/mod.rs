@@ -366,6 +366,11 @@ impl Emulator {
                     SocketAddr::new(config.host, n.command_port),
                 )?;
                 let dest = n.data.addr();
+                if dest.port() == 0 || dest.ip().is_unspecified() {
+                    return Err(EmulatorError::Config(format!(
+                        "NatNet frames cannot be sent to {dest}: give an address and a port"
+                    )));
+                }
                 let data_bind = match dest {
                     SocketAddr::V4(_) => SocketAddr::new(
                         if config.host.is_ipv4() {
