@@ -4,6 +4,7 @@
 
 mod check;
 mod compile;
+mod emulate;
 mod files;
 mod fmt;
 mod gains;
@@ -152,10 +153,59 @@ enum Command {
         #[arg(long, value_name = "SECONDS", default_value_t = 0.5)]
         interval: f64,
     },
+    /// Emulate a drone and its motion capture over the network, on the embedded simulator.
+    Emulate {
+        #[command(subcommand)]
+        kind: EmulateKind,
+    },
     /// Print a shell completion script.
     Completions {
         /// The shell to complete for.
         shell: clap_complete::Shell,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum EmulateKind {
+    /// An AR.Drone 2.0 (AT commands in, navdata out) and OptiTrack Motive (NatNet frames of
+    /// the drone and the actors), the simulator running in real time until Ctrl-C.
+    ///
+    /// Navdata goes to the sender of the trigger packet, from the navdata port. NatNet rigid
+    /// bodies: 1 = the drone, 2, 3, … = the script's actors in order.
+    Ardrone {
+        /// Address to listen on.
+        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1")]
+        host: std::net::IpAddr,
+        /// AT command port (UDP).
+        #[arg(long, value_name = "P", default_value_t = 5556)]
+        at_port: u16,
+        /// Navdata port (UDP).
+        #[arg(long, value_name = "P", default_value_t = 5554)]
+        navdata_port: u16,
+        /// Where NatNet frames go: a unicast address, or a multicast group.
+        #[arg(long, value_name = "ADDR:PORT", default_value = "239.255.42.99:1511")]
+        natnet: std::net::SocketAddr,
+        /// NatNet command port (UDP), answering the connect request with the server info.
+        #[arg(long, value_name = "P", default_value_t = 1510)]
+        natnet_command_port: u16,
+        /// NatNet version to announce and stream (3.0 to 4.1).
+        #[arg(long, value_name = "X.Y", default_value = "4.1")]
+        natnet_version: String,
+        /// Stream Z-up (Motive's default is Y-up).
+        #[arg(long)]
+        z_up: bool,
+        /// No NatNet at all.
+        #[arg(long, conflicts_with_all = ["natnet", "natnet_command_port", "natnet_version", "z_up"])]
+        no_natnet: bool,
+        /// The simulator's seed (noise, wind, radio loss, the actors' deviations).
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        seed: u64,
+        /// A script whose scene gives the actors (and the drone profile); none without it.
+        #[arg(long, value_name = "FILE.psl")]
+        script: Option<PathBuf>,
+        /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
+        #[arg(long)]
+        ideal: bool,
     },
 }
 
@@ -245,6 +295,35 @@ fn main() -> ExitCode {
             rate_hz: rate,
             json: report == ReportFormat::Json,
             quiet,
+            ideal,
+            color,
+        }),
+        Command::Emulate {
+            kind:
+                EmulateKind::Ardrone {
+                    host,
+                    at_port,
+                    navdata_port,
+                    natnet,
+                    natnet_command_port,
+                    natnet_version,
+                    z_up,
+                    no_natnet,
+                    seed,
+                    script,
+                    ideal,
+                },
+        } => emulate::run(&emulate::Args {
+            host,
+            at_port,
+            navdata_port,
+            natnet,
+            natnet_command_port,
+            natnet_version: &natnet_version,
+            z_up,
+            no_natnet,
+            seed,
+            script: script.as_deref(),
             ideal,
             color,
         }),

@@ -15,12 +15,14 @@
 //! - `log`: the flight log (MCAP), written incrementally and read back; `replay` re-runs it.
 //! - `session`: a whole flight on the simulator, and building a controller from its set-up.
 //! - `ardrone`, `natnet`: the AR.Drone 2.0 (AT commands, navdata) and NatNet wire codecs.
+//! - `emulator`: the simulator in real time behind those protocols (`dronecine emulate`).
 
 pub mod ardrone;
 pub mod backend;
 pub mod clock;
 pub mod control;
 pub mod dare;
+pub mod emulator;
 pub mod flight;
 pub mod frames;
 pub mod log;

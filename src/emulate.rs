@@ -1,0 +1,162 @@
+//! `dronecine emulate ardrone`: the embedded simulator in real time behind the AR.Drone 2.0
+//! (AT commands in, navdata out) and OptiTrack NatNet protocols, so a client (the AR.Drone
+//! and NatNet backends, or any AR.Drone app) can fly it over UDP. The actors come from an
+//! optional script (loaded as `compile` and `shoot` load it); without one there are none.
+
+use std::net::{IpAddr, SocketAddr};
+use std::path::Path;
+use std::process::ExitCode;
+
+use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
+use dronecine_grammar::diag;
+use dronecine_runtime::emulator::{
+    empty_scene, Emulator, EmulatorConfig, NatNetConfig, NatNetData, ACTOR_ID_BASE, DRONE_ID,
+};
+use dronecine_runtime::natnet::frame::{UpAxis, Version};
+use dronecine_runtime::sim::{Effects, SimConfig};
+
+use crate::check;
+
+pub struct Args<'a> {
+    pub host: IpAddr,
+    pub at_port: u16,
+    pub navdata_port: u16,
+    /// Where NatNet frames go (unicast, or a multicast group).
+    pub natnet: SocketAddr,
+    pub natnet_command_port: u16,
+    pub natnet_version: &'a str,
+    pub z_up: bool,
+    pub no_natnet: bool,
+    pub seed: u64,
+    pub script: Option<&'a Path>,
+    pub ideal: bool,
+    pub color: bool,
+}
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::FAILURE
+}
+
+/// `"4.1"`, `"3.0"`, `"4.1.0.0"` → a version the codec supports.
+fn parse_version(s: &str) -> Option<Version> {
+    let mut parts = [0u8; 4];
+    let mut n = 0;
+    for p in s.split('.') {
+        *parts.get_mut(n)? = p.parse().ok()?;
+        n += 1;
+    }
+    let v = Version::from_bytes(parts);
+    (n >= 2 && v.is_supported()).then_some(v)
+}
+
+pub fn run(a: &Args) -> ExitCode {
+    let Some(version) = parse_version(a.natnet_version) else {
+        return fail(format!(
+            "--natnet-version {}: expected a NatNet version from 3.0 to 4.1",
+            a.natnet_version
+        ));
+    };
+    let (scene, profile, names) = match a.script {
+        None => (
+            empty_scene(),
+            Profile::builtin(DEFAULT_NAME).expect("the default profile is built in"),
+            Vec::new(),
+        ),
+        Some(path) => {
+            let r = check::check_file(path);
+            if r.checked.has_errors() || r.checked.script.is_none() {
+                eprint!(
+                    "{}",
+                    diag::render(&r.name, &r.text, &r.checked.diagnostics, a.color, 100)
+                );
+                eprintln!("error: `{}` has errors; nothing was emulated", r.name);
+                return ExitCode::FAILURE;
+            }
+            let script = r.checked.script.as_ref().expect("checked above");
+            let Some(scene) = &script.scene else {
+                let d = dronecine_compiler::compile::no_scene(script);
+                eprint!("{}", diag::render(&r.name, &r.text, &[d], a.color, 100));
+                return ExitCode::FAILURE;
+            };
+            let base = crate::files::base_dir(path);
+            let profile =
+                match crate::compile::load_profile(scene, &base, &r.name, &r.text, a.color) {
+                    Ok(p) => p,
+                    Err(code) => return code,
+                };
+            let names = scene.actors.iter().map(|x| x.name.clone()).collect();
+            (scene.clone(), profile, names)
+        }
+    };
+    let mut sim = SimConfig::new(a.seed);
+    if a.ideal {
+        sim.effects = Effects::none();
+    }
+    let config = EmulatorConfig {
+        host: a.host,
+        at_port: a.at_port,
+        navdata_port: a.navdata_port,
+        natnet: (!a.no_natnet).then(|| NatNetConfig {
+            command_port: a.natnet_command_port,
+            data: NatNetData::from_addr(a.natnet),
+            version,
+            up_axis: if a.z_up { UpAxis::Z } else { UpAxis::Y },
+        }),
+        sim,
+        ..EmulatorConfig::new(profile, scene, a.seed)
+    };
+    let profile_name = config.profile.name.clone();
+    let handle = match Emulator::start(config) {
+        Ok(h) => h,
+        Err(e) => return fail(e),
+    };
+    println!(
+        "emulating an AR.Drone 2.0 ({profile_name}, seed {}) in real time",
+        a.seed
+    );
+    println!("  AT commands     udp {}", handle.at_addr());
+    println!(
+        "  navdata         udp {} (send 01 00 00 00 to start it)",
+        handle.navdata_addr()
+    );
+    match (handle.natnet_command_addr(), handle.natnet_data()) {
+        (Some(cmd), Some(data)) => {
+            println!("  NatNet command  udp {cmd} (NatNet {version})");
+            let kind = match data {
+                NatNetData::Multicast(_) => "multicast",
+                NatNetData::Unicast(_) => "unicast",
+            };
+            println!(
+                "  NatNet frames → udp {} ({kind}, {}-up, 100 Hz)",
+                data.addr(),
+                if a.z_up { "Z" } else { "Y" }
+            );
+            println!("  rigid bodies    {DRONE_ID} = drone");
+            for (i, n) in names.iter().enumerate() {
+                println!("                  {} = {n}", ACTOR_ID_BASE + i as i32);
+            }
+        }
+        _ => println!("  NatNet          off"),
+    }
+    println!("Ctrl-C to stop.");
+    match handle.wait() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => fail(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn versions() {
+        assert_eq!(parse_version("4.1"), Some(Version::V4_1));
+        assert_eq!(parse_version("3.0.0.0"), Some(Version::V3_0));
+        assert_eq!(parse_version("2.10"), None);
+        assert_eq!(parse_version("4"), None);
+        assert_eq!(parse_version("4.1.0.0.0"), None);
+        assert_eq!(parse_version("x.1"), None);
+    }
+}
