@@ -116,6 +116,16 @@ enum Command {
         /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
         #[arg(long)]
         ideal: bool,
+        /// Fly a real AR.Drone 2.0 (or `dronecine emulate`):
+        /// ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]. Needs --mocap.
+        #[arg(long, value_name = "URL")]
+        drone: Option<String>,
+        /// Its positions from OptiTrack NatNet: natnet://SERVER[:PORT][?multicast=GROUP|?unicast].
+        #[arg(long, value_name = "URL")]
+        mocap: Option<String>,
+        /// Rigid-body ids of the drone and the actors (TOML) [default: drone 1, actors 2, 3, …].
+        #[arg(long, value_name = "FILE")]
+        rig: Option<PathBuf>,
         /// No progress display, no event lines.
         #[arg(short, long)]
         quiet: bool,
@@ -281,6 +291,9 @@ fn main() -> ExitCode {
             report,
             ideal,
             quiet,
+            drone,
+            mocap,
+            rig,
         } => shoot::run(&shoot::Args {
             file: &file,
             log: log.as_deref(),
@@ -296,6 +309,9 @@ fn main() -> ExitCode {
             json: report == ReportFormat::Json,
             quiet,
             ideal,
+            drone: drone.as_deref(),
+            mocap: mocap.as_deref(),
+            rig: rig.as_deref(),
             color,
         }),
         Command::Emulate {

@@ -13,10 +13,12 @@ use dronecine_compiler::director::Director;
 use dronecine_grammar::diag;
 use dronecine_runtime::flight::{FlightSink, Observer, Progress};
 use dronecine_runtime::log::{FlightLogWriter, LogScene};
+use dronecine_runtime::natnet::rig::Rig;
 use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
 use dronecine_runtime::report::FlightReport;
-use dronecine_runtime::session::{self, SimFlight};
+use dronecine_runtime::session::{self, HardwareFlight, SimFlight};
 use dronecine_runtime::sim::{Effects, SimConfig};
+use dronecine_runtime::url::{ArDroneUrl, NatNetUrl};
 
 use crate::check;
 
@@ -35,7 +37,23 @@ pub struct Args<'a> {
     pub json: bool,
     pub quiet: bool,
     pub ideal: bool,
+    /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`: fly a real drone (or the emulator).
+    pub drone: Option<&'a str>,
+    /// `natnet://SERVER[:PORT][?multicast=GROUP]`: its positions.
+    pub mocap: Option<&'a str>,
+    /// The rig file (rigid-body ids); default: the emulator's layout.
+    pub rig: Option<&'a Path>,
     pub color: bool,
+}
+
+/// Where the flight happens.
+enum Target {
+    Sim,
+    Hardware {
+        drone: ArDroneUrl,
+        mocap: NatNetUrl,
+        rig: Rig,
+    },
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
@@ -69,6 +87,41 @@ pub fn run(a: &Args) -> ExitCode {
     let profile = match crate::compile::load_profile(scene, &base, &r.name, &r.text, a.color) {
         Ok(p) => p,
         Err(code) => return code,
+    };
+
+    let target = match (a.drone, a.mocap) {
+        (None, None) => Target::Sim,
+        (Some(d), Some(m)) => {
+            let drone = match ArDroneUrl::parse(d) {
+                Ok(u) => u,
+                Err(e) => return fail(format!("--drone: {e}")),
+            };
+            let mocap = match NatNetUrl::parse(m) {
+                Ok(u) => u,
+                Err(e) => return fail(format!("--mocap: {e}")),
+            };
+            let rig = match a.rig {
+                Some(path) => match Rig::load(path) {
+                    Ok(r) => r,
+                    Err(e) => return fail(e),
+                },
+                None => {
+                    let names: Vec<&str> = scene.actors.iter().map(|x| x.name.as_str()).collect();
+                    eprintln!(
+                        "note: no --rig: the drone is rigid body 1 and the actors 2, 3, … in the \
+                         script's order, Y up (the layout of `dronecine emulate`)"
+                    );
+                    Rig::numbered(&names)
+                }
+            };
+            Target::Hardware { drone, mocap, rig }
+        }
+        (Some(_), None) => {
+            return fail("--drone needs --mocap: the servo flies on motion-capture positions")
+        }
+        (None, Some(_)) => {
+            return fail("--mocap needs --drone (without both, shoot flies the simulator)")
+        }
     };
 
     // The compiler's verdict first: a script the drone cannot fly is not flown.
@@ -119,8 +172,11 @@ pub fn run(a: &Args) -> ExitCode {
         profile_toml: profile.to_toml(),
         profile: profile.clone(),
         controller: setup.clone(),
-        backend: "sim".into(),
-        seed: Some(a.seed),
+        backend: match (&target, a.drone) {
+            (Target::Hardware { .. }, Some(d)) => d.to_string(),
+            _ => "sim".into(),
+        },
+        seed: matches!(target, Target::Sim).then_some(a.seed),
         rate_hz: a.rate_hz,
         actor_names: actor_names.clone(),
         dronecine_version: env!("CARGO_PKG_VERSION").into(),
@@ -136,21 +192,6 @@ pub fn run(a: &Args) -> ExitCode {
         Ok(w) => w,
         Err(e) => return fail(e),
     };
-    let mut sim = SimConfig::new(a.seed);
-    if a.ideal {
-        sim.effects = Effects::none();
-    }
-    let flight = SimFlight {
-        script,
-        source: &r.text,
-        scene,
-        profile: &profile,
-        rate_hz: a.rate_hz,
-        controller: setup,
-        sim,
-        realtime: a.realtime,
-        interrupts: Some(&INTERRUPTS),
-    };
     // Ctrl-C lands, a second Ctrl-C cuts the motors (the flight loop reads the count).
     if let Err(e) = ctrlc::set_handler(|| {
         INTERRUPTS.fetch_add(1, Ordering::Relaxed);
@@ -158,7 +199,41 @@ pub fn run(a: &Args) -> ExitCode {
         eprintln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
     }
     let mut display = Display::new(a.quiet);
-    let result = session::fly_simulated(&flight, &mut LogSink(&mut log), &mut display);
+    let result = match &target {
+        Target::Sim => {
+            let mut sim = SimConfig::new(a.seed);
+            if a.ideal {
+                sim.effects = Effects::none();
+            }
+            let flight = SimFlight {
+                script,
+                source: &r.text,
+                scene,
+                profile: &profile,
+                rate_hz: a.rate_hz,
+                controller: setup,
+                sim,
+                realtime: a.realtime,
+                interrupts: Some(&INTERRUPTS),
+            };
+            session::fly_simulated(&flight, &mut LogSink(&mut log), &mut display)
+        }
+        Target::Hardware { drone, mocap, rig } => {
+            let flight = HardwareFlight {
+                script,
+                source: &r.text,
+                scene,
+                profile: &profile,
+                rate_hz: a.rate_hz,
+                controller: setup,
+                drone,
+                mocap,
+                rig,
+                interrupts: Some(&INTERRUPTS),
+            };
+            session::fly_hardware(&flight, &mut LogSink(&mut log), &mut display)
+        }
+    };
     display.finish();
     let finished = log.finish();
     let report = match result {

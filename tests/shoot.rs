@@ -165,6 +165,31 @@ fn bad_input_is_a_clear_error() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--rate"), "{}", stderr(&o));
 
+    let o = dronecine(&[
+        "shoot",
+        "shots/square.psl",
+        "--drone",
+        "ardrone://127.0.0.1",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("--drone needs --mocap"),
+        "{}",
+        stderr(&o)
+    );
+    let o = dronecine(&[
+        "shoot",
+        "shots/square.psl",
+        "--drone",
+        "udp://x",
+        "--mocap",
+        "natnet://127.0.0.1",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--drone"), "{}", stderr(&o));
+
     let garbage = dir.join("garbage.mcap");
     std::fs::write(&garbage, b"not an mcap file at all").unwrap();
     let o = dronecine(&["replay", garbage.to_str().unwrap()]);

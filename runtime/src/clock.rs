@@ -13,9 +13,17 @@ pub struct WallClock {
 
 impl WallClock {
     pub fn new() -> Self {
-        WallClock {
-            start: Instant::now(),
-        }
+        Self::starting_at(Instant::now())
+    }
+
+    /// A clock that reads 0 at `start` (backends that timestamp on arrival share it).
+    pub fn starting_at(start: Instant) -> Self {
+        WallClock { start }
+    }
+
+    /// The instant this clock reads 0.
+    pub fn epoch(&self) -> Instant {
+        self.start
     }
 }
 

@@ -1,21 +1,27 @@
-//! A whole flight on the embedded simulator, set up from a script: what `dronecine shoot`
-//! flies by default, and what the tests and benchmarks fly. Also the one place that builds a
-//! controller from its recorded set-up (`shoot` and `replay`).
+//! A whole flight, set up from a script: on the embedded simulator ([`fly_simulated`]: what
+//! `dronecine shoot` flies by default, and what the tests and benchmarks fly) or on a real
+//! AR.Drone 2.0 with OptiTrack NatNet — or the emulator that speaks their protocols
+//! ([`fly_hardware`]). Also the one place that builds a controller from its recorded set-up
+//! (`shoot` and `replay`).
 
 use dronecine_compiler::blocking::Blocking;
 use dronecine_compiler::director::Director;
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::script::{Scene, Script};
 
+use crate::ardrone::client::{ArDroneClient, ArDroneOptions};
 use crate::backend::Clock;
-use crate::clock::Paced;
+use crate::clock::{Paced, WallClock};
 use crate::control::Controller;
 use crate::flight::{self, Backends, FlightError, FlightSetup, FlightSink, Observer, Safety};
 use crate::lqg::{LqgServo, ServoOptions};
+use crate::natnet::client::{NatNetClient, NatNetOptions};
+use crate::natnet::rig::Rig;
 use crate::pid::PidController;
 use crate::record::ControllerSetup;
 use crate::report::FlightReport;
 use crate::sim::{SimConfig, Simulator};
+use crate::url::{ArDroneUrl, NatNetUrl};
 
 /// Builds the controller a flight (or a log) asks for.
 pub fn controller_for(
@@ -123,6 +129,67 @@ pub fn fly_simulated(
             drone: &mut drone,
             mocap: &mut mocap,
             clock,
+        },
+        sink,
+        observer,
+    )
+    .map_err(SessionError::Flight)
+}
+
+/// A flight on hardware: the drone over its UDP protocol, positions from NatNet, paced by
+/// the wall clock.
+pub struct HardwareFlight<'a> {
+    pub script: &'a Script,
+    pub source: &'a str,
+    pub scene: &'a Scene,
+    pub profile: &'a Profile,
+    pub rate_hz: f64,
+    pub controller: ControllerSetup,
+    pub drone: &'a ArDroneUrl,
+    pub mocap: &'a NatNetUrl,
+    /// Rigid-body ids of the drone and the actors, and the mocap's axes.
+    pub rig: &'a Rig,
+    pub interrupts: Option<&'a std::sync::atomic::AtomicU32>,
+}
+
+pub fn fly_hardware(
+    f: &HardwareFlight,
+    sink: &mut dyn FlightSink,
+    observer: &mut dyn Observer,
+) -> Result<FlightReport, SessionError> {
+    let mut controller = controller_for(&f.controller, f.profile, f.rate_hz)
+        .map_err(|e| SessionError::Setup(format!("the servo cannot be set up: {e}")))?;
+    // One epoch for the flight clock and the mocap's arrival times.
+    let mut clock = WallClock::new();
+    let options = NatNetOptions {
+        epoch: clock.epoch(),
+        ..NatNetOptions::default()
+    };
+    let mut mocap = NatNetClient::connect(
+        f.mocap,
+        f.rig,
+        f.scene.actors.iter().map(|a| a.name.as_str()),
+        &options,
+    )
+    .map_err(|e| SessionError::Setup(format!("motion capture: {e}")))?;
+    let mut drone = ArDroneClient::connect(f.drone, f.profile, &ArDroneOptions::default())
+        .map_err(|e| SessionError::Setup(format!("drone: {e}")))?;
+    let setup = FlightSetup {
+        script: f.script,
+        source: f.source,
+        scene: f.scene,
+        profile: f.profile,
+        rate_hz: f.rate_hz,
+        safety: Safety::default(),
+        interrupts: f.interrupts,
+    };
+    flight::fly(
+        &setup,
+        controller.as_mut(),
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock: &mut clock,
         },
         sink,
         observer,

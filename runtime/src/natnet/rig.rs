@@ -119,6 +119,22 @@ impl Rig {
     }
 
     /// Reads and parses a rig file; errors name the file.
+    /// The layout `dronecine emulate` streams: the drone is rigid body 1, the actors 2, 3, …
+    /// in the script's order, Y up, the mocap's origin at the stage's.
+    pub fn numbered<S: AsRef<str>>(actor_names: &[S]) -> Rig {
+        Rig {
+            up: UpAxis::Y,
+            drone_id: 1,
+            actors: actor_names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| (n.as_ref().to_string(), i as i32 + 2))
+                .collect(),
+            origin_m: [0.0; 3],
+            yaw_rad: 0.0,
+        }
+    }
+
     pub fn load(path: &Path) -> Result<Rig, RigError> {
         let src = std::fs::read_to_string(path)
             .map_err(|e| RigError(format!("cannot read the rig file {}: {e}", path.display())))?;
