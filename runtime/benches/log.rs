@@ -96,6 +96,7 @@ fn ticks() -> Vec<Tick> {
                 output,
                 mocap: MocapFrame {
                     t_s: t - 0.004,
+                    received_s: t - 0.002,
                     frame: k as u64,
                     drone: Some(BodyPose {
                         position_m: measurement.position_m,
@@ -199,6 +200,7 @@ fn write(path: &Path, ticks: &[Tick], n: usize, compression: LogCompression) -> 
             actors: &tick.actors,
             framing: &tick.framing,
             drone_state: FlightState::Flying,
+            latency_s: Some(0.002),
         };
         log.write_tick(black_box(&record)).unwrap();
     }

@@ -59,6 +59,9 @@ pub struct BodyPose {
 pub struct MocapFrame {
     /// Capture time on the flight clock (the [`Clock`]'s seconds).
     pub t_s: f64,
+    /// When the frame reached this computer, on the flight clock (≥ `t_s`; equal in the
+    /// simulator). The flight loop measures the mocap-to-command latency from it.
+    pub received_s: f64,
     /// Increases by one per frame the mocap produced; a gap means frames were lost.
     pub frame: u64,
     /// `None` when the drone is not tracked in this frame.

@@ -880,10 +880,13 @@ impl<'s, 'b> Flight<'s, 'b> {
             self.drone.send(&command_sent)?;
         }
 
+        // Mocap frame in → command out, on the flight clock.
+        let latency_s = self
+            .fresh
+            .then(|| (self.clock.now_s() - self.frame.received_s).max(0.0));
         self.metrics
-            .record(phase, shot, &input, &output, &self.framing);
+            .record(phase, shot, &input, &output, &self.framing, latency_s);
         let error = Metrics::tracking_error(&input);
-
         let state = self.drone.telemetry().state;
         let record = TickRecord {
             phase,
@@ -896,6 +899,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             actors: &self.actors.poses,
             framing: &self.framing,
             drone_state: state,
+            latency_s,
         };
         if let Err(e) = self.sink.tick(&record) {
             self.log_error.get_or_insert(e);

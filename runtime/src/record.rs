@@ -73,6 +73,9 @@ pub struct TickRecord<'a> {
     pub actors: &'a [ActorPose],
     pub framing: &'a [FramingRecord],
     pub drone_state: FlightState,
+    /// Seconds from this tick's mocap frame reaching the computer to the command leaving it
+    /// (`None` without a new frame).
+    pub latency_s: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

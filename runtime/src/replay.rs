@@ -90,6 +90,7 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
             &tick.input,
             &tick.output,
             &tick.framing,
+            tick.latency_s,
         );
     }
     let count = |kind: &str| log.events.iter().filter(|e| e.kind == kind).count() as u64;

@@ -54,6 +54,10 @@ pub struct FlightReport {
     pub failsafes: u64,
     pub faults: u64,
     pub deadline_misses: u64,
+    /// From a mocap frame reaching the computer to the command leaving it, over the shots'
+    /// ticks with a new frame (0 in the simulator, where both happen at the tick).
+    pub latency_mean_s: Option<f64>,
+    pub latency_max_s: Option<f64>,
     pub shots: Vec<ShotReport>,
 }
 
@@ -95,6 +99,8 @@ impl Accum {
 pub struct Metrics {
     total: Accum,
     shots: Vec<Accum>,
+    /// Sum, max and count of the mocap-to-command latencies.
+    latency: (f64, f64, u64),
 }
 
 /// The framing error of an actor behind the camera, squared.
@@ -105,6 +111,7 @@ impl Metrics {
         Metrics {
             total: Accum::default(),
             shots: vec![Accum::default(); shots],
+            latency: (0.0, 0.0, 0),
         }
     }
 
@@ -128,10 +135,16 @@ impl Metrics {
         input: &TickInput,
         output: &Result<TickOutput, TickFault>,
         framing: &[FramingRecord],
+        latency_s: Option<f64>,
     ) {
         let (Phase::Shots, Some(i)) = (phase, shot) else {
             return;
         };
+        if let Some(l) = latency_s.filter(|l| l.is_finite()) {
+            self.latency.0 += l;
+            self.latency.1 = self.latency.1.max(l);
+            self.latency.2 += 1;
+        }
         if i >= self.shots.len() {
             self.shots.resize(i + 1, Accum::default());
         }
@@ -197,6 +210,8 @@ impl Metrics {
             failsafes: counts.failsafes,
             faults: counts.faults,
             deadline_misses: counts.deadline_misses,
+            latency_mean_s: (self.latency.2 > 0).then(|| self.latency.0 / self.latency.2 as f64),
+            latency_max_s: (self.latency.2 > 0).then_some(self.latency.1),
             shots,
         }
     }
@@ -256,14 +271,29 @@ mod tests {
             saturated: true,
             ..TickOutput::default()
         });
-        m.record(Phase::Approach, None, &input(0.0, 9.0, 0.0, true), &ok, &[]);
-        m.record(Phase::Shots, Some(0), &input(1.0, 0.3, 0.0, true), &ok, &[]);
+        m.record(
+            Phase::Approach,
+            None,
+            &input(0.0, 9.0, 0.0, true),
+            &ok,
+            &[],
+            None,
+        );
+        m.record(
+            Phase::Shots,
+            Some(0),
+            &input(1.0, 0.3, 0.0, true),
+            &ok,
+            &[],
+            None,
+        );
         m.record(
             Phase::Shots,
             Some(0),
             &input(1.01, 0.4, 0.0, true),
             &sat,
             &[],
+            None,
         );
         m.record(
             Phase::Shots,
@@ -271,6 +301,7 @@ mod tests {
             &input(2.0, 0.0, 0.2, false),
             &ok,
             &[],
+            None,
         );
         // A heading error across ±π is short.
         m.record(
@@ -279,6 +310,7 @@ mod tests {
             &input(2.01, 0.0, 6.2, true),
             &ok,
             &[],
+            None,
         );
         let r = m.report(&["a".into(), "b".into()], Counts::default());
         let rms = ((0.09 + 0.16 + 0.0) / 3.0f64).sqrt();
@@ -314,6 +346,7 @@ mod tests {
             &input(0.0, 0.0, 0.0, true),
             &Ok(TickOutput::default()),
             &f[..1],
+            None,
         );
         let r = m.report(&[], Counts::default());
         assert!((r.figures.rms_framing_error.unwrap() - 0.5).abs() < 1e-12);
@@ -323,6 +356,7 @@ mod tests {
             &input(0.01, 0.0, 0.0, true),
             &Ok(TickOutput::default()),
             &f[1..],
+            None,
         );
         let r = m.report(&[], Counts::default());
         assert!(

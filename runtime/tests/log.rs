@@ -86,6 +86,7 @@ impl Tick {
             actors: &self.actors,
             framing: &self.framing,
             drone_state: FlightState::Flying,
+            latency_s: self.mocap.as_ref().map(|_| 0.0037),
         }
     }
 
@@ -96,6 +97,7 @@ impl Tick {
             input: self.input,
             output: self.output,
             command_sent: self.command_sent,
+            latency_s: self.mocap.as_ref().map(|_| 0.0037),
             // Read back with the tick it was written with (a finite time), screen points
             // with a non-finite coordinate as none.
             framing: if self.input.t_s.is_finite() {
@@ -185,6 +187,7 @@ fn tick(k: usize, t_s: f64, x: [f64; 8]) -> Tick {
         command_sent,
         mocap: measurement.map(|m| MocapFrame {
             t_s: t_s - 0.002,
+            received_s: t_s - 0.001,
             frame: k as u64,
             drone: Some(BodyPose {
                 position_m: m.position_m,

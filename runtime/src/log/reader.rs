@@ -32,6 +32,8 @@ pub struct LoggedTick {
     pub command_sent: Command,
     /// The tick's `/framing` records (empty outside holds).
     pub framing: Vec<FramingRecord>,
+    /// Mocap frame arrival → command sent, seconds (`None` without a new frame).
+    pub latency_s: Option<f64>,
 }
 
 /// A flight log, read back.
@@ -112,6 +114,9 @@ struct RawTick {
     output: Option<RawOutput>,
     fault: Option<TickFault>,
     command_sent: RawCommand,
+    /// Absent in logs written before it was recorded.
+    #[serde(default)]
+    latency_s: Option<Num>,
 }
 
 impl RawTick {
@@ -152,6 +157,7 @@ impl RawTick {
             output,
             command_sent: self.command_sent.command(),
             framing: Vec::new(),
+            latency_s: self.latency_s.map(|n| n.0),
         })
     }
 }

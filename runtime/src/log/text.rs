@@ -368,6 +368,11 @@ impl Text {
         self.exact_command(&tick.command_sent);
         self.raw(b",\"drone_state\":");
         self.raw(state_json(tick.drone_state));
+        self.raw(b",\"latency_s\":");
+        match tick.latency_s {
+            Some(l) => self.exact(l),
+            None => self.raw(b"null"),
+        }
         self.raw(b"}");
     }
 }

@@ -447,6 +447,7 @@ impl Mocap for NatNetClient {
             .checked_duration_since(self.epoch)
             .map_or(0.0, |d| d.as_secs_f64());
         frame.t_s = arrival_s - self.latency_s();
+        frame.received_s = arrival_s;
         frame.frame = u64::from(self.newest.frame_number as u32);
         frame.drone = self.pose(self.rig.drone_id);
         frame.actors.resize(self.actor_ids.len(), None);

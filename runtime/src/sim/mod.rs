@@ -288,6 +288,7 @@ impl Simulator {
             burst: vec![false; n_actors + 1],
             latest: MocapFrame {
                 t_s: 0.0,
+                received_s: 0.0,
                 frame: 0,
                 drone: None,
                 actors: vec![None; n_actors],
@@ -471,6 +472,7 @@ impl Mocap for SimMocap {
         }
         self.last_returned = Some(latest.frame);
         frame.t_s = latest.t_s;
+        frame.received_s = latest.t_s;
         frame.frame = latest.frame;
         frame.drone = latest.drone;
         frame.actors.clone_from(&latest.actors);
