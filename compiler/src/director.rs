@@ -321,6 +321,17 @@ impl Director {
         (heading.is_finite() && pitch.is_finite()).then_some((heading, pitch))
     }
 
+    /// The visual of a one-actor hold being flown this tick, if that is what it is.
+    fn held_one_actor(&self) -> Option<&framing::Visual> {
+        let Phase::Shot { index, .. } = self.phase else {
+            return None;
+        };
+        match (self.plans.get(index), &self.visual) {
+            (Some(Plan::Hold(_)), Some(v @ framing::Visual::One(_))) => Some(v),
+            _ => None,
+        }
+    }
+
     /// Index of the shot being flown (or flown to), for the sample's `shot` field.
     fn shot_index(&self) -> usize {
         match self.phase {
@@ -354,18 +365,25 @@ impl Director {
             self.blend_spare = Some((from, to));
         }
         let target = self.target(t_s, actors, true);
-        // Reused buffers: the sampling loop allocates nothing per tick.
-        let mut ahead = std::mem::take(&mut self.ahead);
-        ahead.clear();
-        ahead.extend(actors.iter().map(|a| extrapolate(a, EPS_S)));
-        let target_ahead = if self.hold_stands_still(actors, &ahead) {
-            // The same solve against the same poses: the same target, bit for bit.
-            target
-        } else {
-            self.target(t_s + EPS_S, &ahead, false)
+        let v_t = match self.held_one_actor() {
+            // A one-actor hold moves rigidly with its actor: the exact velocity (camera-math
+            // §2), no second solve.
+            Some(v) => framing::velocity_mps(v, actors, &self.lens, &self.gimbal),
+            None => {
+                // Reused buffers: the sampling loop allocates nothing per tick.
+                let mut ahead = std::mem::take(&mut self.ahead);
+                ahead.clear();
+                ahead.extend(actors.iter().map(|a| extrapolate(a, EPS_S)));
+                let target_ahead = if self.hold_stands_still(actors, &ahead) {
+                    // The same solve against the same poses: the same target, bit for bit.
+                    target
+                } else {
+                    self.target(t_s + EPS_S, &ahead, false)
+                };
+                self.ahead = ahead;
+                (target_ahead - target) / EPS_S
+            }
         };
-        self.ahead = ahead;
-        let v_t = (target_ahead - target) / EPS_S;
         let a_t = match self.last_target {
             Some((t0, v0, _)) if t_s > t0 => (v_t - v0) / (t_s - t0),
             _ => Vec3::zeros(),
