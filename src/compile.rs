@@ -83,6 +83,50 @@ pub fn load_profile(
     }
 }
 
+/// A script that checks clean, has a scene, and names a drone profile that loads: what
+/// `compile`, `shoot` and `emulate` start from.
+pub struct Loaded {
+    pub file: check::FileResult,
+    pub profile: Profile,
+}
+
+impl Loaded {
+    pub fn script(&self) -> &Script {
+        self.file
+            .checked
+            .script
+            .as_ref()
+            .expect("load_scene checked it")
+    }
+
+    pub fn scene(&self) -> &Scene {
+        self.script().scene.as_ref().expect("load_scene checked it")
+    }
+}
+
+/// Checks `path`, requires a scene, loads its profile; prints the diagnostics otherwise and
+/// ends with "nothing was {what}".
+pub fn load_scene(path: &Path, color: bool, what: &str) -> Result<Loaded, ExitCode> {
+    let r = check::check_file(path);
+    if r.checked.has_errors() || r.checked.script.is_none() {
+        eprint!(
+            "{}",
+            diag::render(&r.name, &r.text, &r.checked.diagnostics, color, 100)
+        );
+        eprintln!("error: `{}` has errors; nothing was {what}", r.name);
+        return Err(ExitCode::FAILURE);
+    }
+    let script = r.checked.script.as_ref().expect("checked above");
+    let Some(scene) = &script.scene else {
+        let d = compile::no_scene(script);
+        eprint!("{}", diag::render(&r.name, &r.text, &[d], color, 100));
+        return Err(ExitCode::FAILURE);
+    };
+    let base = crate::files::base_dir(path);
+    let profile = load_profile(scene, &base, &r.name, &r.text, color)?;
+    Ok(Loaded { file: r, profile })
+}
+
 pub fn run(a: &Args) -> ExitCode {
     if !(a.rate_hz.is_finite() && a.rate_hz >= 1.0 && a.rate_hz <= 1000.0) {
         return fail(format!(
@@ -90,26 +134,12 @@ pub fn run(a: &Args) -> ExitCode {
             a.rate_hz
         ));
     }
-    let r = check::check_file(a.file);
-    if r.checked.has_errors() || r.checked.script.is_none() {
-        eprint!(
-            "{}",
-            diag::render(&r.name, &r.text, &r.checked.diagnostics, a.color, 100)
-        );
-        eprintln!("error: `{}` has errors; nothing was compiled", r.name);
-        return ExitCode::FAILURE;
-    }
-    let script = r.checked.script.as_ref().expect("checked above");
-    let Some(scene) = &script.scene else {
-        let d = compile::no_scene(script);
-        eprint!("{}", diag::render(&r.name, &r.text, &[d], a.color, 100));
-        return ExitCode::FAILURE;
-    };
-    let base = crate::files::base_dir(a.file);
-    let profile = match load_profile(scene, &base, &r.name, &r.text, a.color) {
-        Ok(p) => p,
+    let loaded = match load_scene(a.file, a.color, "compiled") {
+        Ok(l) => l,
         Err(code) => return code,
     };
+    let (r, profile) = (&loaded.file, loaded.profile.clone());
+    let (script, scene) = (loaded.script(), loaded.scene());
 
     let script_name = a
         .file

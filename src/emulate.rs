@@ -8,14 +8,11 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
-use dronecine_grammar::diag;
 use dronecine_runtime::emulator::{
     empty_scene, Emulator, EmulatorConfig, NatNetConfig, NatNetData, ACTOR_ID_BASE, DRONE_ID,
 };
 use dronecine_runtime::natnet::frame::{UpAxis, Version};
 use dronecine_runtime::sim::{Effects, SimConfig};
-
-use crate::check;
 
 pub struct Args<'a> {
     pub host: IpAddr,
@@ -64,29 +61,13 @@ pub fn run(a: &Args) -> ExitCode {
             Vec::new(),
         ),
         Some(path) => {
-            let r = check::check_file(path);
-            if r.checked.has_errors() || r.checked.script.is_none() {
-                eprint!(
-                    "{}",
-                    diag::render(&r.name, &r.text, &r.checked.diagnostics, a.color, 100)
-                );
-                eprintln!("error: `{}` has errors; nothing was emulated", r.name);
-                return ExitCode::FAILURE;
-            }
-            let script = r.checked.script.as_ref().expect("checked above");
-            let Some(scene) = &script.scene else {
-                let d = dronecine_compiler::compile::no_scene(script);
-                eprint!("{}", diag::render(&r.name, &r.text, &[d], a.color, 100));
-                return ExitCode::FAILURE;
+            let loaded = match crate::compile::load_scene(path, a.color, "emulated") {
+                Ok(l) => l,
+                Err(code) => return code,
             };
-            let base = crate::files::base_dir(path);
-            let profile =
-                match crate::compile::load_profile(scene, &base, &r.name, &r.text, a.color) {
-                    Ok(p) => p,
-                    Err(code) => return code,
-                };
+            let scene = loaded.scene();
             let names = scene.actors.iter().map(|x| x.name.clone()).collect();
-            (scene.clone(), profile, names)
+            (scene.clone(), loaded.profile.clone(), names)
         }
     };
     let mut sim = SimConfig::new(a.seed);

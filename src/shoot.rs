@@ -20,8 +20,6 @@ use dronecine_runtime::session::{self, HardwareFlight, SimFlight};
 use dronecine_runtime::sim::{Effects, SimConfig};
 use dronecine_runtime::url::{ArDroneUrl, NatNetUrl};
 
-use crate::check;
-
 /// Ctrl-C presses during the flight.
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
 
@@ -68,26 +66,12 @@ pub fn run(a: &Args) -> ExitCode {
             a.rate_hz
         ));
     }
-    let r = check::check_file(a.file);
-    if r.checked.has_errors() || r.checked.script.is_none() {
-        eprint!(
-            "{}",
-            diag::render(&r.name, &r.text, &r.checked.diagnostics, a.color, 100)
-        );
-        eprintln!("error: `{}` has errors; nothing was flown", r.name);
-        return ExitCode::FAILURE;
-    }
-    let script = r.checked.script.as_ref().expect("checked above");
-    let Some(scene) = &script.scene else {
-        let d = compile::no_scene(script);
-        eprint!("{}", diag::render(&r.name, &r.text, &[d], a.color, 100));
-        return ExitCode::FAILURE;
-    };
-    let base = crate::files::base_dir(a.file);
-    let profile = match crate::compile::load_profile(scene, &base, &r.name, &r.text, a.color) {
-        Ok(p) => p,
+    let loaded = match crate::compile::load_scene(a.file, a.color, "flown") {
+        Ok(l) => l,
         Err(code) => return code,
     };
+    let (r, profile) = (&loaded.file, loaded.profile.clone());
+    let (script, scene) = (loaded.script(), loaded.scene());
 
     let target = match (a.drone, a.mocap) {
         (None, None) => Target::Sim,

@@ -353,6 +353,22 @@ impl Estimator {
         self.pc += self.heading_process;
     }
 
+    /// One tick of the filters: refuses a bad input (state unchanged), else predicts over
+    /// its Δ with what was sent and corrects with its measurement, if any.
+    pub fn step(
+        &mut self,
+        input: &TickInput,
+        u_sent: &Vector3<f64>,
+        yaw_sent_radps: f64,
+    ) -> Result<(), TickFault> {
+        check_input(input)?;
+        self.predict(input.dt_s, u_sent, yaw_sent_radps);
+        if let Some(m) = &input.measurement {
+            self.update(m);
+        }
+        Ok(())
+    }
+
     /// Corrects with a mocap pose (position and wrapped heading innovation).
     pub fn update(&mut self, m: &Measurement) {
         let s = self.p.fixed_view::<3, 3>(3, 3).into_owned() + self.measurement;
@@ -724,12 +740,9 @@ impl Controller for LqgServo {
     }
 
     fn tick(&mut self, input: &TickInput) -> Result<TickOutput, TickFault> {
-        check_input(input)?;
+        self.estimator
+            .step(input, &self.sent, self.sent_yaw_radps)?;
         let dt = input.dt_s;
-        self.estimator.predict(dt, &self.sent, self.sent_yaw_radps);
-        if let Some(m) = &input.measurement {
-            self.estimator.update(m);
-        }
         let c = self.estimator.heading_rad();
         let r = &input.reference;
 

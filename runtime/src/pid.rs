@@ -21,7 +21,7 @@ use nalgebra::Vector3;
 
 use crate::control::{Controller, Measurement, TickFault, TickInput, TickOutput};
 use crate::frames::{self, Command};
-use crate::lqg::{check_input, Estimator};
+use crate::lqg::Estimator;
 
 /// tum_ardrone's autopilot gains (errors in m and deg, outputs normalised).
 pub const KP_RP: f64 = 0.5;
@@ -77,12 +77,9 @@ impl Controller for PidController {
     }
 
     fn tick(&mut self, input: &TickInput) -> Result<TickOutput, TickFault> {
-        check_input(input)?;
+        self.estimator
+            .step(input, &self.sent, self.sent_yaw_radps)?;
         let dt = input.dt_s;
-        self.estimator.predict(dt, &self.sent, self.sent_yaw_radps);
-        if let Some(m) = &input.measurement {
-            self.estimator.update(m);
-        }
         let x = self.estimator.state();
         let c = self.estimator.heading_rad();
         let r = &input.reference;

@@ -189,14 +189,21 @@ fn mcap_err(dest: &Path, e: McapError) -> io::Error {
 }
 
 /// A channel and its message sequence counter.
+/// An MCAP channel being written: its id and the sequence number of its last message
+/// (shared with the runtime's flight log).
 #[derive(Clone, Copy)]
-struct Channel {
+pub struct Channel {
     id: u16,
     sequence: u32,
 }
 
 impl Channel {
-    fn header(&mut self, ns: u64) -> MessageHeader {
+    pub fn new(id: u16) -> Channel {
+        Channel { id, sequence: 0 }
+    }
+
+    /// The header of the channel's next message, logged and published at `ns`.
+    pub fn header(&mut self, ns: u64) -> MessageHeader {
         self.sequence = self.sequence.wrapping_add(1);
         MessageHeader {
             channel_id: self.id,
@@ -297,7 +304,7 @@ impl McapWriter {
         let mut channel = |schema_name: &str, schema: String, topic: &str| {
             let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes())?;
             let id = writer.add_channel(schema_id, topic, "json", &no_meta)?;
-            Ok::<_, McapError>(Channel { id, sequence: 0 })
+            Ok::<_, McapError>(Channel::new(id))
         };
         let scene = foxglove::scene_update_schema();
         let mut channels = Channels {
@@ -343,7 +350,7 @@ impl McapWriter {
             let id = writer
                 .add_channel(tf_schema, &format!("/tf/{frame}"), "json", &no_meta)
                 .map_err(err)?;
-            channels.tf.push(Channel { id, sequence: 0 });
+            channels.tf.push(Channel::new(id));
         }
         let frames: Vec<FrameTopic> = frames.into_iter().map(|(f, _)| f).collect();
         let sha = Sha256::digest(info.script_text.as_bytes());

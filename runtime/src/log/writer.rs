@@ -16,10 +16,10 @@ use dronecine_compiler::camera::Lens;
 use dronecine_compiler::output::foxglove::{self, FrameTopic};
 use dronecine_compiler::output::mcap::{
     actor_prefix, actors_schema, advance, camera_message, camera_schema, reference_schema,
-    write_actors, write_reference, ACTORS_SCHEMA, CAMERA_SCHEMA, REFERENCE_SCHEMA,
+    write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA, REFERENCE_SCHEMA,
 };
 use dronecine_compiler::output::{json, ns_from_s};
-use mcap::records::{MessageHeader, Metadata};
+use mcap::records::Metadata;
 use mcap::{Attachment, McapError, WriteOptions, Writer};
 
 use super::text::{same_command, Text};
@@ -70,24 +70,6 @@ impl Default for LogOptions {
 }
 
 /// A channel and its message sequence counter.
-#[derive(Clone, Copy)]
-struct Channel {
-    id: u16,
-    sequence: u32,
-}
-
-impl Channel {
-    fn header(&mut self, ns: u64) -> MessageHeader {
-        self.sequence = self.sequence.wrapping_add(1);
-        MessageHeader {
-            channel_id: self.id,
-            sequence: self.sequence,
-            log_time: ns,
-            publish_time: ns,
-        }
-    }
-}
-
 struct Channels {
     reference: Channel,
     actors: Channel,
@@ -214,7 +196,7 @@ impl FlightLogWriter {
         let mut channel = |schema_name: &str, schema: String, topic: &str| {
             let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes())?;
             let id = writer.add_channel(schema_id, topic, "json", &no_meta)?;
-            Ok::<_, McapError>(Channel { id, sequence: 0 })
+            Ok::<_, McapError>(Channel::new(id))
         };
         let scene_schema = foxglove::scene_update_schema();
         let channels = Channels {
@@ -321,7 +303,7 @@ impl FlightLogWriter {
             let id = writer
                 .add_channel(tf_schema, &format!("/tf/{frame}"), "json", &no_meta)
                 .map_err(err)?;
-            channels.tf.push(Channel { id, sequence: 0 });
+            channels.tf.push(Channel::new(id));
         }
         let frames: Vec<FrameTopic> = frames.into_iter().map(|(f, _)| f).collect();
         let flush_every_ticks = (rate_hz * options.flush_period_s).floor().max(1.0) as u64;
