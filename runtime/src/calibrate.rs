@@ -1,0 +1,486 @@
+//! The calibration flight behind `dronecine calibrate`: take off, hold a hover point, and per
+//! axis fly open-loop doublets (input +A for T, −A for T, then 0 while the drone coasts) around
+//! it, recording every tick; land; then fit the model ([`crate::identify`]) and build the
+//! profile with the fitted `[model]`.
+//!
+//! Safety, as the flight loop's: before each test the prior model predicts the test's
+//! excursion (times [`EXCURSION_SAFETY`]); a test that would leave the stage's keep-in box
+//! (the stage shrunk by the profile's `stage_margin_m`) is flown at half the amplitude, twice
+//! at most, else refused. During the flight the drone leaving the keep-in box, losing the
+//! mocap for [`MOCAP_LOST_S`], or an interrupt (Ctrl-C counted by the caller) ends it: hover,
+//! land, error.
+//!
+//! Between tests a hover hold (proportional-derivative on the measured position, scaled by
+//! the prior model's gains) brings the drone back to the hover point; only the test windows
+//! are fitted, each as its own segment.
+
+use std::fmt;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use dronecine_compiler::profile::Profile;
+use dronecine_grammar::script::Stage;
+
+use crate::backend::{BackendError, FlightState, MocapFrame};
+use crate::flight::Backends;
+use crate::frames::{self, Command};
+use crate::identify::{self, Axis, FitError, ModelFit, Sample, Segment};
+
+/// The predicted excursion is multiplied by this before the stage check (the prior may be
+/// wrong by this much).
+pub const EXCURSION_SAFETY: f64 = 1.5;
+/// Mocap lost this long → land.
+pub const MOCAP_LOST_S: f64 = 0.5;
+
+/// What to fly.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub axes: Vec<Axis>,
+    /// Control rate, Hz.
+    pub rate_hz: f64,
+    /// Doublet amplitudes: tilt (rad), vertical speed (m/s), yaw rate (rad/s).
+    pub tilt_rad: f64,
+    pub vz_mps: f64,
+    pub yaw_rate_radps: f64,
+    /// Each half of a doublet, seconds.
+    pub half_s: f64,
+    /// Input 0 after the doublet, seconds (recorded).
+    pub coast_s: f64,
+    /// Hover hold before each test, seconds.
+    pub settle_s: f64,
+    /// Doublets per axis (alternating sign).
+    pub repeats: usize,
+    /// Height of the hover point, metres (clamped into the keep-in box).
+    pub hover_height_m: f64,
+}
+
+impl Default for Plan {
+    fn default() -> Plan {
+        Plan {
+            axes: Axis::ALL.to_vec(),
+            rate_hz: 100.0,
+            tilt_rad: 0.02,
+            vz_mps: 0.3,
+            yaw_rate_radps: 0.5,
+            half_s: 2.0,
+            coast_s: 1.5,
+            settle_s: 4.0,
+            repeats: 2,
+            hover_height_m: 1.3,
+        }
+    }
+}
+
+#[derive(Debug)]
+pub enum CalibrateError {
+    Backend(BackendError),
+    /// The stage cannot hold a test even at a quarter of its amplitude.
+    StageTooSmall(Axis),
+    /// The drone left the keep-in box; it was landed.
+    Geofence {
+        position_m: [f64; 3],
+    },
+    /// No mocap for too long; the drone was landed.
+    MocapLost,
+    /// Take-off or landing did not finish in time.
+    Timeout(&'static str),
+    /// Ctrl-C: the drone was landed.
+    Interrupted,
+    BadPlan(String),
+}
+
+impl fmt::Display for CalibrateError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CalibrateError::Backend(e) => write!(f, "backend: {e}"),
+            CalibrateError::StageTooSmall(a) => write!(
+                f,
+                "the stage is too small for the {} test even at a quarter of its amplitude",
+                a.name()
+            ),
+            CalibrateError::Geofence { position_m: p } => write!(
+                f,
+                "the drone left the stage's keep-in box at ({:.2}, {:.2}, {:.2}) m; landed",
+                p[0], p[1], p[2]
+            ),
+            CalibrateError::MocapLost => write!(f, "the mocap lost the drone; landed"),
+            CalibrateError::Timeout(what) => write!(f, "{what} did not finish in time"),
+            CalibrateError::Interrupted => write!(f, "interrupted; landed"),
+            CalibrateError::BadPlan(m) => write!(f, "bad calibration plan: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for CalibrateError {}
+
+impl From<BackendError> for CalibrateError {
+    fn from(e: BackendError) -> Self {
+        CalibrateError::Backend(e)
+    }
+}
+
+/// A calibration's outcome: the recorded tests, the fits, and the profile when every fitted
+/// axis passed.
+#[derive(Clone, Debug)]
+pub struct Calibration {
+    pub tests: Vec<(Axis, Segment)>,
+    pub fit: ModelFit,
+    pub errors: Vec<FitError>,
+    /// `Some` only when `errors` is empty.
+    pub profile: Option<Profile>,
+}
+
+/// Flies the tests, then fits. `prior` gives the hold's gains, the stage margin and every
+/// section the calibration does not measure.
+pub fn calibrate(
+    backends: Backends<'_>,
+    stage: &Stage,
+    prior: &Profile,
+    plan: &Plan,
+    interrupts: Option<&AtomicU32>,
+) -> Result<Calibration, CalibrateError> {
+    let tests = fly_tests(backends, stage, prior, plan, interrupts)?;
+    Ok(fit_tests(tests, prior, &plan.axes))
+}
+
+/// Fits the recorded tests: each axis on its own tests.
+pub fn fit_tests(tests: Vec<(Axis, Segment)>, prior: &Profile, axes: &[Axis]) -> Calibration {
+    let mut fit = ModelFit::default();
+    let mut errors = Vec::new();
+    for &axis in axes {
+        let segs: Vec<Segment> = tests
+            .iter()
+            .filter(|(a, _)| *a == axis)
+            .map(|(_, s)| s.clone())
+            .collect();
+        let (f, e) = identify::fit_model(&segs, &[axis]);
+        if let Some(a) = f.get(axis) {
+            match axis {
+                Axis::Roll => fit.roll = Some(a.clone()),
+                Axis::Pitch => fit.pitch = Some(a.clone()),
+                Axis::Vz => fit.vz = Some(a.clone()),
+                Axis::Yaw => fit.yaw = Some(a.clone()),
+            }
+        }
+        errors.extend(e);
+    }
+    let profile = errors.is_empty().then(|| fit.apply(prior));
+    Calibration {
+        tests,
+        fit,
+        errors,
+        profile,
+    }
+}
+
+struct Flyer<'a, 'b> {
+    b: Backends<'a>,
+    frame: MocapFrame,
+    dt: f64,
+    t: f64,
+    last_seen_s: f64,
+    last: Option<([f64; 3], f64)>,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    prior: &'b Profile,
+    interrupts: Option<&'b AtomicU32>,
+    /// Velocity estimate (smoothed differences) for the hold's damping.
+    vel: [f64; 3],
+}
+
+impl Flyer<'_, '_> {
+    /// Advances one tick and reads the mocap: the measured pose, if any.
+    fn tick(&mut self) -> Result<Option<([f64; 3], f64)>, CalibrateError> {
+        self.t += self.dt;
+        self.b.clock.sleep_until(self.t);
+        let fresh = self.b.mocap.poll(&mut self.frame)?;
+        let pose = if fresh {
+            self.frame.drone.map(|d| (d.position_m, d.heading_rad))
+        } else {
+            None
+        };
+        if let Some((p, _)) = pose {
+            if let Some((q, _)) = self.last {
+                let a = 0.15;
+                for i in 0..3 {
+                    self.vel[i] += a * ((p[i] - q[i]) / self.dt - self.vel[i]);
+                }
+            }
+            self.last_seen_s = self.t;
+            self.last = pose;
+        }
+        Ok(pose)
+    }
+
+    /// The safety checks of every airborne tick.
+    fn guard(&mut self, pose: Option<([f64; 3], f64)>) -> Result<(), CalibrateError> {
+        let err = if self
+            .interrupts
+            .is_some_and(|i| i.load(Ordering::Relaxed) > 0)
+        {
+            Some(CalibrateError::Interrupted)
+        } else if self.t - self.last_seen_s > MOCAP_LOST_S {
+            Some(CalibrateError::MocapLost)
+        } else if let Some((p, _)) = pose {
+            let out = (0..3).any(|i| p[i] < self.lo[i] || p[i] > self.hi[i]);
+            out.then_some(CalibrateError::Geofence { position_m: p })
+        } else {
+            None
+        };
+        match err {
+            Some(e) => {
+                let _ = self.b.drone.hover();
+                self.land();
+                Err(e)
+            }
+            None => Ok(()),
+        }
+    }
+
+    fn land(&mut self) {
+        let _ = self.b.drone.land();
+        let end = self.t + 15.0;
+        while self.t < end {
+            self.t += self.dt;
+            self.b.clock.sleep_until(self.t);
+            if self
+                .interrupts
+                .is_some_and(|i| i.load(Ordering::Relaxed) > 1)
+            {
+                let _ = self.b.drone.emergency();
+                return;
+            }
+            if matches!(
+                self.b.drone.telemetry().state,
+                FlightState::Landed | FlightState::Emergency
+            ) {
+                return;
+            }
+        }
+    }
+
+    /// The hover hold's command toward `home` (position and heading).
+    fn hold(&self, home: ([f64; 3], f64)) -> Command {
+        let Some((p, c)) = self.last else {
+            return Command::HOVER;
+        };
+        let m = &self.prior.model;
+        let (kp, kd) = (0.6, 0.8);
+        let want: Vec<f64> = (0..3)
+            .map(|i| kp * (home.0[i] - p[i]) - kd * self.vel[i])
+            .collect();
+        let vw = nalgebra::Vector3::new(want[0], want[1], want[2]);
+        let vb = frames::body_to_world(c).transpose() * vw; // forward, left, up
+        let l = &self.prior.limits;
+        let clamp = |x: f64, m: f64| x.clamp(-m, m);
+        // forward = −K_θ θ, left = −K_φ φ, up = K_ż ż.
+        Command {
+            roll_rad: clamp(-vb.y / m.gain_roll_mps_per_rad, 0.5 * l.tilt_max_rad),
+            pitch_rad: clamp(-vb.x / m.gain_pitch_mps_per_rad, 0.5 * l.tilt_max_rad),
+            vz_mps: clamp(vb.z / m.gain_vz, 0.5 * l.vz_max_mps),
+            yaw_rate_radps: clamp(
+                frames::yaw_rate_command_radps(
+                    1.0 * frames::wrap_angle_rad(home.1 - c) / m.gain_yaw,
+                ),
+                0.5 * l.yaw_rate_max_radps,
+            ),
+        }
+    }
+}
+
+/// The doublet input of a test at time `s` into it.
+fn doublet(s: f64, amp: f64, half_s: f64) -> f64 {
+    if s < half_s {
+        amp
+    } else if s < 2.0 * half_s {
+        -amp
+    } else {
+        0.0
+    }
+}
+
+/// The prior model's largest displacement (body axis) over a doublet from rest.
+fn predicted_excursion(k: f64, tau: f64, amp: f64, plan: &Plan) -> f64 {
+    let h = 0.01;
+    let (mut v, mut s, mut max) = (0.0f64, 0.0f64, 0.0f64);
+    let total = 2.0 * plan.half_s + plan.coast_s;
+    let mut t = 0.0;
+    while t < total {
+        let u = doublet(t, amp, plan.half_s);
+        v += h * (k * u - v) / tau;
+        s += h * v;
+        max = max.max(s.abs());
+        t += h;
+    }
+    // After the test the hold brings it back; allow one more τ of coasting at the end speed.
+    max.max((s + v * tau).abs())
+}
+
+fn command_for(axis: Axis, x: f64) -> Command {
+    let mut c = Command::HOVER;
+    match axis {
+        Axis::Roll => c.roll_rad = x,
+        Axis::Pitch => c.pitch_rad = x,
+        Axis::Vz => c.vz_mps = x,
+        Axis::Yaw => c.yaw_rate_radps = x,
+    }
+    c
+}
+
+/// Takes off, flies the plan's tests, lands; the recorded test windows.
+pub fn fly_tests(
+    backends: Backends<'_>,
+    stage: &Stage,
+    prior: &Profile,
+    plan: &Plan,
+    interrupts: Option<&AtomicU32>,
+) -> Result<Vec<(Axis, Segment)>, CalibrateError> {
+    if !(plan.rate_hz > 0.0 && plan.rate_hz <= 1000.0) || !(plan.half_s > 0.0) {
+        return Err(CalibrateError::BadPlan(
+            "rate and durations must be positive".into(),
+        ));
+    }
+    let margin = prior.safety.stage_margin_m;
+    let (mut lo, mut hi) = (stage.min_m(), stage.max_m());
+    for i in 0..3 {
+        lo[i] += margin;
+        hi[i] -= margin;
+    }
+    lo[2] = -0.1; // the floor itself (take-off and landing; mocap noise around z = 0)
+    let mut f = Flyer {
+        b: backends,
+        frame: MocapFrame::default(),
+        dt: 1.0 / plan.rate_hz,
+        t: 0.0,
+        last_seen_s: 0.0,
+        last: None,
+        lo,
+        hi,
+        prior,
+        interrupts,
+        vel: [0.0; 3],
+    };
+    f.t = f.b.clock.now_s();
+    f.last_seen_s = f.t;
+    f.b.drone.take_off()?;
+    let deadline = f.t + 10.0;
+    loop {
+        let pose = f.tick()?;
+        f.guard(pose)?;
+        if f.b.drone.telemetry().state == FlightState::Flying {
+            break;
+        }
+        if f.t > deadline {
+            f.land();
+            return Err(CalibrateError::Timeout("take-off"));
+        }
+    }
+    let Some(start) = f.last else {
+        f.land();
+        return Err(CalibrateError::MocapLost);
+    };
+    let hz = plan.hover_height_m.clamp(lo[2].max(0.5), hi[2]);
+    let home = ([start.0[0], start.0[1], hz], start.1);
+    let mut tests = Vec::new();
+    let m = &prior.model;
+    for &axis in &plan.axes {
+        for rep in 0..plan.repeats.max(1) {
+            // Settle at home.
+            let end = f.t + plan.settle_s;
+            while f.t < end {
+                let pose = f.tick()?;
+                f.guard(pose)?;
+                let c = f.hold(home);
+                f.b.drone.send(&c)?;
+            }
+            let sign = if rep % 2 == 0 { 1.0 } else { -1.0 };
+            let base = match axis {
+                Axis::Roll | Axis::Pitch => plan.tilt_rad,
+                Axis::Vz => plan.vz_mps,
+                Axis::Yaw => plan.yaw_rate_radps,
+            };
+            // Stage check on the prior's predicted excursion.
+            let here = f.last.map_or(home.0, |l| l.0);
+            let room = |dir: [f64; 3]| -> f64 {
+                // Distance to the keep-in box along ±dir from here (the smaller side).
+                let mut r = f64::INFINITY;
+                for i in 0..3 {
+                    if dir[i].abs() > 1e-9 {
+                        r = r.min((hi[i] - here[i]) / dir[i].abs());
+                        r = r.min((here[i] - lo[i]) / dir[i].abs());
+                    }
+                }
+                r
+            };
+            let heading = f.last.map_or(home.1, |l| l.1);
+            let mut amp = base;
+            let mut ok = false;
+            for _ in 0..3 {
+                let (need, dir) = match axis {
+                    Axis::Roll => {
+                        let d = frames::body_to_world(heading) * nalgebra::Vector3::y();
+                        (
+                            predicted_excursion(m.gain_roll_mps_per_rad, m.tau_roll_s, amp, plan),
+                            [d.x, d.y, 0.0],
+                        )
+                    }
+                    Axis::Pitch => {
+                        let d = frames::body_to_world(heading) * nalgebra::Vector3::x();
+                        (
+                            predicted_excursion(m.gain_pitch_mps_per_rad, m.tau_pitch_s, amp, plan),
+                            [d.x, d.y, 0.0],
+                        )
+                    }
+                    Axis::Vz => (
+                        predicted_excursion(m.gain_vz, m.tau_vz_s, amp, plan),
+                        [0.0, 0.0, 1.0],
+                    ),
+                    Axis::Yaw => (0.0, [0.0; 3]),
+                };
+                if need * EXCURSION_SAFETY <= room(dir) {
+                    ok = true;
+                    break;
+                }
+                amp *= 0.5;
+            }
+            if !ok {
+                f.land();
+                return Err(CalibrateError::StageTooSmall(axis));
+            }
+            // The test, open loop, recorded.
+            let mut seg = Segment::new();
+            let t0 = f.t;
+            let total = 2.0 * plan.half_s + plan.coast_s;
+            let mut pose = f.last;
+            loop {
+                let s = f.t - t0;
+                if s > total + 1e-9 {
+                    break;
+                }
+                let c = command_for(axis, doublet(s, sign * amp, plan.half_s));
+                f.b.drone.send(&c)?;
+                seg.push(Sample {
+                    t_s: f.t,
+                    command: c,
+                    position_m: pose.map(|p| p.0),
+                    heading_rad: pose.map(|p| p.1),
+                });
+                pose = f.tick()?;
+                f.guard(pose)?;
+            }
+            tests.push((axis, seg));
+        }
+    }
+    // Back home, then land.
+    let end = f.t + plan.settle_s;
+    while f.t < end {
+        let pose = f.tick()?;
+        f.guard(pose)?;
+        let c = f.hold(home);
+        f.b.drone.send(&c)?;
+    }
+    f.land();
+    if f.b.drone.telemetry().state != FlightState::Landed {
+        return Err(CalibrateError::Timeout("landing"));
+    }
+    Ok(tests)
+}
