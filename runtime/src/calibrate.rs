@@ -30,6 +30,9 @@ use crate::identify::{self, Axis, FitError, ModelFit, Sample, Segment};
 pub const EXCURSION_SAFETY: f64 = 1.5;
 /// Mocap lost this long → land.
 pub const MOCAP_LOST_S: f64 = 0.5;
+/// A test ends early (the hold takes over) when the drone comes this close to the keep-in
+/// box; the recorded part is still fitted. Crossing the box itself lands the drone.
+pub const TEST_FENCE_M: f64 = 0.4;
 
 /// What to fly.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,8 +50,12 @@ pub struct Plan {
     pub coast_s: f64,
     /// Hover hold before each test, seconds.
     pub settle_s: f64,
-    /// Doublets per axis (alternating sign).
+    /// Tests per axis: doublets +, −, then steps +, − (the vertical axis: steps only), in
+    /// turn.
     pub repeats: usize,
+    /// Fit a constant velocity disturbance (wind) per test as well
+    /// ([`identify::fit_axis_with`]).
+    pub disturbance: bool,
     /// Height of the hover point, metres (clamped into the keep-in box).
     pub hover_height_m: f64,
 }
@@ -64,7 +71,8 @@ impl Default for Plan {
             half_s: 2.0,
             coast_s: 1.5,
             settle_s: 4.0,
-            repeats: 2,
+            repeats: 4,
+            disturbance: false,
             hover_height_m: 1.3,
         }
     }
@@ -139,11 +147,16 @@ pub fn calibrate(
     interrupts: Option<&AtomicU32>,
 ) -> Result<Calibration, CalibrateError> {
     let tests = fly_tests(backends, stage, prior, plan, interrupts)?;
-    Ok(fit_tests(tests, prior, &plan.axes))
+    Ok(fit_tests(tests, prior, &plan.axes, plan.disturbance))
 }
 
 /// Fits the recorded tests: each axis on its own tests.
-pub fn fit_tests(tests: Vec<(Axis, Segment)>, prior: &Profile, axes: &[Axis]) -> Calibration {
+pub fn fit_tests(
+    tests: Vec<(Axis, Segment)>,
+    prior: &Profile,
+    axes: &[Axis],
+    disturbance: bool,
+) -> Calibration {
     let mut fit = ModelFit::default();
     let mut errors = Vec::new();
     for &axis in axes {
@@ -152,16 +165,15 @@ pub fn fit_tests(tests: Vec<(Axis, Segment)>, prior: &Profile, axes: &[Axis]) ->
             .filter(|(a, _)| *a == axis)
             .map(|(_, s)| s.clone())
             .collect();
-        let (f, e) = identify::fit_model(&segs, &[axis]);
-        if let Some(a) = f.get(axis) {
-            match axis {
-                Axis::Roll => fit.roll = Some(a.clone()),
-                Axis::Pitch => fit.pitch = Some(a.clone()),
-                Axis::Vz => fit.vz = Some(a.clone()),
-                Axis::Yaw => fit.yaw = Some(a.clone()),
-            }
+        match identify::fit_axis_with(&segs, axis, disturbance) {
+            Ok(a) => match axis {
+                Axis::Roll => fit.roll = Some(a),
+                Axis::Pitch => fit.pitch = Some(a),
+                Axis::Vz => fit.vz = Some(a),
+                Axis::Yaw => fit.yaw = Some(a),
+            },
+            Err(e) => errors.push(e),
         }
-        errors.extend(e);
     }
     let profile = errors.is_empty().then(|| fit.apply(prior));
     Calibration {
@@ -287,25 +299,44 @@ impl Flyer<'_, '_> {
     }
 }
 
-/// The doublet input of a test at time `s` into it.
-fn doublet(s: f64, amp: f64, half_s: f64) -> f64 {
-    if s < half_s {
-        amp
-    } else if s < 2.0 * half_s {
-        -amp
+/// A test's input shape.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// +A for `half_s`, −A for `half_s`, then 0.
+    Doublet,
+    /// +A for `2·half_s`, then 0.
+    Step,
+}
+
+/// The shape of test `rep` on `axis`: doublets then steps; on the vertical axis steps only
+/// (a doublet mixes climb and descent in one window, which the AR.Drone answers with
+/// different gains; separate steps give each its own window).
+pub fn shape(axis: Axis, rep: usize) -> Shape {
+    if axis == Axis::Vz || rep % 4 >= 2 {
+        Shape::Step
     } else {
-        0.0
+        Shape::Doublet
+    }
+}
+
+/// The test input at time `s` into it.
+fn test_input(shape: Shape, s: f64, amp: f64, half_s: f64) -> f64 {
+    match shape {
+        Shape::Doublet if s < half_s => amp,
+        Shape::Doublet if s < 2.0 * half_s => -amp,
+        Shape::Step if s < 2.0 * half_s => amp,
+        _ => 0.0,
     }
 }
 
 /// The prior model's largest displacement (body axis) over a doublet from rest.
-fn predicted_excursion(k: f64, tau: f64, amp: f64, plan: &Plan) -> f64 {
+fn predicted_excursion(k: f64, tau: f64, amp: f64, plan: &Plan, shape: Shape) -> f64 {
     let h = 0.01;
     let (mut v, mut s, mut max) = (0.0f64, 0.0f64, 0.0f64);
     let total = 2.0 * plan.half_s + plan.coast_s;
     let mut t = 0.0;
     while t < total {
-        let u = doublet(t, amp, plan.half_s);
+        let u = test_input(shape, t, amp, plan.half_s);
         v += h * (k * u - v) / tau;
         s += h * v;
         max = max.max(s.abs());
@@ -393,6 +424,7 @@ pub fn fly_tests(
                 f.b.drone.send(&c)?;
             }
             let sign = if rep % 2 == 0 { 1.0 } else { -1.0 };
+            let sh = shape(axis, rep);
             let base = match axis {
                 Axis::Roll | Axis::Pitch => plan.tilt_rad,
                 Axis::Vz => plan.vz_mps,
@@ -419,19 +451,31 @@ pub fn fly_tests(
                     Axis::Roll => {
                         let d = frames::body_to_world(heading) * nalgebra::Vector3::y();
                         (
-                            predicted_excursion(m.gain_roll_mps_per_rad, m.tau_roll_s, amp, plan),
+                            predicted_excursion(
+                                m.gain_roll_mps_per_rad,
+                                m.tau_roll_s,
+                                amp,
+                                plan,
+                                sh,
+                            ),
                             [d.x, d.y, 0.0],
                         )
                     }
                     Axis::Pitch => {
                         let d = frames::body_to_world(heading) * nalgebra::Vector3::x();
                         (
-                            predicted_excursion(m.gain_pitch_mps_per_rad, m.tau_pitch_s, amp, plan),
+                            predicted_excursion(
+                                m.gain_pitch_mps_per_rad,
+                                m.tau_pitch_s,
+                                amp,
+                                plan,
+                                sh,
+                            ),
                             [d.x, d.y, 0.0],
                         )
                     }
                     Axis::Vz => (
-                        predicted_excursion(m.gain_vz, m.tau_vz_s, amp, plan),
+                        predicted_excursion(m.gain_vz, m.tau_vz_s, amp, plan, sh),
                         [0.0, 0.0, 1.0],
                     ),
                     Axis::Yaw => (0.0, [0.0; 3]),
@@ -456,7 +500,7 @@ pub fn fly_tests(
                 if s > total + 1e-9 {
                     break;
                 }
-                let c = command_for(axis, doublet(s, sign * amp, plan.half_s));
+                let c = command_for(axis, test_input(sh, s, sign * amp, plan.half_s));
                 f.b.drone.send(&c)?;
                 seg.push(Sample {
                     t_s: f.t,
@@ -466,6 +510,15 @@ pub fn fly_tests(
                 });
                 pose = f.tick()?;
                 f.guard(pose)?;
+                if let Some((p, _)) = pose {
+                    // The floor counts from z = 0 (the box's floor is below it for landing).
+                    let floor = [f.lo[0], f.lo[1], f.lo[2].max(0.0)];
+                    let near = (0..3)
+                        .any(|i| p[i] < floor[i] + TEST_FENCE_M || p[i] > f.hi[i] - TEST_FENCE_M);
+                    if near {
+                        break;
+                    }
+                }
             }
             tests.push((axis, seg));
         }

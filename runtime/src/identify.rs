@@ -165,7 +165,10 @@ impl ModelFit {
         }
     }
 
-    /// The profile with the fitted values in `[model]` (axes not fitted keep theirs).
+    /// The profile with the fitted values in `[model]` (axes not fitted keep theirs). The
+    /// motion limits that follow from the model (`speed_max_mps`, `accel_max_mps2`,
+    /// [`dronecine_compiler::profile::derived_motion_limits`]) follow it at the previous
+    /// profile's authority; a limit the previous profile had set lower stays, if still below.
     pub fn apply(
         &self,
         previous: &dronecine_compiler::profile::Profile,
@@ -187,6 +190,27 @@ impl ModelFit {
         if let Some(f) = &self.yaw {
             m.gain_yaw = f.gain.value;
         }
+        use dronecine_compiler::profile::derived_motion_limits;
+        let l = &previous.limits;
+        let pm = &previous.model;
+        let k_min = pm.gain_roll_mps_per_rad.min(pm.gain_pitch_mps_per_rad);
+        let authority = (l.speed_max_mps / (k_min * l.tilt_max_rad)).clamp(0.0, 1.0);
+        let authority = if authority.is_finite() {
+            authority
+        } else {
+            0.5
+        };
+        let (s0, a0) = derived_motion_limits(pm, l.tilt_max_rad, authority);
+        let (s1, a1) = derived_motion_limits(&p.model, l.tilt_max_rad, authority);
+        let follow = |old: f64, derived_old: f64, derived_new: f64| {
+            if old >= derived_old * (1.0 - 1e-9) {
+                derived_new
+            } else {
+                old.min(derived_new)
+            }
+        };
+        p.limits.speed_max_mps = follow(l.speed_max_mps, s0, s1);
+        p.limits.accel_max_mps2 = follow(l.accel_max_mps2, a0, a1);
         p
     }
 }
@@ -244,8 +268,23 @@ impl std::error::Error for FitError {}
 pub fn fit_model(segments: &[Segment], axes: &[Axis]) -> (ModelFit, Vec<FitError>) {
     let mut out = ModelFit::default();
     let mut errors = Vec::new();
+    let horizontal = (axes.contains(&Axis::Roll) || axes.contains(&Axis::Pitch))
+        .then(|| fit_horizontal(segments, false));
     for &axis in axes {
-        match fit_axis(segments, axis) {
+        let fit = match (axis, &horizontal) {
+            (Axis::Roll, Some(h)) => h.0.clone(),
+            (Axis::Pitch, Some(h)) => h.1.clone(),
+            (Axis::Vz, _) => fit_lag(segments, axis, 2, false),
+            _ => fit_heading(segments),
+        };
+        let checked = fit
+            .ok_or(FitError {
+                axis,
+                problem: FitProblem::NotExcited,
+                fit: None,
+            })
+            .and_then(check);
+        match checked {
             Ok(fit) => out.set(fit),
             Err(e) => errors.push(e),
         }
@@ -255,9 +294,22 @@ pub fn fit_model(segments: &[Segment], axes: &[Axis]) -> (ModelFit, Vec<FitError
 
 /// Fits one axis and checks the fit's quality.
 pub fn fit_axis(segments: &[Segment], axis: Axis) -> Result<AxisFit, FitError> {
-    let fit = match axis.input_index() {
-        Some(j) => fit_lag(segments, axis, j),
-        None => fit_heading(segments),
+    fit_axis_with(segments, axis, false)
+}
+
+/// [`fit_axis`], optionally with a constant velocity disturbance (wind) per segment among the
+/// nuisance parameters: robust to a steady drift, at the price of wider intervals (a step's
+/// response looks like a disturbance until the input stops).
+pub fn fit_axis_with(
+    segments: &[Segment],
+    axis: Axis,
+    disturbance: bool,
+) -> Result<AxisFit, FitError> {
+    let fit = match axis {
+        Axis::Roll => fit_horizontal(segments, disturbance).0,
+        Axis::Pitch => fit_horizontal(segments, disturbance).1,
+        Axis::Vz => fit_lag(segments, axis, 2, disturbance),
+        Axis::Yaw => fit_heading(segments),
     }
     .ok_or(FitError {
         axis,
@@ -317,6 +369,408 @@ fn check(fit: AxisFit) -> Result<AxisFit, FitError> {
     Ok(fit)
 }
 
+/// One segment prepared for the joint horizontal fit: measured world x, y (stacked: x then
+/// y), the heading each interval flies at (the last measured one), roll and pitch inputs.
+struct PlaneData {
+    y: Vec<f64>,
+    mask: Vec<bool>,
+    heading: Vec<f64>,
+    roll: Vec<f64>,
+    pitch: Vec<f64>,
+    dt: Vec<f64>,
+}
+
+fn prepare_plane(seg: &[Sample]) -> Option<PlaneData> {
+    if seg.len() < 3 {
+        return None;
+    }
+    let n = seg.len();
+    let first_heading = seg
+        .iter()
+        .find_map(|s| s.heading_rad.filter(|h| h.is_finite()))?;
+    let mut d = PlaneData {
+        y: vec![0.0; 2 * n],
+        mask: vec![false; 2 * n],
+        heading: Vec::with_capacity(n),
+        roll: Vec::with_capacity(n),
+        pitch: Vec::with_capacity(n),
+        dt: Vec::with_capacity(n),
+    };
+    let mut c = first_heading;
+    for (k, s) in seg.iter().enumerate() {
+        if let Some(h) = s.heading_rad.filter(|h| h.is_finite()) {
+            c = h;
+        }
+        d.heading.push(c);
+        if let Some(p) = s
+            .position_m
+            .filter(|p| p[0].is_finite() && p[1].is_finite())
+        {
+            d.y[k] = p[0];
+            d.y[n + k] = p[1];
+            d.mask[k] = true;
+            d.mask[n + k] = true;
+        }
+        let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
+        d.roll.push(finite(s.command.roll_rad));
+        d.pitch.push(finite(s.command.pitch_rad));
+        let dt = seg.get(k + 1).map_or(0.0, |nx| nx.t_s - s.t_s);
+        if !(dt >= 0.0 && dt.is_finite()) {
+            return None;
+        }
+        d.dt.push(dt);
+    }
+    (d.mask.iter().filter(|m| **m).count() >= 6).then_some(d)
+}
+
+/// What drives one horizontal response.
+#[derive(Clone, Copy)]
+enum Drive {
+    /// Unit roll gain (K_φ = 1), from rest.
+    Roll,
+    Pitch,
+    /// Unit initial world velocity along x (0) or y (1).
+    Velocity(usize),
+    /// A unit constant world wind along x (0) or y (1), from rest relative to it.
+    Wind(usize),
+}
+
+/// The model's world x, y positions (stacked) for one drive, at time constants
+/// `taus = [τ_φ, τ_θ]`: per interval the body-frame lag toward `P·K·u + Mᵀw` at the
+/// interval's heading (control.md §2, heading frozen per step), integrated exactly.
+fn plane_response(d: &PlaneData, taus: [f64; 2], drive: Drive) -> Vec<f64> {
+    let n = d.dt.len();
+    let mut out = vec![0.0; 2 * n];
+    let (mut p, mut v) = ([0.0f64; 2], [0.0f64; 2]);
+    let mut wind = [0.0f64; 2];
+    match drive {
+        Drive::Velocity(i) => v[i] = 1.0,
+        Drive::Wind(i) => wind[i] = 1.0,
+        _ => {}
+    }
+    // Body order: forward (τ_θ), left (τ_φ).
+    let tb = [taus[1], taus[0]];
+    let (mut last_dt, mut a) = (f64::NAN, [0.0; 2]);
+    for k in 0..n {
+        out[k] = p[0];
+        out[n + k] = p[1];
+        let (sn, cs) = d.heading[k].sin_cos();
+        // Body-frame target velocity: forward = −K_θ θ, left = −K_φ φ (unit gains).
+        let target = match drive {
+            Drive::Roll => [0.0, -d.roll[k]],
+            Drive::Pitch => [-d.pitch[k], 0.0],
+            _ => [0.0, 0.0],
+        };
+        // Air-relative velocity in the body frame.
+        let rel = [v[0] - wind[0], v[1] - wind[1]];
+        let vb = [cs * rel[0] + sn * rel[1], -sn * rel[0] + cs * rel[1]];
+        let dt = d.dt[k];
+        if dt != last_dt {
+            a = [(-dt / tb[0]).exp(), (-dt / tb[1]).exp()];
+            last_dt = dt;
+        }
+        let mut vb_new = [0.0; 2];
+        let mut db = [0.0; 2];
+        for j in 0..2 {
+            db[j] = dt * target[j] + (vb[j] - target[j]) * tb[j] * (1.0 - a[j]);
+            vb_new[j] = target[j] + (vb[j] - target[j]) * a[j];
+        }
+        p[0] += cs * db[0] - sn * db[1] + wind[0] * dt;
+        p[1] += sn * db[0] + cs * db[1] + wind[1] * dt;
+        v[0] = cs * vb_new[0] - sn * vb_new[1] + wind[0];
+        v[1] = sn * vb_new[0] + cs * vb_new[1] + wind[1];
+    }
+    out
+}
+
+struct PlaneSolution {
+    /// [K_φ, K_θ] (0 for an axis not excited).
+    k: [f64; 2],
+    ssr: f64,
+    n: usize,
+    /// Per segment, the nuisance coefficients (p₀x, p₀y, v₀x, v₀y, [wx, wy]).
+    nuis: Vec<Vec<f64>>,
+}
+
+fn plane_nuisance(d: &PlaneData, taus: [f64; 2], disturbance: bool) -> Vec<Vec<f64>> {
+    let n = d.dt.len();
+    let mut ox = vec![0.0; 2 * n];
+    let mut oy = vec![0.0; 2 * n];
+    ox[..n].fill(1.0);
+    oy[n..].fill(1.0);
+    let mut cols = vec![
+        ox,
+        oy,
+        plane_response(d, taus, Drive::Velocity(0)),
+        plane_response(d, taus, Drive::Velocity(1)),
+    ];
+    if disturbance {
+        cols.push(plane_response(d, taus, Drive::Wind(0)));
+        cols.push(plane_response(d, taus, Drive::Wind(1)));
+    }
+    cols
+}
+
+/// Linear least squares in the excited gains and every segment's nuisance, at fixed τs.
+fn solve_plane(
+    data: &[PlaneData],
+    taus: [f64; 2],
+    excited: [bool; 2],
+    disturbance: bool,
+) -> PlaneSolution {
+    let mut ata = nalgebra::Matrix2::<f64>::zeros();
+    let mut atb = nalgebra::Vector2::<f64>::zeros();
+    let (mut yy, mut n) = (0.0, 0);
+    let mut cache = Vec::with_capacity(data.len());
+    for d in data {
+        let cols = plane_nuisance(d, taus, disturbance);
+        let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        let mut y = d.y.clone();
+        let mut h = [
+            plane_response(d, taus, Drive::Roll),
+            plane_response(d, taus, Drive::Pitch),
+        ];
+        let raw = h.clone();
+        {
+            let [h0, h1] = &mut h;
+            project_many(&mut [&mut y, h0, h1], &basis, &d.mask);
+        }
+        for k in 0..y.len() {
+            if d.mask[k] {
+                for r in 0..2 {
+                    atb[r] += h[r][k] * y[k];
+                    for c in 0..2 {
+                        ata[(r, c)] += h[r][k] * h[c][k];
+                    }
+                }
+                yy += y[k] * y[k];
+                n += 1;
+            }
+        }
+        cache.push((cols, raw));
+    }
+    // Unexcited gains are held at 0.
+    for j in 0..2 {
+        if !excited[j] {
+            ata[(j, 0)] = 0.0;
+            ata[(0, j)] = 0.0;
+            ata[(j, 1)] = 0.0;
+            ata[(1, j)] = 0.0;
+            ata[(j, j)] = 1.0;
+            atb[j] = 0.0;
+        }
+    }
+    let kv = ata
+        .try_inverse()
+        .map_or(nalgebra::Vector2::zeros(), |inv| inv * atb);
+    let ssr = (yy - kv.dot(&atb)).max(0.0);
+    let k = [kv[0], kv[1]];
+    let nuis = data
+        .iter()
+        .zip(&cache)
+        .map(|(d, (cols, raw))| {
+            let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+            let mut r: Vec<f64> = (0..d.y.len())
+                .map(|i| d.y[i] - k[0] * raw[0][i] - k[1] * raw[1][i])
+                .collect();
+            project_out(&mut r, &basis, &d.mask)
+        })
+        .collect();
+    PlaneSolution { k, ssr, n, nuis }
+}
+
+/// Golden-section minimum of `f` over `[lo, hi]` (log τ).
+fn golden(mut lo: f64, mut hi: f64, f: &dyn Fn(f64) -> f64) -> f64 {
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut x1, mut x2) = (hi - phi * (hi - lo), lo + phi * (hi - lo));
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..28 {
+        if f1 < f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - phi * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + phi * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The joint fit of the roll and pitch axes (the lag is in the body frame and the heading
+/// turns, so the two couple): a grid on a common τ, then alternating golden sections on
+/// log τ_φ and log τ_θ; gains and nuisance by linear least squares.
+fn fit_horizontal(segments: &[Segment], disturbance: bool) -> (Option<AxisFit>, Option<AxisFit>) {
+    let data: Vec<PlaneData> = segments.iter().filter_map(|s| prepare_plane(s)).collect();
+    let excited = [
+        data.iter().any(|d| {
+            d.roll
+                .iter()
+                .zip(&d.dt)
+                .any(|(u, dt)| *u != 0.0 && *dt > 0.0)
+        }),
+        data.iter().any(|d| {
+            d.pitch
+                .iter()
+                .zip(&d.dt)
+                .any(|(u, dt)| *u != 0.0 && *dt > 0.0)
+        }),
+    ];
+    if !excited[0] && !excited[1] {
+        return (None, None);
+    }
+    let ssr =
+        |lt: [f64; 2]| solve_plane(&data, [lt[0].exp(), lt[1].exp()], excited, disturbance).ssr;
+    let (llo, lhi) = (TAU_MIN_S.ln(), TAU_MAX_S.ln());
+    let grid = 32;
+    let at = |i: usize| llo + (lhi - llo) * i as f64 / grid as f64;
+    let best = (0..=grid)
+        .map(|i| (i, ssr([at(i), at(i)])))
+        .fold(
+            (0, f64::INFINITY),
+            |a, (i, s)| if s < a.1 { (i, s) } else { a },
+        )
+        .0;
+    let mut lt = [at(best), at(best)];
+    let step = (lhi - llo) / grid as f64;
+    let mut width = 3.0 * step;
+    for _round in 0..4 {
+        for j in 0..2 {
+            if !excited[j] {
+                continue;
+            }
+            let lo = (lt[j] - width).max(llo);
+            let hi = (lt[j] + width).min(lhi);
+            let f = |x: f64| {
+                let mut t = lt;
+                t[j] = x;
+                ssr(t)
+            };
+            lt[j] = golden(lo, hi, &f);
+        }
+        width = (width * 0.6).max(step * 0.5);
+    }
+    let taus = [lt[0].exp(), lt[1].exp()];
+    let sol = solve_plane(&data, taus, excited, disturbance);
+    // Information matrix of (K_φ, τ_φ, K_θ, τ_θ), nuisance projected out.
+    let mut cols_all: Vec<[Vec<f64>; 4]> = Vec::new();
+    let mut null_ss = 0.0;
+    for (d, nuis) in data.iter().zip(&sol.nuis) {
+        let model = |t: [f64; 2]| -> Vec<f64> {
+            let r = plane_response(d, t, Drive::Roll);
+            let p = plane_response(d, t, Drive::Pitch);
+            let nc = plane_nuisance(d, t, disturbance);
+            (0..d.y.len())
+                .map(|i| {
+                    sol.k[0] * r[i]
+                        + sol.k[1] * p[i]
+                        + nc.iter().zip(nuis).map(|(c, b)| c[i] * b).sum::<f64>()
+                })
+                .collect()
+        };
+        let dtau = |j: usize| -> Vec<f64> {
+            let eps = taus[j] * 1e-4;
+            let (mut tp, mut tm) = (taus, taus);
+            tp[j] += eps;
+            tm[j] -= eps;
+            let (a, b) = (model(tp), model(tm));
+            a.iter()
+                .zip(&b)
+                .map(|(a, b)| (a - b) / (2.0 * eps))
+                .collect()
+        };
+        let nc = plane_nuisance(d, taus, disturbance);
+        let basis: Vec<&[f64]> = nc.iter().map(|c| c.as_slice()).collect();
+        let mut c = [
+            plane_response(d, taus, Drive::Roll),
+            dtau(0),
+            plane_response(d, taus, Drive::Pitch),
+            dtau(1),
+        ];
+        for col in c.iter_mut() {
+            project_out(col, &basis, &d.mask);
+        }
+        for col in c.iter_mut() {
+            for (x, m) in col.iter_mut().zip(&d.mask) {
+                if !m {
+                    *x = 0.0;
+                }
+            }
+        }
+        // The no-input model: constant-velocity drift per segment.
+        let n = d.dt.len();
+        let t: Vec<f64> =
+            d.dt.iter()
+                .scan(0.0, |acc, dt| {
+                    let now = *acc;
+                    *acc += dt;
+                    Some(now)
+                })
+                .collect();
+        let (mut tx, mut ty) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
+        tx[..n].copy_from_slice(&t);
+        ty[n..].copy_from_slice(&t);
+        let mut y0 = d.y.clone();
+        project_out(&mut y0, &[&nc[0], &nc[1], &tx, &ty], &d.mask);
+        null_ss += y0
+            .iter()
+            .zip(&d.mask)
+            .filter(|(_, m)| **m)
+            .map(|(y, _)| y * y)
+            .sum::<f64>();
+        cols_all.push(c);
+    }
+    let idx: Vec<usize> = (0..4).filter(|&i| excited[i / 2]).collect();
+    let m = idx.len();
+    let mut info = nalgebra::DMatrix::<f64>::zeros(m, m);
+    for c in &cols_all {
+        for (r, &ir) in idx.iter().enumerate() {
+            for (q, &iq) in idx.iter().enumerate() {
+                info[(r, q)] += c[ir].iter().zip(&c[iq]).map(|(a, b)| a * b).sum::<f64>();
+            }
+        }
+    }
+    let per_seg = if disturbance { 6 } else { 4 };
+    let dof = sol.n.saturating_sub(m + per_seg * data.len()).max(1) as f64;
+    let sigma2 = sol.ssr / dof;
+    let cov = info.try_inverse().map(|i| i * sigma2);
+    let var = |which: usize| -> f64 {
+        let Some(cov) = &cov else {
+            return f64::INFINITY;
+        };
+        idx.iter()
+            .position(|&i| i == which)
+            .map_or(f64::INFINITY, |r| cov[(r, r)].max(0.0))
+    };
+    let r2 = if null_ss > 0.0 {
+        1.0 - sol.ssr / null_ss
+    } else {
+        0.0
+    };
+    let make = |axis: Axis, j: usize| -> Option<AxisFit> {
+        excited[j].then(|| AxisFit {
+            axis,
+            gain: Estimate {
+                value: sol.k[j],
+                ci95: Z95 * var(2 * j).sqrt(),
+            },
+            tau_s: Some(Estimate {
+                value: taus[j],
+                ci95: Z95 * var(2 * j + 1).sqrt(),
+            }),
+            r2,
+            rms: (sol.ssr / sol.n.max(1) as f64).sqrt(),
+            samples: sol.n / 2,
+        })
+    };
+    (make(Axis::Roll, 0), make(Axis::Pitch, 1))
+}
+
 /// One segment prepared for a translation axis: measured body coordinate (or `None`), the
 /// signed input, the interval to the next sample.
 struct AxisData {
@@ -346,7 +800,7 @@ fn prepare(seg: &[Sample], j: usize) -> Option<AxisData> {
         return None;
     }
     let (c, span) = mean_heading(seg)?;
-    if span > HEADING_SPAN_MAX_RAD {
+    if span > HEADING_SPAN_MAX_RAD && j != 2 {
         return None;
     }
     // Body axis driven by input j, and the sign: body velocity = P·K·u.
@@ -397,7 +851,7 @@ fn responses(d: &AxisData, tau: f64) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// Removes from `x` its least-squares projection on `basis` (over the measured samples).
-fn project_out(x: &mut [f64], basis: &[&[f64]], mask: &[bool]) {
+fn project_out(x: &mut [f64], basis: &[&[f64]], mask: &[bool]) -> Vec<f64> {
     let m = basis.len();
     let mut a = nalgebra::DMatrix::<f64>::zeros(m, m);
     let mut b = nalgebra::DVector::<f64>::zeros(m);
@@ -413,37 +867,96 @@ fn project_out(x: &mut [f64], basis: &[&[f64]], mask: &[bool]) {
         }
     }
     let Some(coef) = a.clone().try_inverse().map(|inv| inv * b) else {
-        return;
+        return vec![0.0; m];
     };
     for k in 0..x.len() {
         for r in 0..m {
             x[k] -= coef[r] * basis[r][k];
         }
     }
+    coef.iter().copied().collect()
+}
+
+/// [`project_out`] for several vectors on one basis (the normal matrix inverted once).
+fn project_many(xs: &mut [&mut [f64]], basis: &[&[f64]], mask: &[bool]) {
+    let m = basis.len();
+    let mut a = nalgebra::DMatrix::<f64>::zeros(m, m);
+    for k in 0..mask.len() {
+        if mask[k] {
+            for r in 0..m {
+                for c in r..m {
+                    a[(r, c)] += basis[r][k] * basis[c][k];
+                }
+            }
+        }
+    }
+    for r in 0..m {
+        for c in 0..r {
+            a[(r, c)] = a[(c, r)];
+        }
+    }
+    let Some(inv) = a.try_inverse() else { return };
+    for x in xs.iter_mut() {
+        let mut b = nalgebra::DVector::<f64>::zeros(m);
+        for k in 0..mask.len() {
+            if mask[k] {
+                for r in 0..m {
+                    b[r] += basis[r][k] * x[k];
+                }
+            }
+        }
+        let coef = &inv * b;
+        for k in 0..x.len() {
+            for r in 0..m {
+                x[k] -= coef[r] * basis[r][k];
+            }
+        }
+    }
+}
+
+/// Time since the segment's first sample, per sample.
+fn elapsed(d: &AxisData) -> Vec<f64> {
+    let mut t = 0.0;
+    d.dt.iter()
+        .map(|dt| {
+            let now = t;
+            t += dt;
+            now
+        })
+        .collect()
+}
+
+/// The nuisance columns of one segment: s₀ (1), v₀ (G), and with `disturbance` a constant
+/// velocity disturbance w (wind) the body lag relaxes toward (T − G).
+fn nuisance(d: &AxisData, g: &[f64], disturbance: bool) -> Vec<Vec<f64>> {
+    let mut cols = vec![vec![1.0; g.len()], g.to_vec()];
+    if disturbance {
+        cols.push(elapsed(d).iter().zip(g).map(|(t, g)| t - g).collect());
+    }
+    cols
 }
 
 struct LagSolution {
     k: f64,
     ssr: f64,
-    /// Σ H⊥², per fit.
-    hh: f64,
     n: usize,
-    /// Per segment: (residual y⊥ − K·H⊥ …) not needed; the fitted v₀ per segment.
-    v0: Vec<f64>,
+    /// Per segment: the fitted coefficients of G and (T − G): v₀ and w (0 without).
+    v0: Vec<(f64, f64)>,
 }
 
-/// The linear least squares in (K, s₀, v₀ per segment) at a fixed τ.
-fn solve_lag(data: &[AxisData], tau: f64) -> LagSolution {
+/// The linear least squares in (K, and per segment the nuisance) at a fixed τ.
+fn solve_lag(data: &[AxisData], tau: f64, disturbance: bool) -> LagSolution {
     let (mut hy, mut hh, mut yy, mut n) = (0.0, 0.0, 0.0, 0);
     let mut per = Vec::with_capacity(data.len());
     for d in data {
         let (g, h) = responses(d, tau);
         let mask: Vec<bool> = d.y.iter().map(|y| y.is_some()).collect();
-        let ones = vec![1.0; g.len()];
+        let cols = nuisance(d, &g, disturbance);
+        let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
         let mut y: Vec<f64> = d.y.iter().map(|y| y.unwrap_or(0.0)).collect();
         let mut hp = h.clone();
-        project_out(&mut y, &[&ones, &g], &mask);
-        project_out(&mut hp, &[&ones, &g], &mask);
+        project_out(&mut y, &basis, &mask);
+        project_out(&mut hp, &basis, &mask);
         for k in 0..y.len() {
             if mask[k] {
                 hy += hp[k] * y[k];
@@ -452,48 +965,26 @@ fn solve_lag(data: &[AxisData], tau: f64) -> LagSolution {
                 n += 1;
             }
         }
-        per.push((g, h, mask));
+        per.push((h, mask, cols));
     }
     let k = if hh > 0.0 { hy / hh } else { 0.0 };
     let ssr = (yy - k * hy).max(0.0);
-    // v₀ per segment: regress y − K·H on [1, G].
     let v0 = data
         .iter()
         .zip(&per)
-        .map(|(d, (g, h, mask))| {
-            let ones = vec![1.0; g.len()];
-            let mut r: Vec<f64> = (0..g.len())
+        .map(|(d, (h, mask, cols))| {
+            let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+            let mut r: Vec<f64> = (0..h.len())
                 .map(|i| d.y[i].unwrap_or(0.0) - k * h[i])
                 .collect();
-            let orig = r.clone();
-            project_out(&mut r, &[&ones, g], mask);
-            // Coefficient of G: solve from the fitted part using two measured points.
-            fitted_coef(&orig, &r, g, mask)
+            let c = project_out(&mut r, &basis, mask);
+            (c[1], c.get(2).copied().unwrap_or(0.0))
         })
         .collect();
-    LagSolution { k, ssr, hh, n, v0 }
+    LagSolution { k, ssr, n, v0 }
 }
 
-/// Given `x` and its residual after projecting on [1, g], the coefficient of g.
-fn fitted_coef(x: &[f64], resid: &[f64], g: &[f64], mask: &[bool]) -> f64 {
-    // fitted = c0 + c1·g; c1 = cov(fitted, g)/var(g) over the measured samples.
-    let idx: Vec<usize> = (0..x.len()).filter(|&k| mask[k]).collect();
-    let n = idx.len() as f64;
-    let mf = idx.iter().map(|&k| x[k] - resid[k]).sum::<f64>() / n;
-    let mg = idx.iter().map(|&k| g[k]).sum::<f64>() / n;
-    let (mut c, mut v) = (0.0, 0.0);
-    for &k in &idx {
-        c += (x[k] - resid[k] - mf) * (g[k] - mg);
-        v += (g[k] - mg) * (g[k] - mg);
-    }
-    if v > 0.0 {
-        c / v
-    } else {
-        0.0
-    }
-}
-
-fn fit_lag(segments: &[Segment], axis: Axis, j: usize) -> Option<AxisFit> {
+fn fit_lag(segments: &[Segment], axis: Axis, j: usize, disturbance: bool) -> Option<AxisFit> {
     let data: Vec<AxisData> = segments
         .iter()
         .filter_map(|s| prepare(s, j))
@@ -506,7 +997,7 @@ fn fit_lag(segments: &[Segment], axis: Axis, j: usize) -> Option<AxisFit> {
         return None;
     }
     // τ: log grid, then golden section around the best point.
-    let ssr = |tau: f64| solve_lag(&data, tau).ssr;
+    let ssr = |tau: f64| solve_lag(&data, tau, disturbance).ssr;
     let grid = 48;
     let lt = |i: usize| {
         (TAU_MIN_S.ln() + (TAU_MAX_S.ln() - TAU_MIN_S.ln()) * i as f64 / grid as f64).exp()
@@ -546,23 +1037,25 @@ fn fit_lag(segments: &[Segment], axis: Axis, j: usize) -> Option<AxisFit> {
         }
     }
     let tau = (0.5 * (lo + hi)).exp();
-    let sol = solve_lag(&data, tau);
+    let sol = solve_lag(&data, tau, disturbance);
     // Information matrix of (K, τ) with s₀, v₀ projected out: columns H (∂/∂K) and
     // D = K·∂H/∂τ + v₀·∂G/∂τ (∂/∂τ), central differences.
     let eps = tau * 1e-4;
     let (mut hh, mut hd, mut dd, mut null_ss) = (0.0, 0.0, 0.0, 0.0);
-    for (d, v0) in data.iter().zip(&sol.v0) {
+    for (d, (v0, w)) in data.iter().zip(&sol.v0) {
         let (g, h) = responses(d, tau);
         let (gp, hp) = responses(d, tau + eps);
         let (gm, hm) = responses(d, tau - eps);
         let mask: Vec<bool> = d.y.iter().map(|y| y.is_some()).collect();
         let ones = vec![1.0; g.len()];
         let mut dcol: Vec<f64> = (0..g.len())
-            .map(|i| (sol.k * (hp[i] - hm[i]) + v0 * (gp[i] - gm[i])) / (2.0 * eps))
+            .map(|i| (sol.k * (hp[i] - hm[i]) + (v0 - w) * (gp[i] - gm[i])) / (2.0 * eps))
             .collect();
         let mut hcol = h.clone();
-        project_out(&mut dcol, &[&ones, &g], &mask);
-        project_out(&mut hcol, &[&ones, &g], &mask);
+        let cols = nuisance(d, &g, disturbance);
+        let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        project_out(&mut dcol, &basis, &mask);
+        project_out(&mut hcol, &basis, &mask);
         // The no-input model: constant-velocity drift.
         let t: Vec<f64> = (0..g.len())
             .scan(0.0, |acc, i| {
@@ -582,8 +1075,7 @@ fn fit_lag(segments: &[Segment], axis: Axis, j: usize) -> Option<AxisFit> {
             }
         }
     }
-    let _ = sol.hh;
-    let params = 2 + 2 * data.len();
+    let params = 2 + (if disturbance { 3 } else { 2 }) * data.len();
     let dof = sol.n.saturating_sub(params).max(1) as f64;
     let sigma2 = sol.ssr / dof;
     let det = hh * dd - hd * hd;
@@ -685,7 +1177,6 @@ fn fit_heading(segments: &[Segment]) -> Option<AxisFit> {
 /// measured body coordinate (or unwrapped heading) and the model's, per sample (`None` where
 /// nothing was measured). Initial state from the same least squares as the fit.
 pub fn simulate_fit(seg: &[Sample], fit: &AxisFit) -> Option<Vec<(f64, Option<f64>, f64)>> {
-    let one = vec![seg.to_vec()];
     match (fit.axis.input_index(), fit.tau_s) {
         (Some(j), Some(tau)) => {
             let d = prepare(seg, j)?;
@@ -697,7 +1188,6 @@ pub fn simulate_fit(seg: &[Sample], fit: &AxisFit) -> Option<Vec<(f64, Option<f6
                 .collect();
             let mut r = orig.clone();
             project_out(&mut r, &[&ones, &g], &mask);
-            let _ = one;
             Some(
                 (0..g.len())
                     .map(|i| {
@@ -732,6 +1222,41 @@ pub fn simulate_fit(seg: &[Sample], fit: &AxisFit) -> Option<Vec<(f64, Option<f6
             Some(out.into_iter().map(|(t, y, m)| (t, y, m + c0)).collect())
         }
     }
+}
+
+/// The segments a flight log gives: the ticks of the approach and the shots (the servo's
+/// commands; take-off and landing are the firmware's), cut into windows of `window_s` and at
+/// every tick whose controller output was refused (a failsafe hover is not the command).
+pub fn segments_from_log(ticks: &[crate::log::LoggedTick], window_s: f64) -> Vec<Segment> {
+    use crate::record::Phase;
+    let mut out = Vec::new();
+    let mut seg: Segment = Vec::new();
+    for t in ticks {
+        let usable = matches!(t.phase, Phase::Approach | Phase::Shots)
+            && t.output.is_ok()
+            && t.input.t_s.is_finite();
+        let too_long = seg.first().is_some_and(|f| t.input.t_s - f.t_s >= window_s);
+        let backwards = seg.last().is_some_and(|l| t.input.t_s <= l.t_s);
+        if !usable || too_long || backwards {
+            if seg.len() >= 3 {
+                out.push(std::mem::take(&mut seg));
+            } else {
+                seg.clear();
+            }
+        }
+        if usable {
+            seg.push(Sample {
+                t_s: t.input.t_s,
+                command: t.command_sent,
+                position_m: t.input.measurement.map(|m| m.position_m),
+                heading_rad: t.input.measurement.map(|m| m.heading_rad),
+            });
+        }
+    }
+    if seg.len() >= 3 {
+        out.push(seg);
+    }
+    out
 }
 
 #[cfg(test)]
@@ -876,6 +1401,19 @@ mod tests {
             prev.model.gain_roll_mps_per_rad
         );
         assert_eq!(p.servo, prev.servo);
-        assert_eq!(p.limits, prev.limits);
+        // The firmware limits stay; the motion limits follow the new model (authority 0.5).
+        assert_eq!(p.limits.tilt_max_rad, prev.limits.tilt_max_rad);
+        assert_eq!(p.limits.jerk_max_mps3, prev.limits.jerk_max_mps3);
+        let (speed, accel) = dronecine_compiler::profile::derived_motion_limits(
+            &p.model,
+            p.limits.tilt_max_rad,
+            0.5,
+        );
+        assert!((p.limits.speed_max_mps - speed).abs() < 1e-9);
+        assert!((p.limits.accel_max_mps2 - accel).abs() < 1e-9);
+        // So the written profile is a valid one.
+        let (back, _) = dronecine_compiler::profile::Profile::from_toml("cal", &p.to_toml())
+            .expect("the calibrated profile loads");
+        assert!((back.model.gain_pitch_mps_per_rad - p.model.gain_pitch_mps_per_rad).abs() < 1e-9);
     }
 }
