@@ -12,7 +12,7 @@ use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
 use dronecine_grammar::script::{DroneRef, Scene, Stage};
 use dronecine_runtime::calibrate::{self as cal, Plan};
 use dronecine_runtime::flight::Backends;
-use dronecine_runtime::identify::{self, Axis, FitError, ModelFit};
+use dronecine_runtime::identify::{self, Axis, FitError, ModelFit, Segment};
 use dronecine_runtime::log::FlightLog;
 use dronecine_runtime::sim::{Effects, SimConfig, Simulator};
 
@@ -47,6 +47,10 @@ pub struct CalibrateArgs {
     /// Control rate, Hz.
     #[arg(long, value_name = "HZ", default_value_t = 100.0)]
     rate: f64,
+    /// Write the calibration report (per axis the measured response against the fitted
+    /// model's and the previous profile's, SVG and PNG) to this folder.
+    #[arg(long, value_name = "DIR")]
+    report: Option<std::path::PathBuf>,
     /// Fit a constant wind drift per test too (wider intervals; for a draughty stage).
     #[arg(long)]
     wind: bool,
@@ -72,6 +76,9 @@ pub struct IdentifyArgs {
     /// Which axes to fit: roll, pitch, vz, yaw or all.
     #[arg(long, value_name = "AXIS", default_value = "all")]
     axis: String,
+    /// Write the report (as `calibrate --report`) on the four most excited windows per axis.
+    #[arg(long, value_name = "DIR")]
+    report: Option<std::path::PathBuf>,
     /// Length of the windows the log is cut into (each with its own initial state), seconds.
     #[arg(long, value_name = "S", default_value_t = 6.0)]
     window: f64,
@@ -179,6 +186,65 @@ fn render(fit: &ModelFit, errors: &[FitError], prev: &Profile, axes: &[Axis]) ->
     out
 }
 
+/// Writes `<axis>.svg` and `<axis>.png` per fitted axis (passed or refused) into `dir`.
+fn write_report(
+    dir: &Path,
+    fit: &ModelFit,
+    errors: &[FitError],
+    prev: &Profile,
+    tests: &[(Axis, Vec<&Segment>)],
+) -> Result<Vec<std::path::PathBuf>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create `{}`: {e}", dir.display()))?;
+    let mut written = Vec::new();
+    for (axis, segs) in tests {
+        let Some(f) = fit
+            .get(*axis)
+            .or_else(|| errors.iter().find(|e| e.axis == *axis)?.fit.as_ref())
+        else {
+            continue;
+        };
+        let Some(svg) = cal::report_svg(*axis, segs, f, prev) else {
+            continue;
+        };
+        let svg_path = dir.join(format!("{}.svg", axis.name()));
+        crate::files::write_atomic(&svg_path, &svg)
+            .map_err(|e| format!("cannot write `{}`: {e}", svg_path.display()))?;
+        let png = dronecine_compiler::preview::svg_to_png(&svg)
+            .map_err(|e| format!("cannot render the {} report: {e}", axis.name()))?;
+        let png_path = dir.join(format!("{}.png", axis.name()));
+        std::fs::write(&png_path, png)
+            .map_err(|e| format!("cannot write `{}`: {e}", png_path.display()))?;
+        written.push(svg_path);
+        written.push(png_path);
+    }
+    Ok(written)
+}
+
+/// The `n` segments with the most input on `axis`.
+fn most_excited(segments: &[Segment], axis: Axis, n: usize) -> Vec<&Segment> {
+    let energy = |s: &Segment| -> f64 {
+        s.iter()
+            .map(|x| {
+                let c = &x.command;
+                match axis {
+                    Axis::Roll => c.roll_rad.powi(2),
+                    Axis::Pitch => c.pitch_rad.powi(2),
+                    Axis::Vz => c.vz_mps.powi(2),
+                    Axis::Yaw => c.yaw_rate_radps.powi(2),
+                }
+            })
+            .filter(|e| e.is_finite())
+            .sum()
+    };
+    let mut v: Vec<(f64, &Segment)> = segments.iter().map(|s| (energy(s), s)).collect();
+    v.sort_by(|a, b| b.0.total_cmp(&a.0));
+    v.into_iter()
+        .filter(|(e, _)| *e > 0.0)
+        .take(n)
+        .map(|(_, s)| s)
+        .collect()
+}
+
 /// Prints the table; writes the profile on a good fit, else names what to repeat.
 fn finish(
     fit: &ModelFit,
@@ -276,14 +342,35 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
         Some(&INTERRUPTS),
     );
     match result {
-        Ok(c) => finish(
-            &c.fit,
-            &c.errors,
-            &prior,
-            &axes,
-            &a.output,
-            &format!("calibrated on the simulator, seed {}", a.seed),
-        ),
+        Ok(c) => {
+            if let Some(dir) = &a.report {
+                let tests: Vec<(Axis, Vec<&Segment>)> = axes
+                    .iter()
+                    .map(|&ax| {
+                        (
+                            ax,
+                            c.tests
+                                .iter()
+                                .filter(|(t, _)| *t == ax)
+                                .map(|(_, s)| s)
+                                .collect(),
+                        )
+                    })
+                    .collect();
+                match write_report(dir, &c.fit, &c.errors, &prior, &tests) {
+                    Ok(files) => println!("report: {} files in {}", files.len(), dir.display()),
+                    Err(e) => return fail(e),
+                }
+            }
+            finish(
+                &c.fit,
+                &c.errors,
+                &prior,
+                &axes,
+                &a.output,
+                &format!("calibrated on the simulator, seed {}", a.seed),
+            )
+        }
         Err(e) => fail(format!("calibration flight: {e}")),
     }
 }
@@ -314,6 +401,16 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
     };
     let segments = identify::segments_from_log(&log.ticks, a.window);
     let (fit, errors) = identify::fit_model(&segments, &axes);
+    if let Some(dir) = &a.report {
+        let tests: Vec<(Axis, Vec<&Segment>)> = axes
+            .iter()
+            .map(|&ax| (ax, most_excited(&segments, ax, 4)))
+            .collect();
+        match write_report(dir, &fit, &errors, &prev, &tests) {
+            Ok(files) => println!("report: {} files in {}", files.len(), dir.display()),
+            Err(e) => return fail(e),
+        }
+    }
     let name = a
         .log
         .file_name()

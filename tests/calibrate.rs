@@ -61,9 +61,12 @@ fn calibrates_a_different_plant_on_the_ideal_simulator_and_writes_it() {
     let plant_file = dir.join("plant.toml");
     std::fs::write(&plant_file, plant.to_toml()).unwrap();
     let out_file = dir.join("out.toml");
+    let report = dir.join("report");
     let o = dronecine(&[
         "calibrate",
         "--ideal",
+        "--report",
+        report.to_str().unwrap(),
         "--plant",
         plant_file.to_str().unwrap(),
         "-o",
@@ -106,6 +109,23 @@ fn calibrates_a_different_plant_on_the_ideal_simulator_and_writes_it() {
     close("K_zdot", g.gain_vz, t.gain_vz, 0.05);
     close("tau_zdot", g.tau_vz_s, t.tau_vz_s, 0.05);
     close("K_psi", g.gain_yaw, t.gain_yaw, 0.05);
+    // The report: per axis the measured and both models' responses, SVG and PNG, with the
+    // fitted value next to the previous one.
+    for axis in ["roll", "pitch", "vz", "yaw"] {
+        let svg = std::fs::read_to_string(report.join(format!("{axis}.svg"))).unwrap();
+        assert!(
+            svg.contains("<polyline") && svg.contains("previous 17.5000")
+                || axis == "vz"
+                || axis == "yaw",
+            "{axis}"
+        );
+        assert!(
+            svg.matches("<polyline").count() >= 3 * 4,
+            "{axis}: measured, fitted and previous per test"
+        );
+        let png = std::fs::read(report.join(format!("{axis}.png"))).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
     // Everything the calibration does not measure is the prior's (ardrone2), not the plant's.
     let prior = Profile::builtin("ardrone2").unwrap();
     assert_eq!(got.servo, prior.servo);

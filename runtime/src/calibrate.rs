@@ -537,3 +537,151 @@ pub fn fly_tests(
     }
     Ok(tests)
 }
+
+/// The calibration report of one axis (SVG): per test (up to four), the measured response
+/// (body-axis position, or the unwrapped heading) against the fitted model's and the previous
+/// profile's, each with its initial state fitted to the test; the fitted values ± 95 % next to
+/// the previous ones in the title. `None` when the axis has no fit.
+pub fn report_svg(
+    axis: Axis,
+    segments: &[&Segment],
+    fit: &identify::AxisFit,
+    previous: &Profile,
+) -> Option<String> {
+    use dronecine_compiler::preview::svg::{Anchor, Style, Svg};
+    let m = &previous.model;
+    let (k_prev, tau_prev) = match axis {
+        Axis::Roll => (m.gain_roll_mps_per_rad, Some(m.tau_roll_s)),
+        Axis::Pitch => (m.gain_pitch_mps_per_rad, Some(m.tau_pitch_s)),
+        Axis::Vz => (m.gain_vz, Some(m.tau_vz_s)),
+        Axis::Yaw => (m.gain_yaw, None),
+    };
+    let prev_fit = identify::AxisFit {
+        gain: identify::Estimate {
+            value: k_prev,
+            ci95: 0.0,
+        },
+        tau_s: tau_prev.map(|t| identify::Estimate {
+            value: t,
+            ci95: 0.0,
+        }),
+        ..fit.clone()
+    };
+    let shown: Vec<_> = segments
+        .iter()
+        .take(4)
+        .filter_map(|s| {
+            Some((
+                identify::simulate_fit(s, fit)?,
+                identify::simulate_fit(s, &prev_fit)?,
+            ))
+        })
+        .collect();
+    if shown.is_empty() {
+        return None;
+    }
+    let (w, panel_h, top) = (900.0, 200.0, 70.0);
+    let mut svg = Svg::new(w, top + panel_h * shown.len() as f64 + 20.0);
+    let unit = if axis == Axis::Yaw { "rad" } else { "m" };
+    let title = match fit.tau_s {
+        Some(t) => format!(
+            "{}: K = {:.4} ± {:.4} (previous {:.4}), τ = {:.4} ± {:.4} s (previous {:.4} s), R² = {:.4}",
+            axis.name(),
+            fit.gain.value,
+            fit.gain.ci95,
+            k_prev,
+            t.value,
+            t.ci95,
+            tau_prev.unwrap_or(f64::NAN),
+            fit.r2
+        ),
+        None => format!(
+            "{}: K = {:.4} ± {:.4} (previous {:.4}), R² = {:.4}",
+            axis.name(),
+            fit.gain.value,
+            fit.gain.ci95,
+            k_prev,
+            fit.r2
+        ),
+    };
+    svg.text(20.0, 28.0, 15.0, Anchor::Start, "#222222", &title);
+    svg.text(
+        20.0,
+        52.0,
+        12.0,
+        Anchor::Start,
+        "#666666",
+        &format!("measured (black), fitted model (blue), previous profile (red, dashed); {unit} against s"),
+    );
+    for (i, (fitted, prev)) in shown.iter().enumerate() {
+        let y0 = top + panel_h * i as f64;
+        let (x_lo, x_hi) = (80.0, w - 20.0);
+        let (y_lo, y_hi) = (y0 + panel_h - 30.0, y0 + 10.0);
+        let t0 = fitted.first().map_or(0.0, |p| p.0);
+        let t1 = fitted.last().map_or(1.0, |p| p.0).max(t0 + 1e-6);
+        let vals = fitted
+            .iter()
+            .flat_map(|p| [p.1.unwrap_or(p.2), p.2])
+            .chain(prev.iter().map(|p| p.2));
+        let (mut lo, mut hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+        if !(hi > lo) {
+            hi = lo + 1e-3;
+        }
+        let pad = 0.05 * (hi - lo);
+        lo -= pad;
+        hi += pad;
+        let px = |t: f64| x_lo + (t - t0) / (t1 - t0) * (x_hi - x_lo);
+        let py = |v: f64| y_lo + (v - lo) / (hi - lo) * (y_hi - y_lo);
+        svg.rect(
+            x_lo,
+            y_hi,
+            x_hi - x_lo,
+            y_lo - y_hi,
+            &Style::stroke("#cccccc", 1.0),
+        );
+        svg.text(
+            x_lo - 6.0,
+            y_hi + 10.0,
+            11.0,
+            Anchor::End,
+            "#666666",
+            &format!("{hi:.3}"),
+        );
+        svg.text(
+            x_lo - 6.0,
+            y_lo,
+            11.0,
+            Anchor::End,
+            "#666666",
+            &format!("{lo:.3}"),
+        );
+        svg.text(
+            x_lo,
+            y_lo + 16.0,
+            11.0,
+            Anchor::Start,
+            "#666666",
+            &format!("{t0:.1} s"),
+        );
+        svg.text(
+            x_hi,
+            y_lo + 16.0,
+            11.0,
+            Anchor::End,
+            "#666666",
+            &format!("{t1:.1} s"),
+        );
+        let measured: Vec<[f64; 2]> = fitted
+            .iter()
+            .filter_map(|p| p.1.map(|v| [px(p.0), py(v)]))
+            .collect();
+        let model: Vec<[f64; 2]> = fitted.iter().map(|p| [px(p.0), py(p.2)]).collect();
+        let before: Vec<[f64; 2]> = prev.iter().map(|p| [px(p.0), py(p.2)]).collect();
+        svg.polyline(&measured, &Style::stroke("#222222", 2.5));
+        svg.polyline(&model, &Style::stroke("#1f77b4", 1.5));
+        svg.polyline(&before, &Style::stroke("#d62728", 1.5).dashed("6 4"));
+    }
+    Some(svg.finish())
+}

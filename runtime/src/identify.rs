@@ -16,10 +16,20 @@
 //! separable: for each τ the linear least squares in (K, s₀, v₀) is solved in closed form,
 //! and τ minimises the residual sum of squares (a log grid, then golden section). Fitting the
 //! positions themselves (no differentiated velocity) keeps the white mocap noise white and the
-//! estimate unbiased. The body coordinate of a segment is its positions rotated by the
-//! segment's mean measured heading; segments whose heading spans more than
-//! [`HEADING_SPAN_MAX_RAD`] are left out of the translation fits (the lag acts in the body
-//! frame).
+//! estimate unbiased.
+//!
+//! **Vertical** is fitted this way alone. **Roll and pitch** are fitted jointly: the lag acts
+//! in the body frame and the heading turns, so the two couple. For fixed (τ_φ, τ_θ) the world
+//! x, y positions are simulated per tick at the measured heading (frozen over the tick, as
+//! control.md §2's `M_D[k]`), linear in K_φ, K_θ and each segment's initial position and
+//! velocity (and, optionally, a constant wind); τ_φ, τ_θ minimise the residual (a grid on a
+//! common τ, then alternating golden sections). A report panel ([`simulate_fit`]) shows a
+//! horizontal axis in its body coordinate at the segment's mean heading.
+//!
+//! Known limit: from a closed-loop log of the square flown on the reduced simulator, pitch,
+//! vertical and heading come back within 0.2 % but roll (excited only in the turns, yawing at
+//! ~1.3 rad/s) about 6 % low, the bias growing with the window length — an unexplained model
+//! mismatch left to investigate (open-loop tests with yaw show < 1 %).
 //!
 //! **Heading.** `c[k+1] = c[k] + K_ψ·Δ·ċ(ψ̇[k])` ([`frames::heading_rate_radps`]): the unwrapped
 //! measured heading is linear in K_ψ and the segment's initial heading.
@@ -41,7 +51,8 @@ use crate::frames::{self, Command};
 pub const R2_MIN: f64 = 0.9;
 /// A 95 % half-width wider than this share of its value is refused.
 pub const CI_REL_MAX: f64 = 0.2;
-/// Segments whose measured heading spans more than this are left out of translation fits.
+/// Segments whose measured heading spans more than this are left out of the report's
+/// body-coordinate panels of roll and pitch.
 pub const HEADING_SPAN_MAX_RAD: f64 = 0.2;
 /// The τ search range, seconds.
 pub const TAU_MIN_S: f64 = 0.02;
@@ -1280,6 +1291,20 @@ mod tests {
 
     /// Synthetic doublets from the exact model at heading `c`, fine sub-steps, noise σ.
     fn synthetic(k: [f64; 4], tau: [f64; 3], c: f64, sigma: f64, seed: u64) -> Vec<Segment> {
+        synthetic_with(k, tau, c, sigma, seed, [0.0; 2], 0.0)
+    }
+
+    /// [`synthetic`] with a constant world wind and a yaw-rate command held during the
+    /// translation tests.
+    fn synthetic_with(
+        k: [f64; 4],
+        tau: [f64; 3],
+        c: f64,
+        sigma: f64,
+        seed: u64,
+        wind: [f64; 2],
+        yaw_rate: f64,
+    ) -> Vec<Segment> {
         let mut noise = Noise(seed);
         let mut segs = Vec::new();
         let tests: [(usize, f64); 4] = [(0, 0.03), (1, -0.03), (2, 0.3), (3, 0.5)];
@@ -1304,6 +1329,9 @@ mod tests {
                     2 => cmd.vz_mps = a,
                     _ => cmd.yaw_rate_radps = a,
                 }
+                if axis < 2 {
+                    cmd.yaw_rate_radps = yaw_rate;
+                }
                 seg.push(Sample {
                     t_s: t,
                     command: cmd,
@@ -1318,12 +1346,13 @@ mod tests {
                 for _ in 0..10 {
                     let hs = dt / 10.0;
                     let r = frames::body_to_world(h);
-                    let vb = r.transpose() * nalgebra::Vector3::from(v);
+                    let w = nalgebra::Vector3::new(wind[0], wind[1], 0.0);
+                    let vb = r.transpose() * (nalgebra::Vector3::from(v) - w);
                     let mut nb = vb;
                     for j in 0..3 {
                         nb[j] = target[j] + (vb[j] - target[j]) * (-hs / bt[j]).exp();
                     }
-                    let vw = r * nb;
+                    let vw = r * nb + w;
                     for j in 0..3 {
                         p[j] += hs * 0.5 * (v[j] + vw[j]);
                     }
@@ -1365,6 +1394,44 @@ mod tests {
                 assert!(f.r2 > 0.99, "{f:?}");
             }
         }
+    }
+
+    #[test]
+    fn roll_and_pitch_while_yawing_are_fitted_jointly_within_5_percent() {
+        // The heading turns at 0.8 rad/s through every roll and pitch test: the body-frame
+        // lag couples the two axes, which the joint fit follows.
+        let k = [12.0, 20.0, 0.8, 1.3];
+        let tau = [1.2, 2.1, 0.6];
+        let segs = synthetic_with(k, tau, 0.4, 0.002, 7, [0.0; 2], 0.8);
+        let (fit, errors) = fit_model(&segs[..2], &[Axis::Roll, Axis::Pitch]);
+        assert!(errors.is_empty(), "{errors:?}");
+        let (r, p) = (fit.roll.unwrap(), fit.pitch.unwrap());
+        assert!((r.gain.value / k[0] - 1.0).abs() < 0.05, "{r:?}");
+        assert!(
+            (r.tau_s.unwrap().value / tau[0] - 1.0).abs() < 0.05,
+            "{r:?}"
+        );
+        assert!((p.gain.value / k[1] - 1.0).abs() < 0.05, "{p:?}");
+        assert!(
+            (p.tau_s.unwrap().value / tau[1] - 1.0).abs() < 0.05,
+            "{p:?}"
+        );
+    }
+
+    #[test]
+    fn a_steady_wind_biases_the_plain_fit_and_the_disturbance_fit_recovers() {
+        let k = [12.0, 20.0, 0.8, 1.3];
+        let tau = [1.2, 2.1, 0.6];
+        let segs = synthetic_with(k, tau, 0.0, 0.002, 8, [0.3, -0.2], 0.0);
+        let plain = fit_horizontal(&segs[..2], false).0.unwrap();
+        let with = fit_axis_with(&segs[..2], Axis::Roll, true).unwrap();
+        let err = |f: &AxisFit| (f.gain.value / k[0] - 1.0).abs();
+        assert!(err(&with) < 0.05, "{with:?}");
+        assert!(
+            (with.tau_s.unwrap().value / tau[0] - 1.0).abs() < 0.05,
+            "{with:?}"
+        );
+        assert!(err(&plain) > 2.0 * err(&with), "{plain:?} vs {with:?}");
     }
 
     #[test]
