@@ -677,6 +677,7 @@ fn fit_horizontal(segments: &[Segment], disturbance: bool) -> (Option<AxisFit>, 
     // Information matrix of (K_φ, τ_φ, K_θ, τ_θ), nuisance projected out.
     let mut cols_all: Vec<[Vec<f64>; 4]> = Vec::new();
     let mut null_ss = 0.0;
+    let mut acc = (0.0, 0.0);
     for (d, nuis) in data.iter().zip(&sol.nuis) {
         let model = |t: [f64; 2]| -> Vec<f64> {
             let r = plane_response(d, t, Drive::Roll);
@@ -719,6 +720,12 @@ fn fit_horizontal(segments: &[Segment], disturbance: bool) -> (Option<AxisFit>, 
                 }
             }
         }
+        let mut resid = d.y.clone();
+        project_out(&mut resid, &basis, &d.mask);
+        for i in 0..resid.len() {
+            resid[i] -= sol.k[0] * c[0][i] + sol.k[1] * c[2][i];
+        }
+        lag1(&mut acc, &resid, &d.mask, d.dt.len());
         // The no-input model: constant-velocity drift per segment.
         let n = d.dt.len();
         let t: Vec<f64> =
@@ -754,7 +761,7 @@ fn fit_horizontal(segments: &[Segment], disturbance: bool) -> (Option<AxisFit>, 
     }
     let per_seg = if disturbance { 6 } else { 4 };
     let dof = sol.n.saturating_sub(m + per_seg * data.len()).max(1) as f64;
-    let sigma2 = sol.ssr / dof;
+    let sigma2 = sol.ssr / dof * inflation(acc);
     let cov = info.try_inverse().map(|i| i * sigma2);
     let var = |which: usize| -> f64 {
         let Some(cov) = &cov else {
@@ -931,6 +938,33 @@ fn project_many(xs: &mut [&mut [f64]], basis: &[&[f64]], mask: &[bool]) {
     }
 }
 
+/// Accumulates the lag-1 products and squares of the residual `r` over consecutive measured
+/// samples (`half`: the stacked x/y boundary, pairs across it are skipped).
+fn lag1(acc: &mut (f64, f64), r: &[f64], mask: &[bool], half: usize) {
+    for k in 0..r.len() {
+        if !mask[k] {
+            continue;
+        }
+        acc.1 += r[k] * r[k];
+        if k + 1 < r.len() && mask[k + 1] && k + 1 != half {
+            acc.0 += r[k] * r[k + 1];
+        }
+    }
+}
+
+/// The variance inflation `(1 + ρ)/(1 − ρ)` of a lag-1 autocorrelation ρ of the residuals
+/// (clamped to [0, 0.999]): coloured residuals (a gust, a model mismatch) carry fewer
+/// independent samples than white mocap noise, so the intervals widen accordingly.
+fn inflation(acc: (f64, f64)) -> f64 {
+    let rho = if acc.1 > 0.0 { acc.0 / acc.1 } else { 0.0 };
+    let rho = if rho.is_finite() {
+        rho.clamp(0.0, 0.999)
+    } else {
+        0.999
+    };
+    (1.0 + rho) / (1.0 - rho)
+}
+
 /// Time since the segment's first sample, per sample.
 fn elapsed(d: &AxisData) -> Vec<f64> {
     let mut t = 0.0;
@@ -1059,6 +1093,7 @@ fn fit_lag(segments: &[Segment], axis: Axis, j: usize, disturbance: bool) -> Opt
     // D = K·∂H/∂τ + v₀·∂G/∂τ (∂/∂τ), central differences.
     let eps = tau * 1e-4;
     let (mut hh, mut hd, mut dd, mut null_ss) = (0.0, 0.0, 0.0, 0.0);
+    let mut acc = (0.0, 0.0);
     for (d, (v0, w)) in data.iter().zip(&sol.v0) {
         let (g, h) = responses(d, tau);
         let (gp, hp) = responses(d, tau + eps);
@@ -1073,6 +1108,12 @@ fn fit_lag(segments: &[Segment], axis: Axis, j: usize, disturbance: bool) -> Opt
         let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
         project_out(&mut dcol, &basis, &mask);
         project_out(&mut hcol, &basis, &mask);
+        let mut resid: Vec<f64> = d.y.iter().map(|y| y.unwrap_or(0.0)).collect();
+        project_out(&mut resid, &basis, &mask);
+        for (r, h) in resid.iter_mut().zip(&hcol) {
+            *r -= sol.k * h;
+        }
+        lag1(&mut acc, &resid, &mask, usize::MAX);
         // The no-input model: constant-velocity drift.
         let t: Vec<f64> = (0..g.len())
             .scan(0.0, |acc, i| {
@@ -1094,7 +1135,7 @@ fn fit_lag(segments: &[Segment], axis: Axis, j: usize, disturbance: bool) -> Opt
     }
     let params = 2 + (if disturbance { 3 } else { 2 }) * data.len();
     let dof = sol.n.saturating_sub(params).max(1) as f64;
-    let sigma2 = sol.ssr / dof;
+    let sigma2 = sol.ssr / dof * inflation(acc);
     let det = hh * dd - hd * hd;
     let (var_k, var_t) = if det > 0.0 {
         (sigma2 * dd / det, sigma2 * hh / det)
@@ -1124,6 +1165,7 @@ fn fit_lag(segments: &[Segment], axis: Axis, j: usize, disturbance: bool) -> Opt
 
 fn fit_heading(segments: &[Segment]) -> Option<AxisFit> {
     let (mut xy, mut xx, mut yy, mut n, mut nseg) = (0.0, 0.0, 0.0, 0usize, 0usize);
+    let mut kept = Vec::new();
     let mut excited = false;
     for seg in segments {
         let mut y = Vec::with_capacity(seg.len());
@@ -1169,6 +1211,7 @@ fn fit_heading(segments: &[Segment]) -> Option<AxisFit> {
                 n += 1;
             }
         }
+        kept.push((y, x, mask));
     }
     if !excited || xx <= 0.0 {
         return None;
@@ -1176,7 +1219,12 @@ fn fit_heading(segments: &[Segment]) -> Option<AxisFit> {
     let k = xy / xx;
     let ssr = (yy - k * xy).max(0.0);
     let dof = n.saturating_sub(1 + nseg).max(1) as f64;
-    let var = ssr / dof / xx;
+    let mut acc = (0.0, 0.0);
+    for (y, x, mask) in &kept {
+        let r: Vec<f64> = y.iter().zip(x).map(|(y, x)| y - k * x).collect();
+        lag1(&mut acc, &r, mask, usize::MAX);
+    }
+    let var = ssr / dof / xx * inflation(acc);
     Some(AxisFit {
         axis: Axis::Yaw,
         gain: Estimate {
