@@ -135,11 +135,38 @@ fn a_stage_too_small_refuses_the_test_and_lands() {
         &plan,
         None,
     )
-    .err()
-    .expect("refused");
+    .expect_err("refused");
     assert!(
         err.to_string().contains("too small for the roll test"),
         "{err}"
     );
+    assert_eq!(sim.truth().state, FlightState::Landed);
+}
+
+#[test]
+fn an_interrupt_lands_the_drone_and_stops_the_calibration() {
+    let prior = Profile::builtin("ardrone2").unwrap();
+    let cfg = SimConfig {
+        effects: Effects::none(),
+        ..SimConfig::new(5)
+    };
+    let scene = scene();
+    let sim = Simulator::new(&cfg, &prior, &scene).unwrap();
+    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
+    // Ctrl-C pressed once before the first test: hover, land, error.
+    let interrupts = std::sync::atomic::AtomicU32::new(1);
+    let err = calibrate(
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock: &mut clock,
+        },
+        &scene.stage,
+        &prior,
+        &Plan::default(),
+        Some(&interrupts),
+    )
+    .expect_err("interrupted");
+    assert!(err.to_string().contains("interrupted"), "{err}");
     assert_eq!(sim.truth().state, FlightState::Landed);
 }
