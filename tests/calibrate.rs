@@ -163,13 +163,22 @@ fn identifies_the_model_from_a_shoot_log() {
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out_file = dir.join("id.toml");
+    let report = dir.join("report");
     let o = dronecine(&[
         "identify",
         log.to_str().unwrap(),
         "-o",
         out_file.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}{}", text(&o.stdout), text(&o.stderr));
+    // Every axis has its report, the turning roll windows shown in world x and y.
+    for axis in ["roll", "pitch", "vz", "yaw"] {
+        assert!(report.join(format!("{axis}.png")).exists(), "{axis}");
+    }
+    let roll = std::fs::read_to_string(report.join("roll.svg")).unwrap();
+    assert!(roll.contains("the drone turns") && roll.matches("<polyline").count() >= 6);
     let got = load(&out_file);
     let t = Profile::builtin("ardrone2").unwrap().model;
     let g = &got.model;

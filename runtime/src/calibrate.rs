@@ -567,14 +567,44 @@ pub fn report_svg(
         }),
         ..fit.clone()
     };
-    let shown: Vec<_> = segments
+    // A panel per test: (time, measured, model) curves for the fit and for the previous
+    // profile. A roll or pitch test that turns is shown in world x and y with the joint model
+    // (the other axis at the previous profile's values).
+    type Curve = Vec<(f64, Option<f64>, f64)>;
+    let plane = |s: &Segment, k: f64, tau: f64| -> Option<[Curve; 2]> {
+        let (own, other) = match axis {
+            Axis::Roll => ((k, tau), (m.gain_pitch_mps_per_rad, m.tau_pitch_s)),
+            _ => ((k, tau), (m.gain_roll_mps_per_rad, m.tau_roll_s)),
+        };
+        let (r, p) = if axis == Axis::Roll {
+            (own, other)
+        } else {
+            (other, own)
+        };
+        let v = identify::simulate_plane(s, r, p)?;
+        Some([0, 1].map(|i| {
+            v.iter()
+                .map(|(t, y, mdl)| (*t, y.map(|y| y[i]), mdl[i]))
+                .collect()
+        }))
+    };
+    let shown: Vec<(Vec<Curve>, Vec<Curve>)> = segments
         .iter()
         .take(4)
         .filter_map(|s| {
-            Some((
-                identify::simulate_fit(s, fit)?,
-                identify::simulate_fit(s, &prev_fit)?,
-            ))
+            match (
+                identify::simulate_fit(s, fit),
+                identify::simulate_fit(s, &prev_fit),
+            ) {
+                (Some(a), Some(b)) => Some((vec![a], vec![b])),
+                _ if matches!(axis, Axis::Roll | Axis::Pitch) => {
+                    let t = fit.tau_s?.value;
+                    let a = plane(s, fit.gain.value, t)?;
+                    let b = plane(s, k_prev, tau_prev?)?;
+                    Some((a.to_vec(), b.to_vec()))
+                }
+                _ => None,
+            }
         })
         .collect();
     if shown.is_empty() {
@@ -617,12 +647,13 @@ pub fn report_svg(
         let y0 = top + panel_h * i as f64;
         let (x_lo, x_hi) = (80.0, w - 20.0);
         let (y_lo, y_hi) = (y0 + panel_h - 30.0, y0 + 10.0);
-        let t0 = fitted.first().map_or(0.0, |p| p.0);
-        let t1 = fitted.last().map_or(1.0, |p| p.0).max(t0 + 1e-6);
+        let t0 = fitted[0].first().map_or(0.0, |p| p.0);
+        let t1 = fitted[0].last().map_or(1.0, |p| p.0).max(t0 + 1e-6);
         let vals = fitted
             .iter()
+            .flatten()
             .flat_map(|p| [p.1.unwrap_or(p.2), p.2])
-            .chain(prev.iter().map(|p| p.2));
+            .chain(prev.iter().flatten().map(|p| p.2));
         let (mut lo, mut hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
             (a.min(v), b.max(v))
         });
@@ -673,15 +704,27 @@ pub fn report_svg(
             "#666666",
             &format!("{t1:.1} s"),
         );
-        let measured: Vec<[f64; 2]> = fitted
-            .iter()
-            .filter_map(|p| p.1.map(|v| [px(p.0), py(v)]))
-            .collect();
-        let model: Vec<[f64; 2]> = fitted.iter().map(|p| [px(p.0), py(p.2)]).collect();
-        let before: Vec<[f64; 2]> = prev.iter().map(|p| [px(p.0), py(p.2)]).collect();
-        svg.polyline(&measured, &Style::stroke("#222222", 2.5));
-        svg.polyline(&model, &Style::stroke("#1f77b4", 1.5));
-        svg.polyline(&before, &Style::stroke("#d62728", 1.5).dashed("6 4"));
+        for (fitted, prev) in fitted.iter().zip(prev) {
+            let measured: Vec<[f64; 2]> = fitted
+                .iter()
+                .filter_map(|p| p.1.map(|v| [px(p.0), py(v)]))
+                .collect();
+            let model: Vec<[f64; 2]> = fitted.iter().map(|p| [px(p.0), py(p.2)]).collect();
+            let before: Vec<[f64; 2]> = prev.iter().map(|p| [px(p.0), py(p.2)]).collect();
+            svg.polyline(&measured, &Style::stroke("#222222", 2.5));
+            svg.polyline(&model, &Style::stroke("#1f77b4", 1.5));
+            svg.polyline(&before, &Style::stroke("#d62728", 1.5).dashed("6 4"));
+        }
+        if fitted.len() == 2 {
+            svg.text(
+                0.5 * (x_lo + x_hi),
+                y_lo + 16.0,
+                11.0,
+                Anchor::Middle,
+                "#666666",
+                "world x and y (the drone turns)",
+            );
+        }
     }
     Some(svg.finish())
 }

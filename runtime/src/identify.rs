@@ -1324,6 +1324,41 @@ pub fn segments_from_log(ticks: &[crate::log::LoggedTick], window_s: f64) -> Vec
     out
 }
 
+/// The joint horizontal model's response on one segment (turning or not), for plotting:
+/// per sample the time, the measured world (x, y) and the model's, with `roll` and `pitch`
+/// given as (K, τ) and the initial position and velocity fitted by least squares.
+#[allow(clippy::type_complexity)]
+pub fn simulate_plane(
+    seg: &[Sample],
+    roll: (f64, f64),
+    pitch: (f64, f64),
+) -> Option<Vec<(f64, Option<[f64; 2]>, [f64; 2])>> {
+    let d = prepare_plane(seg)?;
+    let taus = [roll.1, pitch.1];
+    if !(taus.iter().all(|t| *t > 0.0 && t.is_finite())) {
+        return None;
+    }
+    let hr = plane_response(&d, taus, Drive::Roll);
+    let hp = plane_response(&d, taus, Drive::Pitch);
+    let cols = plane_nuisance(&d, taus, false);
+    let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+    let forced: Vec<f64> = (0..d.y.len())
+        .map(|i| roll.0 * hr[i] + pitch.0 * hp[i])
+        .collect();
+    let mut r: Vec<f64> = (0..d.y.len()).map(|i| d.y[i] - forced[i]).collect();
+    let coef = project_out(&mut r, &basis, &d.mask);
+    let n = d.dt.len();
+    let model = |i: usize| forced[i] + cols.iter().zip(&coef).map(|(c, b)| c[i] * b).sum::<f64>();
+    Some(
+        (0..n)
+            .map(|k| {
+                let measured = d.mask[k].then(|| [d.y[k], d.y[n + k]]);
+                (seg[k].t_s, measured, [model(k), model(n + k)])
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
