@@ -1,7 +1,9 @@
 //! The calibration flight behind `dronecine calibrate`: take off, hold a hover point, and per
-//! axis fly open-loop doublets (input +A for T, −A for T, then 0 while the drone coasts) around
-//! it, recording every tick; land; then fit the model ([`crate::identify`]) and build the
-//! profile with the fitted `[model]`.
+//! axis fly open-loop tests around it — doublets (input +A for T, −A for T, then 0 while the
+//! drone coasts) and steps (+A for 2T, then 0), each sign; the vertical axis steps only
+//! ([`shape`]) — recording every tick; land; then fit the model ([`crate::identify`]) and
+//! build the profile with the fitted `[model]` ([`identify::ModelFit::apply`]). Each test is
+//! a segment of its own; [`report_svg`] draws the calibration report of an axis.
 //!
 //! Safety, as the flight loop's: before each test the prior model predicts the test's
 //! excursion (times [`EXCURSION_SAFETY`]); a test that would leave the stage's keep-in box
