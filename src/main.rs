@@ -2,6 +2,7 @@
 //! (`dronecine-grammar`), the compiler and the runtime. Each subcommand lives in its own
 //! module.
 
+mod calibrate;
 mod check;
 mod compile;
 mod emulate;
@@ -80,6 +81,15 @@ enum Command {
     },
     /// Print the LQG servo's gains for a drone profile (P, K1, N1, poles, Kalman gain, k2).
     Gains(gains::Args),
+    /// Measure the servo's model: fly small doublets on each input around hover (on the
+    /// embedded simulator by default) and fit K and τ per axis and K_ψ by least squares.
+    ///
+    /// Prints each fitted value with its 95 % interval, the fit's R² and the previous
+    /// profile's value; writes the profile only when every fit is good, else exits 1 naming
+    /// the test to repeat.
+    Calibrate(calibrate::CalibrateArgs),
+    /// Fit the servo's model (as `calibrate`) from a flight log.
+    Identify(calibrate::IdentifyArgs),
     /// Fly a script: on the embedded AR.Drone simulator (the default), with the LQG servo.
     ///
     /// Checks and compiles the script first (a script the drone cannot fly is refused), then
@@ -279,6 +289,8 @@ fn main() -> ExitCode {
             color,
         }),
         Command::Gains(args) => gains::run(&args, color),
+        Command::Calibrate(args) => calibrate::run_calibrate(&args, color),
+        Command::Identify(args) => calibrate::run_identify(&args, color),
         Command::Shoot {
             file,
             log,

@@ -5,6 +5,8 @@
 //! - `backend`: the `Drone`, `Mocap` and `Clock` traits.
 //! - `control`: the `Controller` trait the servo and the PID baseline implement.
 //! - `model`: the translation and heading models (A1, B1, the body-frame lag).
+//! - `identify`: the least-squares fit of the model from a measured response; `calibrate`:
+//!   the calibration flight (doublets around hover) that feeds it.
 //! - `dare`: the Riccati solver (structure-preserving doubling, no heap).
 //! - `lqg`: the LQG servo and the Kalman filters.
 //! - `pid`: tum_ardrone's PID autopilot, the baseline.
@@ -19,12 +21,14 @@
 
 pub mod ardrone;
 pub mod backend;
+pub mod calibrate;
 pub mod clock;
 pub mod control;
 pub mod dare;
 pub mod emulator;
 pub mod flight;
 pub mod frames;
+pub mod identify;
 pub mod log;
 pub mod lqg;
 pub mod model;

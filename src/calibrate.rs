@@ -1,0 +1,426 @@
+//! `dronecine calibrate` and `dronecine identify`: measure the servo's model (K and τ per
+//! axis, K_ψ) by flying doublets around hover (on the embedded simulator by default), or from
+//! any flight log; print each fitted value with its 95 % interval, the fit's R² and the
+//! previous profile's value; write the profile (`Profile::to_toml`) only when every fit is
+//! good, else exit 1 naming the test to repeat.
+
+use std::path::Path;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
+use dronecine_grammar::script::{DroneRef, Scene, Stage};
+use dronecine_runtime::calibrate::{self as cal, Plan};
+use dronecine_runtime::flight::Backends;
+use dronecine_runtime::identify::{self, Axis, FitError, ModelFit, Segment};
+use dronecine_runtime::log::FlightLog;
+use dronecine_runtime::sim::{Effects, SimConfig, Simulator};
+
+use crate::compile::load_profile;
+
+static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
+
+#[derive(clap::Args, Debug)]
+pub struct CalibrateArgs {
+    /// The profile file to write.
+    #[arg(short, long, value_name = "PROFILE.toml")]
+    output: std::path::PathBuf,
+    /// Which axis to test: roll, pitch, vz, yaw or all.
+    #[arg(long, value_name = "AXIS", default_value = "all")]
+    axis: String,
+    /// The previous profile (a built-in name or a TOML file): the prior, and every section
+    /// the calibration does not measure.
+    #[arg(long, value_name = "NAME|FILE", default_value = DEFAULT_NAME)]
+    profile: String,
+    /// The profile the simulated drone truly has [default: --profile].
+    #[arg(long, value_name = "NAME|FILE")]
+    plant: Option<String>,
+    /// The stage the tests must stay in: width (x), depth (y), height (z), metres.
+    #[arg(long, value_name = "X,Y,Z", default_value = "6,6,3")]
+    stage: String,
+    /// The simulator's seed.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    seed: u64,
+    /// Simulate the servo's own model only (mocap noise kept on).
+    #[arg(long)]
+    ideal: bool,
+    /// Control rate, Hz.
+    #[arg(long, value_name = "HZ", default_value_t = 100.0)]
+    rate: f64,
+    /// Write the calibration report (per axis the measured response against the fitted
+    /// model's and the previous profile's, SVG and PNG) to this folder.
+    #[arg(long, value_name = "DIR")]
+    report: Option<std::path::PathBuf>,
+    /// Fit a constant wind drift per test too (wider intervals; for a draughty stage).
+    #[arg(long)]
+    wind: bool,
+    /// A real AR.Drone 2.0 (not yet supported by calibrate).
+    #[arg(long, value_name = "URL")]
+    drone: Option<String>,
+    /// Its motion capture (not yet supported by calibrate).
+    #[arg(long, value_name = "URL")]
+    mocap: Option<String>,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct IdentifyArgs {
+    /// The flight log (`dronecine shoot --log`).
+    #[arg(value_name = "LOG.mcap")]
+    log: std::path::PathBuf,
+    /// The profile file to write.
+    #[arg(short, long, value_name = "PROFILE.toml")]
+    output: std::path::PathBuf,
+    /// The previous profile [default: the one the log was flown with].
+    #[arg(long, value_name = "NAME|FILE")]
+    profile: Option<String>,
+    /// Which axes to fit: roll, pitch, vz, yaw or all.
+    #[arg(long, value_name = "AXIS", default_value = "all")]
+    axis: String,
+    /// Write the report (as `calibrate --report`) on the four most excited windows per axis.
+    #[arg(long, value_name = "DIR")]
+    report: Option<std::path::PathBuf>,
+    /// Length of the windows the log is cut into (each with its own initial state), seconds.
+    #[arg(long, value_name = "S", default_value_t = 6.0)]
+    window: f64,
+}
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::FAILURE
+}
+
+fn profile(arg: &str, color: bool) -> Result<Profile, ExitCode> {
+    let is_file =
+        Profile::builtin(arg).is_none() && (arg.ends_with(".toml") || Path::new(arg).exists());
+    let drone = if is_file {
+        DroneRef::File {
+            path: arg.to_string(),
+        }
+    } else {
+        DroneRef::Builtin {
+            name: arg.to_string(),
+        }
+    };
+    let scene = Scene {
+        stage: Stage { size_m: [1.0; 3] },
+        lens: None,
+        drone: Some(drone),
+        actors: Vec::new(),
+        blocking: Vec::new(),
+    };
+    load_profile(&scene, Path::new(""), "--profile", arg, color)
+}
+
+fn axes(arg: &str) -> Result<Vec<Axis>, String> {
+    if arg == "all" {
+        return Ok(Axis::ALL.to_vec());
+    }
+    arg.split(',')
+        .map(|a| {
+            Axis::parse(a.trim())
+                .ok_or_else(|| format!("--axis `{a}`: expected roll, pitch, vz, yaw or all"))
+        })
+        .collect()
+}
+
+fn stage(arg: &str) -> Result<Stage, String> {
+    let v: Vec<f64> = arg
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--stage `{arg}`: expected three numbers X,Y,Z"))?;
+    match v.as_slice() {
+        [x, y, z] if [x, y, z].iter().all(|s| s.is_finite() && **s > 0.0) => Ok(Stage {
+            size_m: [*x, *y, *z],
+        }),
+        _ => Err(format!(
+            "--stage `{arg}`: expected three positive numbers X,Y,Z"
+        )),
+    }
+}
+
+/// The table: per axis the fitted values ± CI, R², and the previous values.
+fn render(fit: &ModelFit, errors: &[FitError], prev: &Profile, axes: &[Axis]) -> String {
+    let m = &prev.model;
+    let mut out = String::new();
+    out.push_str("axis   parameter        fitted ± 95% CI            previous   R²\n");
+    for &axis in axes {
+        let f = fit
+            .get(axis)
+            .or_else(|| errors.iter().find(|e| e.axis == axis)?.fit.as_ref());
+        let (kname, kprev, tname, tprev) = match axis {
+            Axis::Roll => ("K_phi", m.gain_roll_mps_per_rad, "tau_phi", m.tau_roll_s),
+            Axis::Pitch => (
+                "K_theta",
+                m.gain_pitch_mps_per_rad,
+                "tau_theta",
+                m.tau_pitch_s,
+            ),
+            Axis::Vz => ("K_zdot", m.gain_vz, "tau_zdot", m.tau_vz_s),
+            Axis::Yaw => ("K_psi", m.gain_yaw, "", 0.0),
+        };
+        let Some(f) = f else {
+            out.push_str(&format!("{:<6} (not excited)\n", axis.name()));
+            continue;
+        };
+        out.push_str(&format!(
+            "{:<6} {:<16} {:>10.4} ± {:<10.4} {:>14.4}   {:.4}\n",
+            axis.name(),
+            kname,
+            f.gain.value,
+            f.gain.ci95,
+            kprev,
+            f.r2
+        ));
+        if let Some(t) = f.tau_s {
+            out.push_str(&format!(
+                "{:<6} {:<16} {:>10.4} ± {:<10.4} {:>14.4}\n",
+                "",
+                format!("{tname} (s)"),
+                t.value,
+                t.ci95,
+                tprev
+            ));
+        }
+    }
+    out
+}
+
+/// Writes `<axis>.svg` and `<axis>.png` per fitted axis (passed or refused) into `dir`.
+fn write_report(
+    dir: &Path,
+    fit: &ModelFit,
+    errors: &[FitError],
+    prev: &Profile,
+    tests: &[(Axis, Vec<&Segment>)],
+) -> Result<Vec<std::path::PathBuf>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create `{}`: {e}", dir.display()))?;
+    let mut written = Vec::new();
+    for (axis, segs) in tests {
+        let Some(f) = fit
+            .get(*axis)
+            .or_else(|| errors.iter().find(|e| e.axis == *axis)?.fit.as_ref())
+        else {
+            continue;
+        };
+        let Some(svg) = cal::report_svg(*axis, segs, f, prev) else {
+            continue;
+        };
+        let svg_path = dir.join(format!("{}.svg", axis.name()));
+        crate::files::write_atomic(&svg_path, &svg)
+            .map_err(|e| format!("cannot write `{}`: {e}", svg_path.display()))?;
+        let png = dronecine_compiler::preview::svg_to_png(&svg)
+            .map_err(|e| format!("cannot render the {} report: {e}", axis.name()))?;
+        let png_path = dir.join(format!("{}.png", axis.name()));
+        std::fs::write(&png_path, png)
+            .map_err(|e| format!("cannot write `{}`: {e}", png_path.display()))?;
+        written.push(svg_path);
+        written.push(png_path);
+    }
+    Ok(written)
+}
+
+/// The `n` segments with the most input on `axis`.
+fn most_excited(segments: &[Segment], axis: Axis, n: usize) -> Vec<&Segment> {
+    let energy = |s: &Segment| -> f64 {
+        s.iter()
+            .map(|x| {
+                let c = &x.command;
+                match axis {
+                    Axis::Roll => c.roll_rad.powi(2),
+                    Axis::Pitch => c.pitch_rad.powi(2),
+                    Axis::Vz => c.vz_mps.powi(2),
+                    Axis::Yaw => c.yaw_rate_radps.powi(2),
+                }
+            })
+            .filter(|e| e.is_finite())
+            .sum()
+    };
+    let mut v: Vec<(f64, &Segment)> = segments.iter().map(|s| (energy(s), s)).collect();
+    v.sort_by(|a, b| b.0.total_cmp(&a.0));
+    v.into_iter()
+        .filter(|(e, _)| *e > 0.0)
+        .take(n)
+        .map(|(_, s)| s)
+        .collect()
+}
+
+/// Prints the table; writes the profile on a good fit, else names what to repeat.
+fn finish(
+    fit: &ModelFit,
+    errors: &[FitError],
+    prev: &Profile,
+    axes: &[Axis],
+    output: &Path,
+    note: &str,
+) -> ExitCode {
+    print!("{}", render(fit, errors, prev, axes));
+    if !errors.is_empty() {
+        for e in errors {
+            eprintln!("error: {e}");
+        }
+        eprintln!(
+            "error: no profile written to `{}` (a poor fit)",
+            output.display()
+        );
+        return ExitCode::FAILURE;
+    }
+    let mut p = fit.apply(prev);
+    p.description = format!("{} ({note})", prev.description);
+    if let Err(e) = crate::files::write_atomic(output, &p.to_toml()) {
+        return fail(format!("cannot write `{}`: {e}", output.display()));
+    }
+    println!("wrote {}", output.display());
+    ExitCode::SUCCESS
+}
+
+pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
+    if a.drone.is_some() || a.mocap.is_some() {
+        return fail(
+            "calibrate on a real drone (--drone/--mocap) is not implemented yet; \
+             calibrate on the simulator, or fly `dronecine shoot` and run `dronecine identify` on its log",
+        );
+    }
+    let axes = match axes(&a.axis) {
+        Ok(x) => x,
+        Err(e) => return fail(e),
+    };
+    let stage = match stage(&a.stage) {
+        Ok(s) => s,
+        Err(e) => return fail(e),
+    };
+    let prior = match profile(&a.profile, color) {
+        Ok(p) => p,
+        Err(c) => return c,
+    };
+    let plant = match &a.plant {
+        Some(name) => match profile(name, color) {
+            Ok(p) => p,
+            Err(c) => return c,
+        },
+        None => prior.clone(),
+    };
+    let mut cfg = SimConfig::new(a.seed);
+    if a.ideal {
+        cfg.effects = Effects {
+            mocap_noise: true,
+            ..Effects::none()
+        };
+    }
+    let scene = Scene {
+        stage,
+        lens: None,
+        drone: None,
+        actors: Vec::new(),
+        blocking: Vec::new(),
+    };
+    let sim = match Simulator::new(&cfg, &plant, &scene) {
+        Ok(s) => s,
+        Err(e) => return fail(e),
+    };
+    if let Err(e) = ctrlc::set_handler(|| {
+        INTERRUPTS.fetch_add(1, Ordering::Relaxed);
+    }) {
+        eprintln!("warning: Ctrl-C cannot be caught ({e})");
+    }
+    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
+    let plan = Plan {
+        axes: axes.clone(),
+        rate_hz: a.rate,
+        disturbance: a.wind,
+        ..Plan::default()
+    };
+    let result = cal::calibrate(
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock: &mut clock,
+        },
+        &stage,
+        &prior,
+        &plan,
+        Some(&INTERRUPTS),
+    );
+    match result {
+        Ok(c) => {
+            if let Some(dir) = &a.report {
+                let tests: Vec<(Axis, Vec<&Segment>)> = axes
+                    .iter()
+                    .map(|&ax| {
+                        (
+                            ax,
+                            c.tests
+                                .iter()
+                                .filter(|(t, _)| *t == ax)
+                                .map(|(_, s)| s)
+                                .collect(),
+                        )
+                    })
+                    .collect();
+                match write_report(dir, &c.fit, &c.errors, &prior, &tests) {
+                    Ok(files) => println!("report: {} files in {}", files.len(), dir.display()),
+                    Err(e) => return fail(e),
+                }
+            }
+            finish(
+                &c.fit,
+                &c.errors,
+                &prior,
+                &axes,
+                &a.output,
+                &format!("calibrated on the simulator, seed {}", a.seed),
+            )
+        }
+        Err(e) => fail(format!("calibration flight: {e}")),
+    }
+}
+
+pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
+    let axes = match axes(&a.axis) {
+        Ok(x) => x,
+        Err(e) => return fail(e),
+    };
+    if !(a.window > 0.0 && a.window.is_finite()) {
+        return fail("--window must be a positive number of seconds");
+    }
+    let log = match FlightLog::open(&a.log) {
+        Ok(l) => l,
+        Err(e) => {
+            return fail(format!(
+                "cannot read the flight log `{}`: {e}",
+                a.log.display()
+            ))
+        }
+    };
+    let prev = match &a.profile {
+        Some(name) => match profile(name, color) {
+            Ok(p) => p,
+            Err(c) => return c,
+        },
+        None => log.header.profile.clone(),
+    };
+    let segments = identify::segments_from_log(&log.ticks, a.window);
+    let (fit, errors) = identify::fit_model(&segments, &axes);
+    if let Some(dir) = &a.report {
+        let tests: Vec<(Axis, Vec<&Segment>)> = axes
+            .iter()
+            .map(|&ax| (ax, most_excited(&segments, ax, 4)))
+            .collect();
+        match write_report(dir, &fit, &errors, &prev, &tests) {
+            Ok(files) => println!("report: {} files in {}", files.len(), dir.display()),
+            Err(e) => return fail(e),
+        }
+    }
+    let name = a
+        .log
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    finish(
+        &fit,
+        &errors,
+        &prev,
+        &axes,
+        &a.output,
+        &format!("identified from {name}"),
+    )
+}

@@ -1,0 +1,247 @@
+//! `dronecine calibrate` and `dronecine identify`: on the simulator reduced to the model
+//! (mocap noise on) calibration recovers a plant that differs from the prior and writes it;
+//! on the full simulator (wind gusts, asymmetric climb and descent) it refuses and names the
+//! test to repeat; identify fits the model from a `shoot` log; bad arguments exit 1.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use dronecine_compiler::profile::Profile;
+
+fn dronecine(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dronecine"))
+        .args(args)
+        .current_dir(common::workspace())
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("dronecine-calibrate-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn load(path: &Path) -> Profile {
+    Profile::load(path).expect("a valid profile").0
+}
+
+fn close(name: &str, got: f64, want: f64, tol: f64) {
+    assert!(
+        (got / want - 1.0).abs() < tol,
+        "{name}: {got} vs {want} (tolerance {tol})"
+    );
+}
+
+#[test]
+fn calibrates_a_different_plant_on_the_ideal_simulator_and_writes_it() {
+    let dir = scratch("ideal");
+    let mut plant = Profile::builtin("ardrone2").unwrap();
+    plant.model.gain_roll_mps_per_rad = 13.0;
+    plant.model.tau_roll_s = 1.1;
+    plant.model.gain_pitch_mps_per_rad = 22.0;
+    plant.model.tau_pitch_s = 2.3;
+    plant.model.gain_vz = 0.7;
+    plant.model.tau_vz_s = 0.8;
+    plant.model.gain_yaw = 0.9;
+    let (speed, accel) = dronecine_compiler::profile::derived_motion_limits(
+        &plant.model,
+        plant.limits.tilt_max_rad,
+        0.5,
+    );
+    (plant.limits.speed_max_mps, plant.limits.accel_max_mps2) = (speed, accel);
+    let plant_file = dir.join("plant.toml");
+    std::fs::write(&plant_file, plant.to_toml()).unwrap();
+    let out_file = dir.join("out.toml");
+    let report = dir.join("report");
+    let o = dronecine(&[
+        "calibrate",
+        "--ideal",
+        "--report",
+        report.to_str().unwrap(),
+        "--plant",
+        plant_file.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+    ]);
+    let stdout = text(&o.stdout);
+    assert!(o.status.success(), "{stdout}{}", text(&o.stderr));
+    // The table: every parameter, its interval, the previous value (ardrone2: 17.5) and R².
+    for key in [
+        "K_phi",
+        "tau_phi",
+        "K_theta",
+        "tau_theta",
+        "K_zdot",
+        "tau_zdot",
+        "K_psi",
+        "R²",
+        "±",
+        "17.5000",
+    ] {
+        assert!(stdout.contains(key), "{key} missing in\n{stdout}");
+    }
+    let got = load(&out_file);
+    // The written profile round-trips through TOML (degrees): 5 % is the bound.
+    let (g, t) = (&got.model, &plant.model);
+    close(
+        "K_phi",
+        g.gain_roll_mps_per_rad,
+        t.gain_roll_mps_per_rad,
+        0.05,
+    );
+    close("tau_phi", g.tau_roll_s, t.tau_roll_s, 0.05);
+    close(
+        "K_theta",
+        g.gain_pitch_mps_per_rad,
+        t.gain_pitch_mps_per_rad,
+        0.05,
+    );
+    close("tau_theta", g.tau_pitch_s, t.tau_pitch_s, 0.05);
+    close("K_zdot", g.gain_vz, t.gain_vz, 0.05);
+    close("tau_zdot", g.tau_vz_s, t.tau_vz_s, 0.05);
+    close("K_psi", g.gain_yaw, t.gain_yaw, 0.05);
+    // The report: per axis the measured and both models' responses, SVG and PNG, with the
+    // fitted value next to the previous one.
+    for axis in ["roll", "pitch", "vz", "yaw"] {
+        let svg = std::fs::read_to_string(report.join(format!("{axis}.svg"))).unwrap();
+        assert!(
+            svg.contains("<polyline") && svg.contains("previous 17.5000")
+                || axis == "vz"
+                || axis == "yaw",
+            "{axis}"
+        );
+        assert!(
+            svg.matches("<polyline").count() >= 3 * 4,
+            "{axis}: measured, fitted and previous per test"
+        );
+        let png = std::fs::read(report.join(format!("{axis}.png"))).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
+    // Everything the calibration does not measure is the prior's (ardrone2), not the plant's.
+    let prior = Profile::builtin("ardrone2").unwrap();
+    assert_eq!(got.servo, prior.servo);
+    assert_eq!(got.safety, prior.safety);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn refuses_a_poor_fit_names_the_test_and_writes_nothing() {
+    let dir = scratch("full");
+    let out_file = dir.join("out.toml");
+    // The full simulator: wind gusts and a descent twice as strong as the climb are beyond
+    // the first-order model the doublets fit.
+    let o = dronecine(&["calibrate", "-o", out_file.to_str().unwrap()]);
+    let stderr = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("repeat the"), "{stderr}");
+    assert!(stderr.contains("dronecine calibrate --axis"), "{stderr}");
+    assert!(stderr.contains("no profile written"), "{stderr}");
+    assert!(!out_file.exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn identifies_the_model_from_a_shoot_log() {
+    let dir = scratch("identify");
+    let log = dir.join("square.mcap");
+    let o = dronecine(&[
+        "shoot",
+        "shots/square.psl",
+        "--ideal",
+        "-q",
+        "--log",
+        log.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out_file = dir.join("id.toml");
+    let report = dir.join("report");
+    let o = dronecine(&[
+        "identify",
+        log.to_str().unwrap(),
+        "-o",
+        out_file.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}{}", text(&o.stdout), text(&o.stderr));
+    // Every axis has its report, the turning roll windows shown in world x and y.
+    for axis in ["roll", "pitch", "vz", "yaw"] {
+        assert!(report.join(format!("{axis}.png")).exists(), "{axis}");
+    }
+    let roll = std::fs::read_to_string(report.join("roll.svg")).unwrap();
+    assert!(roll.contains("the drone turns") && roll.matches("<polyline").count() >= 6);
+    let got = load(&out_file);
+    let t = Profile::builtin("ardrone2").unwrap().model;
+    let g = &got.model;
+    close(
+        "K_theta",
+        g.gain_pitch_mps_per_rad,
+        t.gain_pitch_mps_per_rad,
+        0.02,
+    );
+    close("tau_theta", g.tau_pitch_s, t.tau_pitch_s, 0.02);
+    close("K_zdot", g.gain_vz, t.gain_vz, 0.02);
+    close("tau_zdot", g.tau_vz_s, t.tau_vz_s, 0.02);
+    close("K_psi", g.gain_yaw, t.gain_yaw, 0.02);
+    // Roll is excited only in the square's turns, the drone yawing at ~1.3 rad/s: the fit
+    // follows the heading through each tick.
+    close(
+        "K_phi",
+        g.gain_roll_mps_per_rad,
+        t.gain_roll_mps_per_rad,
+        0.02,
+    );
+    close("tau_phi", g.tau_roll_s, t.tau_roll_s, 0.02);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_arguments_exit_1() {
+    let o = dronecine(&[
+        "calibrate",
+        "--axis",
+        "sideways",
+        "-o",
+        "/nonexistent/x.toml",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("--axis `sideways`"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = dronecine(&[
+        "calibrate",
+        "--drone",
+        "ardrone://192.168.1.1",
+        "-o",
+        "/nonexistent/x.toml",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("not implemented yet"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = dronecine(&[
+        "identify",
+        "/nonexistent/log.mcap",
+        "-o",
+        "/nonexistent/x.toml",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("cannot read the flight log"),
+        "{}",
+        text(&o.stderr)
+    );
+}
