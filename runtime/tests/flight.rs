@@ -631,3 +631,78 @@ fn a_mocap_stall_and_burst_keep_the_loop_ticking() {
     assert!((d[0].1 - (from + 0.3)).abs() < 0.011, "{:?}", d[0]);
     assert!(r.figures.rms_position_error_m < 0.1);
 }
+
+#[test]
+fn a_late_tick_is_logged_as_a_missed_deadline() {
+    let at = action_s() + 1.0;
+    // The clock reads 20 ms late once: the tick ran 2 periods after it was due.
+    let (r, rec) = fly_with(Faults::default(), Some((at, -0.02)), |_| {});
+    let r = r.unwrap();
+    assert_eq!(r.deadline_misses, 1);
+    let e = rec.first("deadline_missed").unwrap();
+    assert!(e.message.contains("ms late"), "{}", e.message);
+    assert!(r.completed);
+}
+
+#[test]
+fn a_draining_battery_lands_mid_flight() {
+    // 21 % at take-off, draining 1 %/s: below the 15 % threshold during the shot.
+    let (r, rec) = fly_with(Faults::default(), None, |c| {
+        c.battery_start_percent = 21.0;
+        c.battery_drain_percent_per_min = 60.0;
+    });
+    let r = r.unwrap();
+    assert!(!r.completed);
+    let e = rec.first("failsafe").unwrap();
+    assert!(e.message.contains("battery"), "{}", e.message);
+    assert!(rec.first("landed").is_some());
+}
+
+#[test]
+fn preflight_refuses_a_first_framing_outside_the_stage() {
+    // The actor faces the wall 0.2 m away: the front MS puts the camera outside the stage.
+    let src = "stage 8m x 6m x 3m\ndrone ardrone2\n\
+               actor A height 1.80m at (3.8, 0) facing 0deg\nMS on A front for 4s\n";
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    let script = dronecine_grammar::check(src, &opts).script.unwrap();
+    let scene = script.scene.as_ref().unwrap();
+    let profile = Profile::builtin("ardrone2").unwrap();
+    let mut cfg = SimConfig::new(3);
+    cfg.start_position_m = [3.0, 0.0, 0.0];
+    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
+    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
+    let setup = ControllerSetup {
+        kind: "lqg".into(),
+        paper_prefilter: false,
+        per_tick_solve: false,
+    };
+    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
+    let mut rec = Recorder::default();
+    let r = flight::fly(
+        &FlightSetup {
+            script: &script,
+            source: src,
+            scene,
+            profile: &profile,
+            rate_hz: 100.0,
+            safety: Safety::default(),
+            interrupts: None,
+        },
+        controller.as_mut(),
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock: &mut clock,
+        },
+        &mut rec,
+        &mut NoObserver,
+    );
+    match r {
+        Err(FlightError::Preflight(m)) => assert!(m.contains("outside the stage"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(rec.first("take_off").is_none());
+}
