@@ -617,3 +617,31 @@ fn monitoring_writes_no_limits_and_refuses_to_fly() {
         Err(BackendError::Refused(_))
     ));
 }
+
+#[test]
+fn a_drone_that_goes_silent_never_stalls_the_caller() {
+    let fake = FakeDrone::start(NORMAL);
+    let mut client = connect(&fake);
+    drop(fake); // the drone is gone: nothing answers, nothing reads
+    let started = Instant::now();
+    let mut slowest = Duration::ZERO;
+    for k in 0..200 {
+        let t = Instant::now();
+        client
+            .send(&Command {
+                pitch_rad: 0.01 * (k % 3) as f64,
+                ..Command::HOVER
+            })
+            .ok();
+        let telemetry = client.telemetry();
+        slowest = slowest.max(t.elapsed());
+        assert!(telemetry.link_age_s >= 0.0);
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    // Every call returns at once (non-blocking sockets), and the link age tells the loop.
+    assert!(
+        slowest < Duration::from_millis(20),
+        "a call took {slowest:?}"
+    );
+    assert!(client.telemetry().link_age_s >= started.elapsed().as_secs_f64() * 0.9);
+}

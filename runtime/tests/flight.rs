@@ -37,6 +37,8 @@ struct Faults {
     nan_at_s: Option<f64>,
     /// From this time on, the drone is reported this much off in x.
     shift_from_s: Option<(f64, f64)>,
+    /// The actors are never tracked.
+    lose_actors: bool,
 }
 
 struct Faulty<M: Mocap> {
@@ -55,6 +57,9 @@ impl<M: Mocap> Mocap for Faulty<M> {
                 .is_some_and(|t| frame.t_s >= t)
             {
                 frame.drone = None;
+            }
+            if self.faults.lose_actors {
+                frame.actors.iter_mut().for_each(|a| *a = None);
             }
             if let (Some(t), false) = (self.faults.nan_at_s, self.nan_done) {
                 if frame.t_s >= t {
@@ -314,7 +319,7 @@ fn leaving_the_stage_lands() {
 }
 
 #[test]
-fn preflight_refuses_an_untracked_drone_and_a_flat_battery() {
+fn preflight_refuses_an_untracked_drone_or_actor_and_a_flat_battery() {
     let (r, rec) = fly_with(
         Faults {
             lose_drone_from_s: Some(0.0),
@@ -325,6 +330,22 @@ fn preflight_refuses_an_untracked_drone_and_a_flat_battery() {
     );
     match r {
         Err(FlightError::Preflight(m)) => assert!(m.contains("not tracked"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(rec.first("take_off").is_none());
+
+    let (r, rec) = fly_with(
+        Faults {
+            lose_actors: true,
+            ..Faults::default()
+        },
+        None,
+        |_| {},
+    );
+    match r {
+        Err(FlightError::Preflight(m)) => {
+            assert!(m.contains("actor not tracked") && m.contains('A'), "{m}")
+        }
         other => panic!("{other:?}"),
     }
     assert!(rec.first("take_off").is_none());
