@@ -113,6 +113,14 @@ pub fn run(a: &Args) -> ExitCode {
                 data.addr(),
                 if a.z_up { "Z" } else { "Y" }
             );
+            if matches!(data, NatNetData::Multicast(_)) && a.host.is_loopback() {
+                eprintln!(
+                    "warning: multicast frames from {} leave by the loopback interface, which \
+                     often carries no multicast: use --host 0.0.0.0, or unicast \
+                     (--natnet 127.0.0.1:PORT) for a client on this machine",
+                    a.host
+                );
+            }
             println!("  rigid bodies    {DRONE_ID} = drone");
             for (i, n) in names.iter().enumerate() {
                 println!("                  {} = {n}", ACTOR_ID_BASE + i as i32);
