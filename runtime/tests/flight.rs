@@ -4,8 +4,7 @@
 //! behaviour — never a panic.
 
 use dronecine_compiler::profile::Profile;
-use dronecine_grammar::Script;
-use dronecine_runtime::backend::{BackendError, Clock, Mocap, MocapFrame};
+use dronecine_runtime::backend::{BackendError, Clock, Drone, FlightState, Mocap, MocapFrame};
 use dronecine_runtime::flight::{
     self, Backends, FlightError, FlightSetup, FlightSink, NoObserver, Safety,
 };
@@ -18,15 +17,6 @@ use dronecine_runtime::sim::{SimConfig, Simulator};
 const SCRIPT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                       actor A height 1.80m at (0, 0) facing 0deg\n\
                       MS on A 34left for 6s\n";
-
-fn script() -> Script {
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let checked = dronecine_grammar::check(SCRIPT, &opts);
-    checked.script.expect("valid script")
-}
 
 /// What a wrapper does to the mocap stream.
 #[derive(Clone, Copy, Default)]
@@ -137,12 +127,38 @@ impl Recorder {
     }
 }
 
-fn fly_with(
-    faults: Faults,
-    clock_jump: Option<(f64, f64)>,
+/// The backends one test flies: the simulator's, wrapped as the test wants.
+struct Rig {
+    drone: Box<dyn Drone>,
+    mocap: Box<dyn Mocap>,
+    clock: Box<dyn Clock>,
+}
+
+impl Rig {
+    fn plain(sim: &Simulator) -> Rig {
+        Rig {
+            drone: Box::new(sim.drone()),
+            mocap: Box::new(sim.mocap()),
+            clock: Box::new(sim.clock()),
+        }
+    }
+}
+
+/// Flies `src` (actors waiting for "action!", the drone below its first framing) on the
+/// simulator set up by `config`, through the backends `rig` makes of it.
+fn fly_on(
+    src: &str,
     config: impl FnOnce(&mut SimConfig),
-) -> (Result<FlightReport, FlightError>, Recorder) {
-    let script = script();
+    interrupts: Option<&std::sync::atomic::AtomicU32>,
+    rig: impl FnOnce(&Simulator) -> Rig,
+) -> (Result<FlightReport, FlightError>, Recorder, FlightState) {
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    let script = dronecine_grammar::check(src, &opts)
+        .script
+        .expect("valid script");
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
     let mut cfg = SimConfig::new(3);
@@ -150,26 +166,7 @@ fn fly_with(
     cfg.wait_for_action = true;
     config(&mut cfg);
     let sim = Simulator::new(&cfg, &profile, scene).unwrap();
-    let mut drone = sim.drone();
-    let mut mocap = Faulty {
-        inner: sim.mocap(),
-        faults,
-        nan_done: false,
-    };
-    let mut plain = sim.clock();
-    let mut jumpy;
-    let clock: &mut dyn Clock = match clock_jump {
-        Some((at_s, back_s)) => {
-            jumpy = Jumpy {
-                inner: sim.clock(),
-                at_s,
-                back_s,
-                jumped: false,
-            };
-            &mut jumpy
-        }
-        None => &mut plain,
-    };
+    let mut backends = rig(&sim);
     let setup = ControllerSetup {
         kind: "lqg".into(),
         paper_prefilter: false,
@@ -180,22 +177,48 @@ fn fly_with(
     let result = flight::fly(
         &FlightSetup {
             script: &script,
-            source: SCRIPT,
+            source: src,
             scene,
             profile: &profile,
             rate_hz: 100.0,
             safety: Safety::default(),
-            interrupts: None,
+            interrupts,
         },
         controller.as_mut(),
         Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock,
+            drone: backends.drone.as_mut(),
+            mocap: backends.mocap.as_mut(),
+            clock: backends.clock.as_mut(),
         },
         &mut rec,
         &mut NoObserver,
     );
+    let state = backends.drone.telemetry().state;
+    (result, rec, state)
+}
+
+fn fly_with(
+    faults: Faults,
+    clock_jump: Option<(f64, f64)>,
+    config: impl FnOnce(&mut SimConfig),
+) -> (Result<FlightReport, FlightError>, Recorder) {
+    let (result, rec, _) = fly_on(SCRIPT, config, None, |sim| Rig {
+        mocap: Box::new(Faulty {
+            inner: sim.mocap(),
+            faults,
+            nan_done: false,
+        }),
+        clock: match clock_jump {
+            Some((at_s, back_s)) => Box::new(Jumpy {
+                inner: sim.clock(),
+                at_s,
+                back_s,
+                jumped: false,
+            }),
+            None => Box::new(sim.clock()),
+        },
+        ..Rig::plain(sim)
+    });
     (result, rec)
 }
 
@@ -380,59 +403,25 @@ impl<C: Clock> Clock for Presses<C> {
 fn fly_interrupted(
     presses: Vec<f64>,
     count: &'static std::sync::atomic::AtomicU32,
-) -> (
-    FlightReport,
-    Recorder,
-    dronecine_runtime::backend::FlightState,
-) {
-    use dronecine_runtime::backend::Drone;
-    let script = script();
-    let scene = script.scene.as_ref().unwrap();
-    let profile = Profile::builtin("ardrone2").unwrap();
-    let mut cfg = SimConfig::new(3);
-    (cfg.start_position_m, cfg.start_heading_rad) = start_pose(&script, scene, &profile);
-    cfg.wait_for_action = true;
-    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
-    let (mut drone, mut mocap) = (sim.drone(), sim.mocap());
-    let mut clock = Presses {
-        inner: sim.clock(),
-        at_s: presses,
-        count,
-    };
-    let setup = ControllerSetup {
-        kind: "lqg".into(),
-        paper_prefilter: false,
-        per_tick_solve: false,
-    };
-    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
-    let mut rec = Recorder::default();
-    let report = flight::fly(
-        &FlightSetup {
-            script: &script,
-            source: SCRIPT,
-            scene,
-            profile: &profile,
-            rate_hz: 100.0,
-            safety: Safety::default(),
-            interrupts: Some(count),
+) -> (FlightReport, Recorder, FlightState) {
+    let (r, rec, state) = fly_on(
+        SCRIPT,
+        |_| {},
+        Some(count),
+        |sim| Rig {
+            clock: Box::new(Presses {
+                inner: sim.clock(),
+                at_s: presses,
+                count,
+            }),
+            ..Rig::plain(sim)
         },
-        controller.as_mut(),
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &mut rec,
-        &mut NoObserver,
-    )
-    .unwrap();
-    let state = drone.telemetry().state;
-    (report, rec, state)
+    );
+    (r.unwrap(), rec, state)
 }
 
 #[test]
 fn ctrl_c_lands_and_a_second_one_cuts_the_motors() {
-    use dronecine_runtime::backend::FlightState;
     use std::sync::atomic::AtomicU32;
     static ONCE: AtomicU32 = AtomicU32::new(0);
     static TWICE: AtomicU32 = AtomicU32::new(0);
@@ -503,46 +492,20 @@ impl<D: dronecine_runtime::backend::Drone, C: Clock> dronecine_runtime::backend:
 #[test]
 fn losing_the_telemetry_lands() {
     let lost = action_s() + 1.0;
-    let script = script();
-    let scene = script.scene.as_ref().unwrap();
-    let profile = Profile::builtin("ardrone2").unwrap();
-    let mut cfg = SimConfig::new(3);
-    (cfg.start_position_m, cfg.start_heading_rad) = start_pose(&script, scene, &profile);
-    cfg.wait_for_action = true;
-    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
-    let mut drone = Silent {
-        inner: sim.drone(),
-        clock: sim.clock(),
-        lost_from_s: lost,
-    };
-    let (mut mocap, mut clock) = (sim.mocap(), sim.clock());
-    let setup = ControllerSetup {
-        kind: "lqg".into(),
-        paper_prefilter: false,
-        per_tick_solve: false,
-    };
-    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
-    let mut rec = Recorder::default();
-    let r = flight::fly(
-        &FlightSetup {
-            script: &script,
-            source: SCRIPT,
-            scene,
-            profile: &profile,
-            rate_hz: 100.0,
-            safety: Safety::default(),
-            interrupts: None,
+    let (r, rec, _) = fly_on(
+        SCRIPT,
+        |_| {},
+        None,
+        |sim| Rig {
+            drone: Box::new(Silent {
+                inner: sim.drone(),
+                clock: sim.clock(),
+                lost_from_s: lost,
+            }),
+            ..Rig::plain(sim)
         },
-        controller.as_mut(),
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &mut rec,
-        &mut NoObserver,
-    )
-    .unwrap();
+    );
+    let r = r.unwrap();
     assert!(!r.completed);
     let e = rec.first("failsafe").unwrap();
     assert!(e.message.contains("no telemetry"), "{}", e.message);
@@ -592,49 +555,23 @@ impl<M: Mocap> Mocap for Bursty<M> {
 #[test]
 fn a_mocap_stall_and_burst_keep_the_loop_ticking() {
     let from = action_s() + 1.0;
-    let script = script();
-    let scene = script.scene.as_ref().unwrap();
-    let profile = Profile::builtin("ardrone2").unwrap();
-    let mut cfg = SimConfig::new(3);
-    (cfg.start_position_m, cfg.start_heading_rad) = start_pose(&script, scene, &profile);
-    cfg.wait_for_action = true;
-    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
     let delivered = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
-    let mut mocap = Bursty {
-        inner: sim.mocap(),
-        from_s: from,
-        stall_s: 0.3,
-        held: None,
-        delivered: delivered.clone(),
-    };
-    let (mut drone, mut clock) = (sim.drone(), sim.clock());
-    let setup = ControllerSetup {
-        kind: "lqg".into(),
-        paper_prefilter: false,
-        per_tick_solve: false,
-    };
-    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
-    let mut rec = Recorder::default();
-    let r = flight::fly(
-        &FlightSetup {
-            script: &script,
-            source: SCRIPT,
-            scene,
-            profile: &profile,
-            rate_hz: 100.0,
-            safety: Safety::default(),
-            interrupts: None,
+    let (r, rec, _) = fly_on(
+        SCRIPT,
+        |_| {},
+        None,
+        |sim| Rig {
+            mocap: Box::new(Bursty {
+                inner: sim.mocap(),
+                from_s: from,
+                stall_s: 0.3,
+                held: None,
+                delivered: delivered.clone(),
+            }),
+            ..Rig::plain(sim)
         },
-        controller.as_mut(),
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &mut rec,
-        &mut NoObserver,
-    )
-    .unwrap();
+    );
+    let r = r.unwrap();
     // 0.3 s without frames is below the 0.5 s hover failsafe: the flight goes on, the loop
     // ticking at its rate (the filters predict), and completes.
     assert!(r.completed, "{:?}", rec.kinds());
@@ -684,42 +621,11 @@ fn preflight_refuses_a_first_framing_outside_the_stage() {
     // The actor faces the wall 0.2 m away: the front MS puts the camera outside the stage.
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                actor A height 1.80m at (3.8, 0) facing 0deg\nMS on A front for 4s\n";
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let script = dronecine_grammar::check(src, &opts).script.unwrap();
-    let scene = script.scene.as_ref().unwrap();
-    let profile = Profile::builtin("ardrone2").unwrap();
-    let mut cfg = SimConfig::new(3);
-    cfg.start_position_m = [3.0, 0.0, 0.0];
-    let sim = Simulator::new(&cfg, &profile, scene).unwrap();
-    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
-    let setup = ControllerSetup {
-        kind: "lqg".into(),
-        paper_prefilter: false,
-        per_tick_solve: false,
-    };
-    let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
-    let mut rec = Recorder::default();
-    let r = flight::fly(
-        &FlightSetup {
-            script: &script,
-            source: src,
-            scene,
-            profile: &profile,
-            rate_hz: 100.0,
-            safety: Safety::default(),
-            interrupts: None,
-        },
-        controller.as_mut(),
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &mut rec,
-        &mut NoObserver,
+    let (r, rec, _) = fly_on(
+        src,
+        |c| c.start_position_m = [3.0, 0.0, 0.0],
+        None,
+        Rig::plain,
     );
     match r {
         Err(FlightError::Preflight(m)) => assert!(m.contains("outside the stage"), "{m}"),
