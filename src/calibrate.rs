@@ -9,14 +9,12 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
-use dronecine_grammar::script::{DroneRef, Scene, Stage};
+use dronecine_grammar::script::{Scene, Stage};
 use dronecine_runtime::calibrate::{self as cal, Plan};
 use dronecine_runtime::flight::Backends;
 use dronecine_runtime::identify::{self, Axis, FitError, ModelFit, Segment};
 use dronecine_runtime::log::FlightLog;
 use dronecine_runtime::sim::{Effects, SimConfig, Simulator};
-
-use crate::compile::load_profile;
 
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
 
@@ -87,28 +85,6 @@ pub struct IdentifyArgs {
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("error: {msg}");
     ExitCode::FAILURE
-}
-
-fn profile(arg: &str, color: bool) -> Result<Profile, ExitCode> {
-    let is_file =
-        Profile::builtin(arg).is_none() && (arg.ends_with(".toml") || Path::new(arg).exists());
-    let drone = if is_file {
-        DroneRef::File {
-            path: arg.to_string(),
-        }
-    } else {
-        DroneRef::Builtin {
-            name: arg.to_string(),
-        }
-    };
-    let scene = Scene {
-        stage: Stage { size_m: [1.0; 3] },
-        lens: None,
-        drone: Some(drone),
-        actors: Vec::new(),
-        blocking: Vec::new(),
-    };
-    load_profile(&scene, Path::new(""), "--profile", arg, color)
 }
 
 fn axes(arg: &str) -> Result<Vec<Axis>, String> {
@@ -289,12 +265,12 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(e),
     };
-    let prior = match profile(&a.profile, color) {
+    let prior = match crate::compile::profile_arg(&a.profile, color) {
         Ok(p) => p,
         Err(c) => return c,
     };
     let plant = match &a.plant {
-        Some(name) => match profile(name, color) {
+        Some(name) => match crate::compile::profile_arg(name, color) {
             Ok(p) => p,
             Err(c) => return c,
         },
@@ -393,7 +369,7 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
         }
     };
     let prev = match &a.profile {
-        Some(name) => match profile(name, color) {
+        Some(name) => match crate::compile::profile_arg(name, color) {
             Ok(p) => p,
             Err(c) => return c,
         },

@@ -83,6 +83,30 @@ pub fn load_profile(
     }
 }
 
+/// The profile named or pointed at by `--profile`, through the compiler's loader (which
+/// renders profile errors as diagnostics).
+pub fn profile_arg(arg: &str, color: bool) -> Result<Profile, ExitCode> {
+    let is_file =
+        Profile::builtin(arg).is_none() && (arg.ends_with(".toml") || Path::new(arg).exists());
+    let drone = if is_file {
+        DroneRef::File {
+            path: arg.to_string(),
+        }
+    } else {
+        DroneRef::Builtin {
+            name: arg.to_string(),
+        }
+    };
+    let scene = Scene {
+        stage: dronecine_grammar::script::Stage { size_m: [1.0; 3] },
+        lens: None,
+        drone: Some(drone),
+        actors: Vec::new(),
+        blocking: Vec::new(),
+    };
+    load_profile(&scene, Path::new(""), "--profile", arg, color)
+}
+
 /// A script that checks clean, has a scene, and names a drone profile that loads: what
 /// `compile`, `shoot` and `emulate` start from.
 pub struct Loaded {

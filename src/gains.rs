@@ -4,14 +4,10 @@
 //! the DARE residual — as aligned text or JSON. Model and weights can be overridden from the
 //! command line to try values before writing them into a profile.
 
-use std::path::Path;
 use std::process::ExitCode;
 
-use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
-use dronecine_grammar::script::{DroneRef, Scene, Stage};
+use dronecine_compiler::profile::DEFAULT_NAME;
 use dronecine_runtime::lqg::{GainsReport, LqgServo, ServoOptions};
-
-use crate::compile::load_profile;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -74,32 +70,8 @@ fn numbers<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], String> {
     Ok(out)
 }
 
-/// The profile named or pointed at by `--profile`, through the compiler's loader (which
-/// renders profile errors as diagnostics).
-fn profile(arg: &str, color: bool) -> Result<Profile, ExitCode> {
-    let is_file =
-        Profile::builtin(arg).is_none() && (arg.ends_with(".toml") || Path::new(arg).exists());
-    let drone = if is_file {
-        DroneRef::File {
-            path: arg.to_string(),
-        }
-    } else {
-        DroneRef::Builtin {
-            name: arg.to_string(),
-        }
-    };
-    let scene = Scene {
-        stage: Stage { size_m: [1.0; 3] },
-        lens: None,
-        drone: Some(drone),
-        actors: Vec::new(),
-        blocking: Vec::new(),
-    };
-    load_profile(&scene, Path::new(""), "--profile", arg, color)
-}
-
 pub fn run(a: &Args, color: bool) -> ExitCode {
-    let mut p = match profile(&a.profile, color) {
+    let mut p = match crate::compile::profile_arg(&a.profile, color) {
         Ok(p) => p,
         Err(code) => return code,
     };
