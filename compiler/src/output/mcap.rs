@@ -325,34 +325,8 @@ impl McapWriter {
             .map_err(err)?,
         };
 
-        let tf_schema = writer
-            .add_schema(
-                foxglove::FRAME_TRANSFORMS,
-                "jsonschema",
-                foxglove::frame_transforms_schema().as_bytes(),
-            )
-            .map_err(err)?;
-        let mut frames = vec![
-            (
-                FrameTopic::new(foxglove::WORLD, foxglove::DRONE),
-                foxglove::DRONE.to_string(),
-            ),
-            (
-                FrameTopic::new(foxglove::DRONE, foxglove::CAMERA),
-                foxglove::CAMERA.to_string(),
-            ),
-        ];
-        for name in info.actor_names {
-            let frame = foxglove::actor_frame(name);
-            frames.push((FrameTopic::new(foxglove::WORLD, &frame), frame));
-        }
-        for (_, frame) in &frames {
-            let id = writer
-                .add_channel(tf_schema, &format!("/tf/{frame}"), "json", &no_meta)
-                .map_err(err)?;
-            channels.tf.push(Channel::new(id));
-        }
-        let frames: Vec<FrameTopic> = frames.into_iter().map(|(f, _)| f).collect();
+        let (frames, tf) = frame_topics(&mut writer, info.actor_names, &[]).map_err(err)?;
+        channels.tf = tf;
         let sha = Sha256::digest(info.script_text.as_bytes());
         let sha_hex: String = sha.iter().map(|b| format!("{b:02x}")).collect();
         let mut metadata = BTreeMap::new();
@@ -596,6 +570,39 @@ pub fn advance(next_s: f64, t_s: f64, hz: f64) -> f64 {
     } else {
         t_s + period
     }
+}
+
+/// The transform topics, one per frame (`/tf/drone`, `/tf/camera`, `/tf/actor/NAME` for each
+/// actor, then `/tf/CHILD` for each `extra` (parent, child)), in that order: each frame's
+/// publisher and its channel.
+pub fn frame_topics<W: std::io::Write + std::io::Seek>(
+    writer: &mut Writer<W>,
+    actor_names: &[String],
+    extra: &[(&str, &str)],
+) -> Result<(Vec<FrameTopic>, Vec<Channel>), McapError> {
+    let schema = writer.add_schema(
+        foxglove::FRAME_TRANSFORMS,
+        "jsonschema",
+        foxglove::frame_transforms_schema().as_bytes(),
+    )?;
+    let mut frames = vec![
+        (foxglove::WORLD.to_string(), foxglove::DRONE.to_string()),
+        (foxglove::DRONE.to_string(), foxglove::CAMERA.to_string()),
+    ];
+    frames.extend(
+        actor_names
+            .iter()
+            .map(|n| (foxglove::WORLD.to_string(), foxglove::actor_frame(n))),
+    );
+    frames.extend(extra.iter().map(|(p, c)| (p.to_string(), c.to_string())));
+    let mut topics = Vec::with_capacity(frames.len());
+    let mut channels = Vec::with_capacity(frames.len());
+    for (parent, child) in &frames {
+        let id = writer.add_channel(schema, &format!("/tf/{child}"), "json", &BTreeMap::new())?;
+        channels.push(Channel::new(id));
+        topics.push(FrameTopic::new(parent, child));
+    }
+    Ok((topics, channels))
 }
 
 /// `{"name":NAME,"position_m":`, the start of an actor's entry in `/actors`.

@@ -15,8 +15,9 @@ use std::path::{Path, PathBuf};
 use dronecine_compiler::camera::Lens;
 use dronecine_compiler::output::foxglove::{self, FrameTopic};
 use dronecine_compiler::output::mcap::{
-    actor_prefix, actors_schema, advance, camera_message, camera_schema, reference_schema,
-    write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA, REFERENCE_SCHEMA,
+    actor_prefix, actors_schema, advance, camera_message, camera_schema, frame_topics,
+    reference_schema, write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA,
+    REFERENCE_SCHEMA,
 };
 use dronecine_compiler::output::{json, ns_from_s};
 use mcap::records::Metadata;
@@ -274,38 +275,13 @@ impl FlightLogWriter {
             100.0
         };
         let mut channels = channels;
-        let tf_schema = writer
-            .add_schema(
-                foxglove::FRAME_TRANSFORMS,
-                "jsonschema",
-                foxglove::frame_transforms_schema().as_bytes(),
-            )
-            .map_err(err)?;
-        let mut frames = vec![
-            (
-                FrameTopic::new(foxglove::WORLD, foxglove::DRONE),
-                foxglove::DRONE.to_string(),
-            ),
-            (
-                FrameTopic::new(foxglove::DRONE, foxglove::CAMERA),
-                foxglove::CAMERA.to_string(),
-            ),
-        ];
-        for name in scene.actor_names {
-            let frame = foxglove::actor_frame(name);
-            frames.push((FrameTopic::new(foxglove::WORLD, &frame), frame));
-        }
-        frames.push((
-            FrameTopic::new(foxglove::WORLD, REFERENCE_FRAME),
-            REFERENCE_FRAME.to_string(),
-        ));
-        for (_, frame) in &frames {
-            let id = writer
-                .add_channel(tf_schema, &format!("/tf/{frame}"), "json", &no_meta)
-                .map_err(err)?;
-            channels.tf.push(Channel::new(id));
-        }
-        let frames: Vec<FrameTopic> = frames.into_iter().map(|(f, _)| f).collect();
+        let (frames, tf) = frame_topics(
+            &mut writer,
+            scene.actor_names,
+            &[(foxglove::WORLD, REFERENCE_FRAME)],
+        )
+        .map_err(err)?;
+        channels.tf = tf;
         let flush_every_ticks = (rate_hz * options.flush_period_s).floor().max(1.0) as u64;
         let mut log = FlightLogWriter {
             writer: Some(writer),
