@@ -5,19 +5,11 @@
 
 mod common;
 
+use common::dronecine;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use dronecine_compiler::profile::Profile;
-
-fn dronecine(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dronecine"))
-        .args(args)
-        .current_dir(common::workspace())
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("runs")
-}
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()

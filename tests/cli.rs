@@ -2,31 +2,7 @@
 
 mod common;
 
-use std::process::{Command, Output};
-
-fn dronecine(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dronecine"))
-        .args(args)
-        .current_dir(common::workspace())
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn temp_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("dronecine-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{dronecine, stderr, stdout, temp_dir};
 
 #[test]
 fn check_prints_one_summary_line_per_valid_file() {

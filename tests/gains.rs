@@ -4,24 +4,7 @@
 
 mod common;
 
-use std::process::{Command, Output};
-
-fn dronecine(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dronecine"))
-        .args(args)
-        .current_dir(common::workspace())
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{dronecine, stderr, stdout};
 
 fn json(args: &[&str]) -> serde_json::Value {
     let mut all = vec!["gains", "--json"];

@@ -3,27 +3,9 @@
 
 mod common;
 
+use common::{dronecine, stderr, temp_dir};
+
 use std::process::{Command, Output};
-
-fn dronecine(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dronecine"))
-        .args(args)
-        .current_dir(common::workspace())
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn temp_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("dronecine-shoot-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn report(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout)
