@@ -1,6 +1,6 @@
 //! `dronecine calibrate` and `dronecine identify`: measure the servo's model (K and τ per
-//! axis, K_ψ) by flying doublets around hover (on the embedded simulator by default), or from
-//! any flight log; print each fitted value with its 95 % interval, the fit's R² and the
+//! axis, K_ψ) by flying doublets around hover (on the embedded simulator by default, or on a
+//! real AR.Drone 2.0 with NatNet positions, `--drone/--mocap`), or from any flight log; print each fitted value with its 95 % interval, the fit's R² and the
 //! previous profile's value; write the profile (`Profile::to_toml`) only when every fit is
 //! good, else exit 1 naming the test to repeat.
 
@@ -14,6 +14,7 @@ use dronecine_runtime::calibrate::{self as cal, Plan};
 use dronecine_runtime::flight::Backends;
 use dronecine_runtime::identify::{self, Axis, FitError, ModelFit, Segment};
 use dronecine_runtime::log::FlightLog;
+use dronecine_runtime::session;
 use dronecine_runtime::sim::{Effects, SimConfig, Simulator};
 
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
@@ -30,21 +31,24 @@ pub struct CalibrateArgs {
     /// the calibration does not measure.
     #[arg(long, value_name = "NAME|FILE", default_value = DEFAULT_NAME)]
     profile: String,
-    /// The profile the simulated drone truly has [default: --profile].
+    /// The profile the simulated drone truly has [default: --profile] (simulator only).
     #[arg(long, value_name = "NAME|FILE")]
     plant: Option<String>,
     /// The stage the tests must stay in: width (x), depth (y), height (z), metres.
     #[arg(long, value_name = "X,Y,Z", default_value = "6,6,3")]
     stage: String,
-    /// The simulator's seed.
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    seed: u64,
-    /// Simulate the servo's own model only (mocap noise kept on).
+    /// The simulator's seed [default: 1] (simulator only).
+    #[arg(long, value_name = "N")]
+    seed: Option<u64>,
+    /// Simulate the servo's own model only, mocap noise kept on (simulator only).
     #[arg(long)]
     ideal: bool,
     /// Control rate, Hz.
     #[arg(long, value_name = "HZ", default_value_t = 100.0)]
     rate: f64,
+    /// Tests per axis (doublets +, −, then steps +, −, in turn; the vertical axis steps only).
+    #[arg(long, value_name = "N", default_value_t = Plan::default().repeats)]
+    repeats: usize,
     /// Write the calibration report (per axis the measured response against the fitted
     /// model's and the previous profile's, SVG and PNG) to this folder.
     #[arg(long, value_name = "DIR")]
@@ -52,12 +56,18 @@ pub struct CalibrateArgs {
     /// Fit a constant wind drift per test too (wider intervals; for a draughty stage).
     #[arg(long)]
     wind: bool,
-    /// A real AR.Drone 2.0 (not yet supported by calibrate).
+    /// Calibrate a real AR.Drone 2.0 (or `dronecine emulate`) instead of the simulator:
+    /// ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]. Needs --mocap. The tests fly around the
+    /// point where it takes off, inside --stage (centred on the mocap's origin).
     #[arg(long, value_name = "URL")]
     drone: Option<String>,
-    /// Its motion capture (not yet supported by calibrate).
+    /// Its positions from OptiTrack NatNet: natnet://SERVER[:PORT][?multicast=GROUP|?unicast].
     #[arg(long, value_name = "URL")]
     mocap: Option<String>,
+    /// The drone's rigid-body id and the mocap's up axis (TOML, as `shoot --rig`)
+    /// [default: drone 1, Y up].
+    #[arg(long, value_name = "FILE")]
+    rig: Option<std::path::PathBuf>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -251,11 +261,27 @@ fn finish(
 }
 
 pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
-    if a.drone.is_some() || a.mocap.is_some() {
-        return fail(
-            "calibrate on a real drone (--drone/--mocap) is not implemented yet; \
-             calibrate on the simulator, or fly `dronecine shoot` and run `dronecine identify` on its log",
-        );
+    if a.drone.is_some() {
+        let sim_only: Vec<&str> = [
+            (a.seed.is_some(), "--seed"),
+            (a.ideal, "--ideal"),
+            (a.plant.is_some(), "--plant"),
+        ]
+        .into_iter()
+        .filter_map(|(given, name)| given.then_some(name))
+        .collect();
+        if !sim_only.is_empty() {
+            let (names, verb) = match sim_only.as_slice() {
+                [one] => (one.to_string(), "is a simulator option"),
+                _ => (sim_only.join(", "), "are simulator options"),
+            };
+            return fail(format!(
+                "{names} {verb}: a real drone (--drone) has its own plant and noise"
+            ));
+        }
+    }
+    if a.repeats == 0 {
+        return fail("--repeats must be at least 1 (tests per axis)");
     }
     let axes = match axes(&a.axis) {
         Ok(x) => x,
@@ -265,58 +291,88 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(e),
     };
+    let target = match crate::hardware::target(
+        "calibrate",
+        a.drone.as_deref(),
+        a.mocap.as_deref(),
+        a.rig.as_deref(),
+        None,
+    ) {
+        Ok(t) => t,
+        Err(e) => return fail(e),
+    };
     let prior = match crate::compile::profile_arg(&a.profile, color) {
         Ok(p) => p,
         Err(c) => return c,
     };
-    let plant = match &a.plant {
-        Some(name) => match crate::compile::profile_arg(name, color) {
-            Ok(p) => p,
-            Err(c) => return c,
-        },
-        None => prior.clone(),
-    };
-    let mut cfg = SimConfig::new(a.seed);
-    if a.ideal {
-        cfg.effects = Effects {
-            mocap_noise: true,
-            ..Effects::none()
-        };
-    }
-    let scene = Scene {
-        stage,
-        lens: None,
-        drone: None,
-        actors: Vec::new(),
-        blocking: Vec::new(),
-    };
-    let sim = match Simulator::new(&cfg, &plant, &scene) {
-        Ok(s) => s,
-        Err(e) => return fail(e),
-    };
+    // Ctrl-C lands, a second Ctrl-C cuts the motors (the calibration reads the count).
     if let Err(e) = ctrlc::set_handler(|| {
         INTERRUPTS.fetch_add(1, Ordering::Relaxed);
     }) {
-        eprintln!("warning: Ctrl-C cannot be caught ({e})");
+        eprintln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
     }
-    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
+    let (sim, mut sim_backends, mut hardware);
+    let (backends, note) = match &target {
+        None => {
+            let plant = match &a.plant {
+                Some(name) => match crate::compile::profile_arg(name, color) {
+                    Ok(p) => p,
+                    Err(c) => return c,
+                },
+                None => prior.clone(),
+            };
+            let seed = a.seed.unwrap_or(1);
+            let mut cfg = SimConfig::new(seed);
+            if a.ideal {
+                cfg.effects = Effects {
+                    mocap_noise: true,
+                    ..Effects::none()
+                };
+            }
+            let scene = Scene {
+                stage,
+                lens: None,
+                drone: None,
+                actors: Vec::new(),
+                blocking: Vec::new(),
+            };
+            sim = match Simulator::new(&cfg, &plant, &scene) {
+                Ok(s) => s,
+                Err(e) => return fail(e),
+            };
+            sim_backends = (sim.drone(), sim.mocap(), sim.clock());
+            let (drone, mocap, clock) = &mut sim_backends;
+            (
+                Backends {
+                    drone,
+                    mocap,
+                    clock,
+                },
+                format!("calibrated on the simulator, seed {seed}"),
+            )
+        }
+        Some(t) => {
+            hardware = match session::connect_hardware(
+                &t.drone,
+                &t.mocap,
+                &t.rig,
+                std::iter::empty::<&str>(),
+                &prior,
+            ) {
+                Ok(h) => h,
+                Err(e) => return fail(e),
+            };
+            (hardware.backends(), format!("calibrated on {}", t.drone))
+        }
+    };
     let plan = Plan {
         axes: axes.clone(),
         rate_hz: a.rate,
+        repeats: a.repeats,
         disturbance: a.wind,
         ..Plan::default()
     };
-    let result = cal::calibrate(
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &stage,
-        &prior,
-        &plan,
-        Some(&INTERRUPTS),
-    );
+    let result = cal::calibrate(backends, &stage, &prior, &plan, Some(&INTERRUPTS));
     match result {
         Ok(c) => {
             if let Some(dir) = &a.report {
@@ -338,14 +394,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
                     Err(e) => return fail(e),
                 }
             }
-            finish(
-                &c.fit,
-                &c.errors,
-                &prior,
-                &axes,
-                &a.output,
-                &format!("calibrated on the simulator, seed {}", a.seed),
-            )
+            finish(&c.fit, &c.errors, &prior, &axes, &a.output, &note)
         }
         Err(e) => fail(format!("calibration flight: {e}")),
     }

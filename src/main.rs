@@ -9,6 +9,7 @@ mod emulate;
 mod files;
 mod fmt;
 mod gains;
+mod hardware;
 mod replay;
 mod shoot;
 mod status;
@@ -82,7 +83,8 @@ enum Command {
     /// Print the LQG servo's gains for a drone profile (P, K1, N1, poles, Kalman gain, k2).
     Gains(gains::Args),
     /// Measure the servo's model: fly small doublets on each input around hover (on the
-    /// embedded simulator by default) and fit K and τ per axis and K_ψ by least squares.
+    /// embedded simulator by default, or a real drone with --drone/--mocap) and fit K and τ
+    /// per axis and K_ψ by least squares.
     ///
     /// Prints each fitted value with its 95 % interval, the fit's R² and the previous
     /// profile's value; writes the profile only when every fit is good, else exits 1 naming

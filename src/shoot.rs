@@ -13,12 +13,10 @@ use dronecine_compiler::director::Director;
 use dronecine_grammar::diag;
 use dronecine_runtime::flight::{FlightSink, Observer, Progress};
 use dronecine_runtime::log::{FlightLogWriter, LogScene};
-use dronecine_runtime::natnet::rig::Rig;
 use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
 use dronecine_runtime::report::FlightReport;
 use dronecine_runtime::session::{self, HardwareFlight, SimFlight};
 use dronecine_runtime::sim::{Effects, SimConfig};
-use dronecine_runtime::url::{ArDroneUrl, NatNetUrl};
 
 /// Ctrl-C presses during the flight.
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
@@ -47,11 +45,7 @@ pub struct Args<'a> {
 /// Where the flight happens.
 enum Target {
     Sim,
-    Hardware {
-        drone: ArDroneUrl,
-        mocap: NatNetUrl,
-        rig: Rig,
-    },
+    Hardware(crate::hardware::Target),
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
@@ -73,39 +67,11 @@ pub fn run(a: &Args) -> ExitCode {
     let (r, profile) = (&loaded.file, loaded.profile.clone());
     let (script, scene) = (loaded.script(), loaded.scene());
 
-    let target = match (a.drone, a.mocap) {
-        (None, None) => Target::Sim,
-        (Some(d), Some(m)) => {
-            let drone = match ArDroneUrl::parse(d) {
-                Ok(u) => u,
-                Err(e) => return fail(format!("--drone: {e}")),
-            };
-            let mocap = match NatNetUrl::parse(m) {
-                Ok(u) => u,
-                Err(e) => return fail(format!("--mocap: {e}")),
-            };
-            let rig = match a.rig {
-                Some(path) => match Rig::load(path) {
-                    Ok(r) => r,
-                    Err(e) => return fail(e),
-                },
-                None => {
-                    let names: Vec<&str> = scene.actors.iter().map(|x| x.name.as_str()).collect();
-                    eprintln!(
-                        "note: no --rig: the drone is rigid body 1 and the actors 2, 3, … in the \
-                         script's order, Y up (the layout of `dronecine emulate`)"
-                    );
-                    Rig::numbered(&names)
-                }
-            };
-            Target::Hardware { drone, mocap, rig }
-        }
-        (Some(_), None) => {
-            return fail("--drone needs --mocap: the servo flies on motion-capture positions")
-        }
-        (None, Some(_)) => {
-            return fail("--mocap needs --drone (without both, shoot flies the simulator)")
-        }
+    let names: Vec<&str> = scene.actors.iter().map(|x| x.name.as_str()).collect();
+    let target = match crate::hardware::target("shoot", a.drone, a.mocap, a.rig, Some(&names)) {
+        Ok(None) => Target::Sim,
+        Ok(Some(t)) => Target::Hardware(t),
+        Err(e) => return fail(e),
     };
 
     // The compiler's verdict first: a script the drone cannot fly is not flown.
@@ -157,7 +123,7 @@ pub fn run(a: &Args) -> ExitCode {
         profile: profile.clone(),
         controller: setup.clone(),
         backend: match (&target, a.drone) {
-            (Target::Hardware { .. }, Some(d)) => d.to_string(),
+            (Target::Hardware(_), Some(d)) => d.to_string(),
             _ => "sim".into(),
         },
         seed: matches!(target, Target::Sim).then_some(a.seed),
@@ -202,7 +168,7 @@ pub fn run(a: &Args) -> ExitCode {
             };
             session::fly_simulated(&flight, &mut LogSink(&mut log), &mut display)
         }
-        Target::Hardware { drone, mocap, rig } => {
+        Target::Hardware(crate::hardware::Target { drone, mocap, rig }) => {
             let flight = HardwareFlight {
                 script,
                 source: &r.text,

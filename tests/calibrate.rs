@@ -1,11 +1,13 @@
 //! `dronecine calibrate` and `dronecine identify`: on the simulator reduced to the model
 //! (mocap noise on) calibration recovers a plant that differs from the prior and writes it;
 //! on the full simulator (wind gusts, asymmetric climb and descent) it refuses and names the
-//! test to repeat; identify fits the model from a `shoot` log; bad arguments exit 1.
+//! test to repeat; identify fits the model from a `shoot` log; on `dronecine emulate` over
+//! loopback (`--drone/--mocap`) it flies the same tests through the wire protocols in real
+//! time; bad arguments exit 1 before any flight.
 
 mod common;
 
-use common::dronecine;
+use common::{dronecine, Emulator};
 
 use std::path::{Path, PathBuf};
 
@@ -211,16 +213,10 @@ fn bad_arguments_exit_1() {
         "{}",
         text(&o.stderr)
     );
-    let o = dronecine(&[
-        "calibrate",
-        "--drone",
-        "ardrone://192.168.1.1",
-        "-o",
-        "/nonexistent/x.toml",
-    ]);
+    let o = dronecine(&["calibrate", "--repeats", "0", "-o", "/nonexistent/x.toml"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
-        text(&o.stderr).contains("not implemented yet"),
+        text(&o.stderr).contains("--repeats must be at least 1"),
         "{}",
         text(&o.stderr)
     );
@@ -236,4 +232,96 @@ fn bad_arguments_exit_1() {
         "{}",
         text(&o.stderr)
     );
+}
+
+#[test]
+fn calibrates_yaw_through_the_emulator_over_the_wire() {
+    // The emulator reduced to the model: one real-time yaw test has a tight enough interval
+    // (with all its effects one test's interval is too wide and it asks for more).
+    let emulator = Emulator::start(&["--ideal"]);
+    let dir = scratch("wire");
+    let out_file = dir.join("out.toml");
+    let o = dronecine(&[
+        "calibrate",
+        "--drone",
+        &emulator.drone_url,
+        "--mocap",
+        &emulator.mocap_url,
+        "--axis",
+        "yaw",
+        "--repeats",
+        "1",
+        "-o",
+        out_file.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}{}", text(&o.stdout), text(&o.stderr));
+    assert!(text(&o.stderr).contains("no --rig"), "{}", text(&o.stderr));
+    let got = load(&out_file);
+    // The emulator's plant is ardrone2 (K_psi = 1).
+    let plant = Profile::builtin("ardrone2").unwrap();
+    close("K_psi", got.model.gain_yaw, plant.model.gain_yaw, 0.10);
+    // Only yaw was measured: the rest is the prior's.
+    assert_eq!(
+        got.model.gain_roll_mps_per_rad,
+        plant.model.gain_roll_mps_per_rad
+    );
+    assert!(
+        got.description
+            .contains(&format!("calibrated on {}", emulator.drone_url)),
+        "{}",
+        got.description
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn hardware_arguments_are_checked_before_any_flight() {
+    let dir = scratch("hw-args");
+    let out_file = dir.join("out.toml");
+    let out = out_file.to_str().unwrap();
+    // Nothing listens at these addresses: each error must come before any connection.
+    let (drone, mocap) = ("ardrone://127.0.0.1:9:9", "natnet://127.0.0.1:9?unicast");
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["--drone", drone],
+            "--drone needs --mocap: the servo flies on motion-capture positions",
+        ),
+        (
+            &["--mocap", mocap],
+            "--mocap needs --drone (without both, calibrate flies the simulator)",
+        ),
+        (
+            &["--drone", drone, "--mocap", mocap, "--seed", "3"],
+            "--seed is a simulator option: a real drone (--drone)",
+        ),
+        (
+            &[
+                "--drone", drone, "--mocap", mocap, "--ideal", "--plant", "ardrone2",
+            ],
+            "--ideal, --plant are simulator options",
+        ),
+        (&["--drone", "http://x", "--mocap", mocap], "--drone: "),
+        (
+            &[
+                "--drone",
+                drone,
+                "--mocap",
+                mocap,
+                "--rig",
+                "/nonexistent/rig.toml",
+            ],
+            "cannot read the rig file",
+        ),
+    ];
+    for (args, want) in cases {
+        let mut all = vec!["calibrate", "-o", out];
+        all.extend_from_slice(args);
+        let o = dronecine(&all);
+        let stderr = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(want), "{args:?}: {stderr}");
+        assert!(text(&o.stdout).is_empty(), "{args:?}: no table, no flight");
+        assert!(!out_file.exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -1,7 +1,8 @@
 //! A whole flight, set up from a script: on the embedded simulator ([`fly_simulated`]: what
 //! `dronecine shoot` flies by default, and what the tests and benchmarks fly) or on a real
 //! AR.Drone 2.0 with OptiTrack NatNet — or the emulator that speaks their protocols
-//! ([`fly_hardware`]). Also the one place that builds a controller from its recorded set-up
+//! ([`fly_hardware`], its backends connected by [`connect_hardware`], which `calibrate` flies
+//! too). Also the one place that builds a controller from its recorded set-up
 //! (`shoot` and `replay`).
 
 use dronecine_compiler::blocking::Blocking;
@@ -152,6 +153,57 @@ pub struct HardwareFlight<'a> {
     pub interrupts: Option<&'a std::sync::atomic::AtomicU32>,
 }
 
+/// The backends of a flight on hardware, connected: the drone over its UDP protocol (its
+/// limits set from the profile), its positions from NatNet, and the wall clock they share.
+pub struct Hardware {
+    pub drone: ArDroneClient,
+    pub mocap: NatNetClient,
+    /// Its epoch is the mocap's: frames are timestamped on arrival on the flight's clock.
+    pub clock: WallClock,
+}
+
+impl Hardware {
+    /// The three as the flight loop (or the calibration) takes them.
+    pub fn backends(&mut self) -> Backends<'_> {
+        Backends {
+            drone: &mut self.drone,
+            mocap: &mut self.mocap,
+            clock: &mut self.clock,
+        }
+    }
+}
+
+/// Connects to the motion capture (the drone's and the actors' rigid bodies from `rig`;
+/// `actor_names` in the scene's order, none for a flight without actors), then to the drone,
+/// giving it the profile's limits. The clock starts now and is the mocap's epoch.
+pub fn connect_hardware<I>(
+    drone: &ArDroneUrl,
+    mocap: &NatNetUrl,
+    rig: &Rig,
+    actor_names: I,
+    profile: &Profile,
+) -> Result<Hardware, SessionError>
+where
+    I: IntoIterator,
+    I::Item: AsRef<str>,
+{
+    // One epoch for the flight clock and the mocap's arrival times.
+    let clock = WallClock::new();
+    let options = NatNetOptions {
+        epoch: clock.epoch(),
+        ..NatNetOptions::default()
+    };
+    let mocap = NatNetClient::connect(mocap, rig, actor_names, &options)
+        .map_err(|e| SessionError::Setup(format!("motion capture: {e}")))?;
+    let drone = ArDroneClient::connect(drone, profile, &ArDroneOptions::default())
+        .map_err(|e| SessionError::Setup(format!("drone: {e}")))?;
+    Ok(Hardware {
+        drone,
+        mocap,
+        clock,
+    })
+}
+
 pub fn fly_hardware(
     f: &HardwareFlight,
     sink: &mut dyn FlightSink,
@@ -159,21 +211,13 @@ pub fn fly_hardware(
 ) -> Result<FlightReport, SessionError> {
     let mut controller = controller_for(&f.controller, f.profile, f.rate_hz)
         .map_err(|e| SessionError::Setup(format!("the servo cannot be set up: {e}")))?;
-    // One epoch for the flight clock and the mocap's arrival times.
-    let mut clock = WallClock::new();
-    let options = NatNetOptions {
-        epoch: clock.epoch(),
-        ..NatNetOptions::default()
-    };
-    let mut mocap = NatNetClient::connect(
+    let mut hw = connect_hardware(
+        f.drone,
         f.mocap,
         f.rig,
         f.scene.actors.iter().map(|a| a.name.as_str()),
-        &options,
-    )
-    .map_err(|e| SessionError::Setup(format!("motion capture: {e}")))?;
-    let mut drone = ArDroneClient::connect(f.drone, f.profile, &ArDroneOptions::default())
-        .map_err(|e| SessionError::Setup(format!("drone: {e}")))?;
+        f.profile,
+    )?;
     let setup = FlightSetup {
         script: f.script,
         source: f.source,
@@ -183,16 +227,99 @@ pub fn fly_hardware(
         safety: Safety::default(),
         interrupts: f.interrupts,
     };
-    flight::fly(
-        &setup,
-        controller.as_mut(),
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        sink,
-        observer,
-    )
-    .map_err(SessionError::Flight)
+    flight::fly(&setup, controller.as_mut(), hw.backends(), sink, observer)
+        .map_err(SessionError::Flight)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::backend::{FlightState, MocapFrame};
+    use crate::emulator::{empty_scene, Emulator, EmulatorConfig, NatNetConfig, NatNetData};
+    use crate::sim::Effects;
+    use std::net::UdpSocket;
+
+    fn ardrone2() -> Profile {
+        Profile::builtin("ardrone2").unwrap()
+    }
+
+    #[test]
+    fn connect_hardware_refuses_an_actor_without_a_rigid_body_before_any_traffic() {
+        // Nothing listens on these ports: the rig check must come first.
+        let drone = ArDroneUrl::parse("ardrone://127.0.0.1:9:9").unwrap();
+        let mocap = NatNetUrl::parse("natnet://127.0.0.1:9?unicast").unwrap();
+        let rig = Rig::numbered::<&str>(&[]);
+        let e = connect_hardware(&drone, &mocap, &rig, ["A"], &ardrone2())
+            .err()
+            .expect("refused");
+        let msg = e.to_string();
+        assert!(
+            matches!(e, SessionError::Setup(_)) && msg.starts_with("motion capture: "),
+            "{msg}"
+        );
+        assert!(msg.contains("actor `A`"), "{msg}");
+    }
+
+    #[test]
+    fn connect_hardware_timestamps_mocap_frames_on_the_flight_clock() {
+        let data = UdpSocket::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap();
+        let config = EmulatorConfig {
+            at_port: 0,
+            navdata_port: 0,
+            natnet: Some(NatNetConfig {
+                command_port: 0,
+                data: NatNetData::Unicast(data),
+                ..NatNetConfig::default()
+            }),
+            sim: SimConfig {
+                effects: Effects::none(),
+                ..SimConfig::new(3)
+            },
+            ..EmulatorConfig::new(ardrone2(), empty_scene(), 3)
+        };
+        let emulator = Emulator::start(config).expect("the emulator starts");
+        let drone = ArDroneUrl::parse(&format!(
+            "ardrone://127.0.0.1:{}:{}",
+            emulator.at_addr().port(),
+            emulator.navdata_addr().port()
+        ))
+        .unwrap();
+        let mocap = NatNetUrl::parse(&format!(
+            "natnet://127.0.0.1:{}?unicast&data_port={}",
+            emulator.natnet_command_addr().unwrap().port(),
+            data.port()
+        ))
+        .unwrap();
+        let rig = Rig::numbered::<&str>(&[]);
+        let mut hw = connect_hardware(
+            &drone,
+            &mocap,
+            &rig,
+            std::iter::empty::<&str>(),
+            &ardrone2(),
+        )
+        .expect("connects to the emulator");
+        let b = hw.backends();
+        assert_eq!(b.drone.telemetry().state, FlightState::Landed);
+        let mut frame = MocapFrame::default();
+        let mut t = b.clock.now_s();
+        let deadline = t + 3.0;
+        while !b.mocap.poll(&mut frame).unwrap() {
+            assert!(t < deadline, "no NatNet frame in 3 s");
+            t += 0.01;
+            b.clock.sleep_until(t);
+        }
+        // Arrival times are on the clock the flight ticks by (one epoch): not ahead of it,
+        // and not from before it started.
+        let now = b.clock.now_s();
+        assert!(
+            frame.received_s >= 0.0 && frame.received_s <= now,
+            "received at {} s, clock at {now} s",
+            frame.received_s
+        );
+        assert!(frame.drone.is_some(), "the drone is rigid body 1");
+    }
 }

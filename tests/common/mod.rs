@@ -78,3 +78,61 @@ pub fn temp_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// A UDP port free on loopback now (for a child process to bind).
+pub fn free_port() -> u16 {
+    std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// `dronecine emulate ardrone` on free loopback ports, NatNet unicast to this machine;
+/// killed when dropped.
+pub struct Emulator {
+    child: std::process::Child,
+    /// `--drone` for it.
+    pub drone_url: String,
+    /// `--mocap` for it.
+    pub mocap_url: String,
+}
+
+impl Emulator {
+    /// Starts it with `args` added (`--ideal`, `--seed N`, `--script FILE`) and waits until
+    /// it listens.
+    pub fn start(args: &[&str]) -> Emulator {
+        let (at, nav, cmd, data) = (free_port(), free_port(), free_port(), free_port());
+        let child = Command::new(env!("CARGO_BIN_EXE_dronecine"))
+            .args(["emulate", "ardrone"])
+            .args(["--at-port", &at.to_string()])
+            .args(["--navdata-port", &nav.to_string()])
+            .args(["--natnet", &format!("127.0.0.1:{data}")])
+            .args(["--natnet-command-port", &cmd.to_string()])
+            .args(args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("the emulator starts");
+        let emulator = Emulator {
+            child,
+            drone_url: format!("ardrone://127.0.0.1:{at}:{nav}"),
+            mocap_url: format!("natnet://127.0.0.1:{cmd}?unicast&data_port={data}"),
+        };
+        // Until it listens (a connect that fails too early would fail the test for nothing).
+        let started = std::time::Instant::now();
+        while std::net::UdpSocket::bind(("127.0.0.1", at)).is_ok()
+            && started.elapsed() < std::time::Duration::from_secs(5)
+        {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        emulator
+    }
+}
+
+impl Drop for Emulator {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}

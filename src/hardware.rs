@@ -1,0 +1,59 @@
+//! `--drone URL --mocap URL [--rig FILE]`, shared by `shoot` and `calibrate`: both or neither,
+//! the URLs parsed, the rig loaded (or the emulator's numbered layout, with a note).
+
+use std::path::Path;
+
+use dronecine_runtime::natnet::rig::Rig;
+use dronecine_runtime::url::{ArDroneUrl, NatNetUrl};
+
+/// A real drone and its motion capture.
+pub struct Target {
+    pub drone: ArDroneUrl,
+    pub mocap: NatNetUrl,
+    pub rig: Rig,
+}
+
+/// `None` without `--drone` and `--mocap` (the command flies the simulator); the error
+/// message (without `error: `) when only one is given, a URL is malformed or the rig file
+/// is bad. `actors`: the scene's actor names in order (`None` for a command that flies no
+/// scene), numbered 2, 3, … when there is no rig file.
+pub fn target(
+    command: &str,
+    drone: Option<&str>,
+    mocap: Option<&str>,
+    rig: Option<&Path>,
+    actors: Option<&[&str]>,
+) -> Result<Option<Target>, String> {
+    match (drone, mocap) {
+        (None, None) => Ok(None),
+        (Some(d), Some(m)) => {
+            let drone = ArDroneUrl::parse(d).map_err(|e| format!("--drone: {e}"))?;
+            let mocap = NatNetUrl::parse(m).map_err(|e| format!("--mocap: {e}"))?;
+            let rig = match rig {
+                Some(path) => Rig::load(path).map_err(|e| e.to_string())?,
+                None => {
+                    let names = actors.unwrap_or(&[]);
+                    if actors.is_some() {
+                        eprintln!(
+                            "note: no --rig: the drone is rigid body 1 and the actors 2, 3, … in \
+                             the script's order, Y up (the layout of `dronecine emulate`)"
+                        );
+                    } else {
+                        eprintln!(
+                            "note: no --rig: the drone is rigid body 1, Y up (the layout of \
+                             `dronecine emulate`)"
+                        );
+                    }
+                    Rig::numbered(names)
+                }
+            };
+            Ok(Some(Target { drone, mocap, rig }))
+        }
+        (Some(_), None) => {
+            Err("--drone needs --mocap: the servo flies on motion-capture positions".into())
+        }
+        (None, Some(_)) => Err(format!(
+            "--mocap needs --drone (without both, {command} flies the simulator)"
+        )),
+    }
+}
