@@ -46,16 +46,14 @@ pub struct CalibrateArgs {
     /// Control rate, Hz.
     #[arg(long, value_name = "HZ", default_value_t = 100.0)]
     rate: f64,
-    /// Tests per axis (doublets +, −, then steps +, −, in turn; the vertical axis steps only).
-    #[arg(long, value_name = "N", default_value_t = Plan::default().repeats)]
-    repeats: usize,
+    /// Tests per axis [default: 12 on roll and pitch, 4 on vz and yaw]. Roll and pitch fly
+    /// doublets (alternating sign), vz steps, yaw doublets then steps.
+    #[arg(long, value_name = "N")]
+    repeats: Option<usize>,
     /// Write the calibration report (per axis the measured response against the fitted
     /// model's and the previous profile's, SVG and PNG) to this folder.
     #[arg(long, value_name = "DIR")]
     report: Option<std::path::PathBuf>,
-    /// Fit a constant wind drift per test too (wider intervals; for a draughty stage).
-    #[arg(long)]
-    wind: bool,
     /// Calibrate a real AR.Drone 2.0 (or `dronecine emulate`) instead of the simulator:
     /// ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]. Needs --mocap. The tests fly around the
     /// point where it takes off, inside --stage (centred on the mocap's origin).
@@ -88,7 +86,7 @@ pub struct IdentifyArgs {
     #[arg(long, value_name = "DIR")]
     report: Option<std::path::PathBuf>,
     /// Length of the windows the log is cut into (each with its own initial state), seconds.
-    #[arg(long, value_name = "S", default_value_t = 6.0)]
+    #[arg(long, value_name = "S", default_value_t = 20.0)]
     window: f64,
 }
 
@@ -167,6 +165,24 @@ fn render(fit: &ModelFit, errors: &[FitError], prev: &Profile, axes: &[Axis]) ->
                 t.ci95,
                 tprev
             ));
+        }
+        // Found by the fit, not in the servo's model: reported, not written.
+        if let Some(d) = f.descent_gain {
+            out.push_str(&format!(
+                "{:<6} {:<16} {:>10.4} ± {:<10.4} {:>14}\n",
+                "", "K_zdot descent", d.value, d.ci95, "(not in model)"
+            ));
+        }
+        for (name, value) in [
+            ("attitude lag (s)", f.attitude_lag_s),
+            ("latency (s)", f.latency_s),
+        ] {
+            if let Some(v) = value {
+                out.push_str(&format!(
+                    "{:<6} {:<16} {:>10.4} {:>27}\n",
+                    "", name, v, "(not in model)"
+                ));
+            }
         }
     }
     out
@@ -280,7 +296,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
             ));
         }
     }
-    if a.repeats == 0 {
+    if a.repeats == Some(0) {
         return fail("--repeats must be at least 1 (tests per axis)");
     }
     let axes = match axes(&a.axis) {
@@ -368,8 +384,8 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
     let plan = Plan {
         axes: axes.clone(),
         rate_hz: a.rate,
-        repeats: a.repeats,
-        disturbance: a.wind,
+        repeats: a.repeats.unwrap_or(Plan::default().repeats),
+        tilt_repeats: a.repeats.unwrap_or(Plan::default().tilt_repeats),
         ..Plan::default()
     };
     let result = cal::calibrate(backends, &stage, &prior, &plan, Some(&INTERRUPTS));

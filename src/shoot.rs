@@ -162,6 +162,7 @@ pub fn run(a: &Args) -> ExitCode {
                 profile: &profile,
                 rate_hz: a.rate_hz,
                 controller: setup,
+                plant: None,
                 sim,
                 realtime: a.realtime,
                 interrupts: Some(&INTERRUPTS),

@@ -79,6 +79,7 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>) {
             paper_prefilter: false,
             per_tick_solve: false,
         },
+        plant: None,
         sim,
         realtime: false,
         interrupts: None,

@@ -104,6 +104,7 @@ fn run() -> Result<(), String> {
                     paper_prefilter: false,
                     per_tick_solve: false,
                 },
+                plant: None,
                 sim,
                 realtime: false,
                 interrupts: None,

@@ -1,9 +1,12 @@
 //! The calibration flight behind `dronecine calibrate`: take off, hold a hover point, and per
-//! axis fly open-loop tests around it — doublets (input +A for T, −A for T, then 0 while the
-//! drone coasts) and steps (+A for 2T, then 0), each sign; the vertical axis steps only
-//! ([`shape`]) — recording every tick; land; then fit the model ([`crate::identify`]) and
-//! build the profile with the fitted `[model]` ([`identify::ModelFit::apply`]). Each test is
-//! a segment of its own; [`report_svg`] draws the calibration report of an axis.
+//! axis fly open-loop tests around it ([`shape`]): on roll and pitch doublets (+A for T, −A
+//! for T) followed by a long coast at zero tilt, where the drag's τ shows; on the vertical
+//! axis steps; on yaw doublets then steps — each sign in turn, recording every tick; land;
+//! then fit the model ([`crate::identify`], a prediction-error fit that models the wind, the
+//! attitude lag and the latency) and build the profile with the fitted `[model]`
+//! ([`identify::ModelFit::apply`]). Each test is a segment of its own; [`report_svg`] draws
+//! the calibration report of an axis. Gusts blur τ, so roll and pitch get more tests
+//! ([`Plan::tilt_repeats`]).
 //!
 //! Safety, as the flight loop's: before each test the prior model predicts the test's
 //! excursion (times [`EXCURSION_SAFETY`]); a test that would leave the stage's keep-in box
@@ -13,8 +16,9 @@
 //! land, error.
 //!
 //! Between tests a hover hold (proportional-derivative on the measured position, scaled by
-//! the prior model's gains) brings the drone back to the hover point; only the test windows
-//! are fitted, each as its own segment.
+//! the prior model's gains) brings the drone back to the hover point and slows it
+//! ([`SETTLED_M`], [`SETTLED_MPS`]) before the next test; only the test windows are fitted,
+//! each as its own segment.
 
 use std::fmt;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -33,8 +37,14 @@ pub const EXCURSION_SAFETY: f64 = 1.5;
 /// Mocap lost this long → land.
 pub const MOCAP_LOST_S: f64 = 0.5;
 /// A test ends early (the hold takes over) when the drone comes this close to the keep-in
-/// box; the recorded part is still fitted. Crossing the box itself lands the drone.
-pub const TEST_FENCE_M: f64 = 0.4;
+/// box's sides, or to its floor and ceiling; the recorded part is still fitted. Crossing the
+/// box itself lands the drone. Horizontally the drone may be gliding at a metre a second
+/// (the hold needs about half a metre to stop it); vertically it is slow.
+pub const TEST_FENCE_M: [f64; 3] = [0.8, 0.8, 0.3];
+
+/// A test starts once the hold has the drone this close to the hover point and this slow.
+pub const SETTLED_M: f64 = 0.15;
+pub const SETTLED_MPS: f64 = 0.1;
 
 /// What to fly.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,12 +62,12 @@ pub struct Plan {
     pub coast_s: f64,
     /// Hover hold before each test, seconds.
     pub settle_s: f64,
-    /// Tests per axis: doublets +, −, then steps +, − (the vertical axis: steps only), in
-    /// turn.
+    /// Tests per axis on the vertical and yaw axes: doublets +, −, then steps +, − (the
+    /// vertical axis: steps only), in turn.
     pub repeats: usize,
-    /// Fit a constant velocity disturbance (wind) per test as well
-    /// ([`identify::fit_axis_with`]).
-    pub disturbance: bool,
+    /// Tests per axis on roll and pitch: the drag's τ is slow (≈ 1.7 s) and gusts blur it, so
+    /// these axes need more of them than the others.
+    pub tilt_repeats: usize,
     /// Height of the hover point, metres (clamped into the keep-in box).
     pub hover_height_m: f64,
 }
@@ -67,14 +77,14 @@ impl Default for Plan {
         Plan {
             axes: Axis::ALL.to_vec(),
             rate_hz: 100.0,
-            tilt_rad: 0.02,
+            tilt_rad: 0.08,
             vz_mps: 0.3,
             yaw_rate_radps: 0.5,
-            half_s: 2.0,
-            coast_s: 1.5,
+            half_s: 1.5,
+            coast_s: 4.0,
             settle_s: 4.0,
             repeats: 4,
-            disturbance: false,
+            tilt_repeats: 12,
             hover_height_m: 1.3,
         }
     }
@@ -149,16 +159,11 @@ pub fn calibrate(
     interrupts: Option<&AtomicU32>,
 ) -> Result<Calibration, CalibrateError> {
     let tests = fly_tests(backends, stage, prior, plan, interrupts)?;
-    Ok(fit_tests(tests, prior, &plan.axes, plan.disturbance))
+    Ok(fit_tests(tests, prior, &plan.axes))
 }
 
 /// Fits the recorded tests: each axis on its own tests.
-pub fn fit_tests(
-    tests: Vec<(Axis, Segment)>,
-    prior: &Profile,
-    axes: &[Axis],
-    disturbance: bool,
-) -> Calibration {
+pub fn fit_tests(tests: Vec<(Axis, Segment)>, prior: &Profile, axes: &[Axis]) -> Calibration {
     let mut fit = ModelFit::default();
     let mut errors = Vec::new();
     for &axis in axes {
@@ -167,7 +172,7 @@ pub fn fit_tests(
             .filter(|(a, _)| *a == axis)
             .map(|(_, s)| s.clone())
             .collect();
-        match identify::fit_axis_with(&segs, axis, disturbance) {
+        match identify::fit_axis(&segs, axis) {
             Ok(a) => match axis {
                 Axis::Roll => fit.roll = Some(a),
                 Axis::Pitch => fit.pitch = Some(a),
@@ -272,6 +277,15 @@ impl Flyer<'_, '_> {
         }
     }
 
+    /// Back at `home` and slow (within [`SETTLED_M`] and [`SETTLED_MPS`]).
+    fn settled(&self, home: ([f64; 3], f64)) -> bool {
+        self.last.is_some_and(|(p, _)| {
+            let d = (0..3).map(|i| (p[i] - home.0[i]).powi(2)).sum::<f64>();
+            let v = self.vel.iter().map(|v| v * v).sum::<f64>();
+            d.sqrt() < SETTLED_M && v.sqrt() < SETTLED_MPS
+        })
+    }
+
     /// The hover hold's command toward `home` (position and heading).
     fn hold(&self, home: ([f64; 3], f64)) -> Command {
         let Some((p, c)) = self.last else {
@@ -310,14 +324,16 @@ pub enum Shape {
     Step,
 }
 
-/// The shape of test `rep` on `axis`: doublets then steps; on the vertical axis steps only
-/// (a doublet mixes climb and descent in one window, which the AR.Drone answers with
-/// different gains; separate steps give each its own window).
+/// The shape of test `rep` on `axis`. Roll and pitch: doublets only (a step's speed carries
+/// the drone across the stage while it coasts); the vertical axis: steps only (a doublet
+/// mixes climb and descent in one window, which the AR.Drone answers with different gains;
+/// separate steps give each its own window); yaw: doublets, then steps.
 pub fn shape(axis: Axis, rep: usize) -> Shape {
-    if axis == Axis::Vz || rep % 4 >= 2 {
-        Shape::Step
-    } else {
-        Shape::Doublet
+    match axis {
+        Axis::Roll | Axis::Pitch => Shape::Doublet,
+        Axis::Vz => Shape::Step,
+        Axis::Yaw if rep % 4 >= 2 => Shape::Step,
+        Axis::Yaw => Shape::Doublet,
     }
 }
 
@@ -416,10 +432,15 @@ pub fn fly_tests(
     let mut tests = Vec::new();
     let m = &prior.model;
     for &axis in &plan.axes {
-        for rep in 0..plan.repeats.max(1) {
-            // Settle at home.
-            let end = f.t + plan.settle_s;
-            while f.t < end {
+        let repeats = match axis {
+            Axis::Roll | Axis::Pitch => plan.tilt_repeats,
+            Axis::Vz | Axis::Yaw => plan.repeats,
+        };
+        for rep in 0..repeats.max(1) {
+            // Settle at home: at least `settle_s`, then until back and slow (three times
+            // that at most), so that every test starts with the stage's room around it.
+            let (start, end) = (f.t, f.t + plan.settle_s);
+            while f.t < end || (!f.settled(home) && f.t < start + 3.0 * plan.settle_s) {
                 let pose = f.tick()?;
                 f.guard(pose)?;
                 let c = f.hold(home);
@@ -515,8 +536,9 @@ pub fn fly_tests(
                 if let Some((p, _)) = pose {
                     // The floor counts from z = 0 (the box's floor is below it for landing).
                     let floor = [f.lo[0], f.lo[1], f.lo[2].max(0.0)];
-                    let near = (0..3)
-                        .any(|i| p[i] < floor[i] + TEST_FENCE_M || p[i] > f.hi[i] - TEST_FENCE_M);
+                    let near = (0..3).any(|i| {
+                        p[i] < floor[i] + TEST_FENCE_M[i] || p[i] > f.hi[i] - TEST_FENCE_M[i]
+                    });
                     if near {
                         break;
                     }

@@ -66,6 +66,9 @@ pub struct SimFlight<'a> {
     pub profile: &'a Profile,
     pub rate_hz: f64,
     pub controller: ControllerSetup,
+    /// The drone the simulator truly is, when it is not the one the servo flies with
+    /// (`profile`): a calibrated profile flown on the nominal plant, a wrong guess of a model.
+    pub plant: Option<&'a Profile>,
     /// Seed and effects; the start pose is set by [`fly_simulated`] from [`start_pose`].
     pub sim: SimConfig,
     /// Keep to the wall clock.
@@ -103,7 +106,7 @@ pub fn fly_simulated(
     (config.start_position_m, config.start_heading_rad) = start_pose(f.script, f.scene, f.profile);
     // The actors wait on their marks until the flight loop's "action!".
     config.wait_for_action = true;
-    let sim = Simulator::new(&config, f.profile, f.scene)
+    let sim = Simulator::new(&config, f.plant.unwrap_or(f.profile), f.scene)
         .map_err(|e| SessionError::Setup(format!("the simulator cannot be set up: {e}")))?;
     let (mut drone, mut mocap) = (sim.drone(), sim.mocap());
     let (mut paced, mut plain);

@@ -146,6 +146,7 @@ fn fly(with_log: bool) -> (usize, Vec<(f64, usize)>) {
             profile: &profile,
             rate_hz: 100.0,
             controller: setup,
+            plant: None,
             sim: SimConfig::new(2),
             realtime: false,
             interrupts: None,

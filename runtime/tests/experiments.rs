@@ -48,6 +48,7 @@ fn fly_text(text: &str, script: &Script, controller: &str, seed: u64) -> FlightR
             paper_prefilter: false,
             per_tick_solve: false,
         },
+        plant: None,
         sim: SimConfig::new(seed),
         realtime: false,
         interrupts: None,

@@ -73,6 +73,7 @@ fn fly_to_log(controller: &str, path: &std::path::Path) -> dronecine_runtime::re
             profile: &profile,
             rate_hz: 100.0,
             controller: setup,
+            plant: None,
             sim: SimConfig::new(9),
             realtime: false,
             interrupts: None,

@@ -6,46 +6,36 @@
 //! Each segment has its own unknown initial position and velocity, so segments may be cut
 //! anywhere (a test window, a few seconds of a flight log).
 //!
-//! **Translation axes (output-error fit on positions).** Per body axis the model is
-//! `v̇ = (K·u − v)/τ` with `u` the input of [`frames::INPUT_TO_BODY`] (sign included); with the
-//! command held over each interval Δ the exact response is
-//! `v[k+1] = a·v[k] + (1 − a)·K·u[k]`, `a = e^{−Δ/τ}` (the discrete model of control.md §2),
-//! and the position integrates it exactly:
-//! `s[k+1] = s[k] + Δ·K·u[k] + (v[k] − K·u[k])·τ·(1 − a)`. The position is linear in K and in
-//! each segment's initial position s₀ and velocity v₀ once τ is fixed, so the fit is
-//! separable: for each τ the linear least squares in (K, s₀, v₀) is solved in closed form,
-//! and τ minimises the residual sum of squares (a log grid, then golden section). Fitting the
-//! positions themselves (no differentiated velocity) keeps the white mocap noise white and the
-//! estimate unbiased.
+//! **Translation axes: prediction-error fit (`pem.rs`).** Roll, pitch and vertical speed are
+//! fitted by maximum likelihood through a Kalman filter whose model is control.md §2's (the
+//! body-frame lag `v̇_b = (P·K·u − v_b)/τ`, exact per tick, heading frozen at the tick's
+//! midpoint) plus what a real flight adds and the servo's model leaves out: a drift that
+//! random-walks (wind), an attitude lag and a command latency. Gains come in closed form
+//! for each (τ, lag, latency, drift intensity), which a simplex searches. A gusty stage, a
+//! latency or a closed loop no longer bias K and τ (on the full simulator: within ±15 %
+//! with ±10–13 % intervals from 12 doublets per axis; the output-error fit this replaced
+//! refused every axis there). The vertical axis has one gain climbing and one descending;
+//! the profile takes the climb's.
 //!
-//! **Vertical** is fitted this way alone. **Roll and pitch** are fitted jointly: the lag acts
-//! in the body frame and the heading turns, so the two couple. For fixed (τ_φ, τ_θ) the world
-//! x, y positions are simulated per tick at the measured heading (frozen over the tick, as
-//! control.md §2's `M_D[k]`, at the tick's mid-heading), linear in K_φ, K_θ and each
-//! segment's initial position and velocity (and, optionally, a constant wind); τ_φ, τ_θ minimise the residual (a grid on a
-//! common τ, then alternating golden sections). A report panel ([`simulate_fit`]) shows a
-//! horizontal axis in its body coordinate at the segment's mean heading.
-//!
-//! The heading used over a tick is the midpoint of the two measured ones: the drone turns
-//! during the tick, and when roll is excited only in turns (a square flown facing the path,
-//! yawing at ~1.3 rad/s) the tick-start heading biased K_φ and τ_φ by 6 %; the midpoint brings
-//! them within 1.5 % from that closed-loop log.
+//! **Report curves (output-error).** [`simulate_fit`] draws a test's response with the
+//! fitted model and the segment's initial state fitted by least squares (the body axis at
+//! the segment's mean heading, or world x and y with the joint model while the drone turns).
 //!
 //! **Heading.** `c[k+1] = c[k] + K_ψ·Δ·ċ(ψ̇[k])` ([`frames::heading_rate_radps`]): the unwrapped
 //! measured heading is linear in K_ψ and the segment's initial heading.
 //!
-//! **Confidence and quality.** Standard errors from the Gauss–Newton information matrix of
-//! (K, τ) with the nuisance parameters projected out, σ² from the residuals; 95 % intervals
-//! are ±1.96 standard errors (the delta method is implicit: τ itself is the parameter). The
-//! quality figure is R² against the model with no input (each segment a constant-velocity
-//! drift, or a constant heading): the share of the motion left after drift that the fitted
-//! model explains. A fit is refused ([`FitError`]) when R² < [`R2_MIN`], a 95 % half-width
+//! **Confidence and quality.** Translation axes: 95 % intervals from the inverse Hessian of
+//! the likelihood, and R² of the model's one-second-ahead predictions against
+//! constant-velocity extrapolation (`pem.rs`). Heading: standard errors from the least
+//! squares, R² against a constant heading. A fit is refused ([`FitError`]) when R² < [`R2_MIN`], a 95 % half-width
 //! exceeds [`CI_REL_MAX`] of its value, τ sits at the edge of the search range, or the axis
 //! was not excited — naming the axis and the test to repeat.
 
 use std::fmt;
 
 use crate::frames::{self, Command};
+
+mod pem;
 
 /// Below this R² a fit is refused.
 pub const R2_MIN: f64 = 0.9;
@@ -146,6 +136,13 @@ pub struct AxisFit {
     pub rms: f64,
     /// Measured samples used.
     pub samples: usize,
+    /// Vertical only: K_ż while descending (the AR.Drone's descent is about twice as strong
+    /// as its climb, control.md §5); `gain` is the climb's, the profile's convention.
+    pub descent_gain: Option<Estimate>,
+    /// Translation axes: the command latency and (roll, pitch) the attitude lag the fit
+    /// found, seconds — the servo's model has neither, they are reported only.
+    pub latency_s: Option<f64>,
+    pub attitude_lag_s: Option<f64>,
 }
 
 /// The whole model, as far as it was fitted.
@@ -268,7 +265,11 @@ impl fmt::Display for FitError {
                 write!(f, "{a}: implausible {what} = {value:.4}")?
             }
         }
-        write!(f, "; repeat {}", self.axis.test())
+        write!(f, "; repeat {}", self.axis.test())?;
+        if matches!(self.problem, FitProblem::Uncertain { .. }) {
+            f.write_str(" with more tests (`--repeats N`)")?;
+        }
+        Ok(())
     }
 }
 
@@ -280,12 +281,12 @@ pub fn fit_model(segments: &[Segment], axes: &[Axis]) -> (ModelFit, Vec<FitError
     let mut out = ModelFit::default();
     let mut errors = Vec::new();
     let horizontal = (axes.contains(&Axis::Roll) || axes.contains(&Axis::Pitch))
-        .then(|| fit_horizontal(segments, false));
+        .then(|| fit_horizontal_pem(segments));
     for &axis in axes {
         let fit = match (axis, &horizontal) {
             (Axis::Roll, Some(h)) => h.0.clone(),
             (Axis::Pitch, Some(h)) => h.1.clone(),
-            (Axis::Vz, _) => fit_lag(segments, axis, 2, false),
+            (Axis::Vz, _) => fit_vz_pem(segments),
             _ => fit_heading(segments),
         };
         let checked = fit
@@ -305,21 +306,10 @@ pub fn fit_model(segments: &[Segment], axes: &[Axis]) -> (ModelFit, Vec<FitError
 
 /// Fits one axis and checks the fit's quality.
 pub fn fit_axis(segments: &[Segment], axis: Axis) -> Result<AxisFit, FitError> {
-    fit_axis_with(segments, axis, false)
-}
-
-/// [`fit_axis`], optionally with a constant velocity disturbance (wind) per segment among the
-/// nuisance parameters: robust to a steady drift, at the price of wider intervals (a step's
-/// response looks like a disturbance until the input stops).
-pub fn fit_axis_with(
-    segments: &[Segment],
-    axis: Axis,
-    disturbance: bool,
-) -> Result<AxisFit, FitError> {
     let fit = match axis {
-        Axis::Roll => fit_horizontal(segments, disturbance).0,
-        Axis::Pitch => fit_horizontal(segments, disturbance).1,
-        Axis::Vz => fit_lag(segments, axis, 2, disturbance),
+        Axis::Roll => fit_horizontal_pem(segments).0,
+        Axis::Pitch => fit_horizontal_pem(segments).1,
+        Axis::Vz => fit_vz_pem(segments),
         Axis::Yaw => fit_heading(segments),
     }
     .ok_or(FitError {
@@ -500,15 +490,6 @@ fn plane_response(d: &PlaneData, taus: [f64; 2], drive: Drive) -> Vec<f64> {
     out
 }
 
-struct PlaneSolution {
-    /// [K_φ, K_θ] (0 for an axis not excited).
-    k: [f64; 2],
-    ssr: f64,
-    n: usize,
-    /// Per segment, the nuisance coefficients (p₀x, p₀y, v₀x, v₀y, [wx, wy]).
-    nuis: Vec<Vec<f64>>,
-}
-
 fn plane_nuisance(d: &PlaneData, taus: [f64; 2], disturbance: bool) -> Vec<Vec<f64>> {
     let n = d.dt.len();
     let mut ox = vec![0.0; 2 * n];
@@ -528,271 +509,46 @@ fn plane_nuisance(d: &PlaneData, taus: [f64; 2], disturbance: bool) -> Vec<Vec<f
     cols
 }
 
-/// Linear least squares in the excited gains and every segment's nuisance, at fixed τs.
-fn solve_plane(
-    data: &[PlaneData],
-    taus: [f64; 2],
-    excited: [bool; 2],
-    disturbance: bool,
-) -> PlaneSolution {
-    let mut ata = nalgebra::Matrix2::<f64>::zeros();
-    let mut atb = nalgebra::Vector2::<f64>::zeros();
-    let (mut yy, mut n) = (0.0, 0);
-    let mut cache = Vec::with_capacity(data.len());
-    for d in data {
-        let cols = plane_nuisance(d, taus, disturbance);
-        let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-        let mut y = d.y.clone();
-        let mut h = [
-            plane_response(d, taus, Drive::Roll),
-            plane_response(d, taus, Drive::Pitch),
-        ];
-        let raw = h.clone();
-        {
-            let [h0, h1] = &mut h;
-            project_many(&mut [&mut y, h0, h1], &basis, &d.mask);
-        }
-        for k in 0..y.len() {
-            if d.mask[k] {
-                for r in 0..2 {
-                    atb[r] += h[r][k] * y[k];
-                    for c in 0..2 {
-                        ata[(r, c)] += h[r][k] * h[c][k];
-                    }
-                }
-                yy += y[k] * y[k];
-                n += 1;
-            }
-        }
-        cache.push((cols, raw));
-    }
-    // Unexcited gains are held at 0.
-    for j in 0..2 {
-        if !excited[j] {
-            ata[(j, 0)] = 0.0;
-            ata[(0, j)] = 0.0;
-            ata[(j, 1)] = 0.0;
-            ata[(1, j)] = 0.0;
-            ata[(j, j)] = 1.0;
-            atb[j] = 0.0;
-        }
-    }
-    let kv = ata
-        .try_inverse()
-        .map_or(nalgebra::Vector2::zeros(), |inv| inv * atb);
-    let ssr = (yy - kv.dot(&atb)).max(0.0);
-    let k = [kv[0], kv[1]];
-    let nuis = data
-        .iter()
-        .zip(&cache)
-        .map(|(d, (cols, raw))| {
-            let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-            let mut r: Vec<f64> = (0..d.y.len())
-                .map(|i| d.y[i] - k[0] * raw[0][i] - k[1] * raw[1][i])
-                .collect();
-            project_out(&mut r, &basis, &d.mask)
-        })
-        .collect();
-    PlaneSolution { k, ssr, n, nuis }
-}
-
-/// Golden-section minimum of `f` over `[lo, hi]` (log τ).
-fn golden(mut lo: f64, mut hi: f64, f: &dyn Fn(f64) -> f64) -> f64 {
-    let phi = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut x1, mut x2) = (hi - phi * (hi - lo), lo + phi * (hi - lo));
-    let (mut f1, mut f2) = (f(x1), f(x2));
-    for _ in 0..28 {
-        if f1 < f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - phi * (hi - lo);
-            f1 = f(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + phi * (hi - lo);
-            f2 = f(x2);
-        }
-    }
-    0.5 * (lo + hi)
-}
-
-/// The joint fit of the roll and pitch axes (the lag is in the body frame and the heading
-/// turns, so the two couple): a grid on a common τ, then alternating golden sections on
-/// log τ_φ and log τ_θ; gains and nuisance by linear least squares.
-fn fit_horizontal(segments: &[Segment], disturbance: bool) -> (Option<AxisFit>, Option<AxisFit>) {
+/// The prediction-error fit of roll and pitch ([`pem`]): wind modelled, any loop.
+fn fit_horizontal_pem(segments: &[Segment]) -> (Option<AxisFit>, Option<AxisFit>) {
     let data: Vec<PlaneData> = segments.iter().filter_map(|s| prepare_plane(s)).collect();
-    let excited = [
-        data.iter().any(|d| {
-            d.roll
-                .iter()
-                .zip(&d.dt)
-                .any(|(u, dt)| *u != 0.0 && *dt > 0.0)
-        }),
-        data.iter().any(|d| {
-            d.pitch
-                .iter()
-                .zip(&d.dt)
-                .any(|(u, dt)| *u != 0.0 && *dt > 0.0)
-        }),
-    ];
-    if !excited[0] && !excited[1] {
+    let Some((f, excited)) = pem::fit_plane(&data) else {
         return (None, None);
-    }
-    let ssr =
-        |lt: [f64; 2]| solve_plane(&data, [lt[0].exp(), lt[1].exp()], excited, disturbance).ssr;
-    let (llo, lhi) = (TAU_MIN_S.ln(), TAU_MAX_S.ln());
-    let grid = 32;
-    let at = |i: usize| llo + (lhi - llo) * i as f64 / grid as f64;
-    let best = (0..=grid)
-        .map(|i| (i, ssr([at(i), at(i)])))
-        .fold(
-            (0, f64::INFINITY),
-            |a, (i, s)| if s < a.1 { (i, s) } else { a },
-        )
-        .0;
-    let mut lt = [at(best), at(best)];
-    let step = (lhi - llo) / grid as f64;
-    let mut width = 3.0 * step;
-    for _round in 0..4 {
-        for j in 0..2 {
-            if !excited[j] {
-                continue;
-            }
-            let lo = (lt[j] - width).max(llo);
-            let hi = (lt[j] + width).min(lhi);
-            let f = |x: f64| {
-                let mut t = lt;
-                t[j] = x;
-                ssr(t)
-            };
-            lt[j] = golden(lo, hi, &f);
-        }
-        width = (width * 0.6).max(step * 0.5);
-    }
-    let taus = [lt[0].exp(), lt[1].exp()];
-    let sol = solve_plane(&data, taus, excited, disturbance);
-    // Information matrix of (K_φ, τ_φ, K_θ, τ_θ), nuisance projected out.
-    let mut cols_all: Vec<[Vec<f64>; 4]> = Vec::new();
-    let mut null_ss = 0.0;
-    let mut acc = (0.0, 0.0);
-    for (d, nuis) in data.iter().zip(&sol.nuis) {
-        let model = |t: [f64; 2]| -> Vec<f64> {
-            let r = plane_response(d, t, Drive::Roll);
-            let p = plane_response(d, t, Drive::Pitch);
-            let nc = plane_nuisance(d, t, disturbance);
-            (0..d.y.len())
-                .map(|i| {
-                    sol.k[0] * r[i]
-                        + sol.k[1] * p[i]
-                        + nc.iter().zip(nuis).map(|(c, b)| c[i] * b).sum::<f64>()
-                })
-                .collect()
-        };
-        let dtau = |j: usize| -> Vec<f64> {
-            let eps = taus[j] * 1e-4;
-            let (mut tp, mut tm) = (taus, taus);
-            tp[j] += eps;
-            tm[j] -= eps;
-            let (a, b) = (model(tp), model(tm));
-            a.iter()
-                .zip(&b)
-                .map(|(a, b)| (a - b) / (2.0 * eps))
-                .collect()
-        };
-        let nc = plane_nuisance(d, taus, disturbance);
-        let basis: Vec<&[f64]> = nc.iter().map(|c| c.as_slice()).collect();
-        let mut c = [
-            plane_response(d, taus, Drive::Roll),
-            dtau(0),
-            plane_response(d, taus, Drive::Pitch),
-            dtau(1),
-        ];
-        for col in c.iter_mut() {
-            project_out(col, &basis, &d.mask);
-        }
-        for col in c.iter_mut() {
-            for (x, m) in col.iter_mut().zip(&d.mask) {
-                if !m {
-                    *x = 0.0;
-                }
-            }
-        }
-        let mut resid = d.y.clone();
-        project_out(&mut resid, &basis, &d.mask);
-        for i in 0..resid.len() {
-            resid[i] -= sol.k[0] * c[0][i] + sol.k[1] * c[2][i];
-        }
-        lag1(&mut acc, &resid, &d.mask, d.dt.len());
-        // The no-input model: constant-velocity drift per segment.
-        let n = d.dt.len();
-        let t: Vec<f64> =
-            d.dt.iter()
-                .scan(0.0, |acc, dt| {
-                    let now = *acc;
-                    *acc += dt;
-                    Some(now)
-                })
-                .collect();
-        let (mut tx, mut ty) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
-        tx[..n].copy_from_slice(&t);
-        ty[n..].copy_from_slice(&t);
-        let mut y0 = d.y.clone();
-        project_out(&mut y0, &[&nc[0], &nc[1], &tx, &ty], &d.mask);
-        null_ss += y0
-            .iter()
-            .zip(&d.mask)
-            .filter(|(_, m)| **m)
-            .map(|(y, _)| y * y)
-            .sum::<f64>();
-        cols_all.push(c);
-    }
-    let idx: Vec<usize> = (0..4).filter(|&i| excited[i / 2]).collect();
-    let m = idx.len();
-    let mut info = nalgebra::DMatrix::<f64>::zeros(m, m);
-    for c in &cols_all {
-        for (r, &ir) in idx.iter().enumerate() {
-            for (q, &iq) in idx.iter().enumerate() {
-                info[(r, q)] += c[ir].iter().zip(&c[iq]).map(|(a, b)| a * b).sum::<f64>();
-            }
-        }
-    }
-    let per_seg = if disturbance { 6 } else { 4 };
-    let dof = sol.n.saturating_sub(m + per_seg * data.len()).max(1) as f64;
-    let sigma2 = sol.ssr / dof * inflation(acc);
-    let cov = info.try_inverse().map(|i| i * sigma2);
-    let var = |which: usize| -> f64 {
-        let Some(cov) = &cov else {
-            return f64::INFINITY;
-        };
-        idx.iter()
-            .position(|&i| i == which)
-            .map_or(f64::INFINITY, |r| cov[(r, r)].max(0.0))
-    };
-    let r2 = if null_ss > 0.0 {
-        1.0 - sol.ssr / null_ss
-    } else {
-        0.0
     };
     let make = |axis: Axis, j: usize| -> Option<AxisFit> {
         excited[j].then(|| AxisFit {
             axis,
-            gain: Estimate {
-                value: sol.k[j],
-                ci95: Z95 * var(2 * j).sqrt(),
-            },
-            tau_s: Some(Estimate {
-                value: taus[j],
-                ci95: Z95 * var(2 * j + 1).sqrt(),
-            }),
-            r2,
-            rms: (sol.ssr / sol.n.max(1) as f64).sqrt(),
-            samples: sol.n / 2,
+            gain: f.gains[j],
+            tau_s: Some(f.taus[j]),
+            r2: f.r2,
+            rms: f.rms_m,
+            samples: f.samples,
+            descent_gain: None,
+            latency_s: Some(f.latency_s),
+            attitude_lag_s: f.attitude_lag_s,
         })
     };
     (make(Axis::Roll, 0), make(Axis::Pitch, 1))
+}
+
+/// The prediction-error fit of the vertical axis ([`pem`]): climb and descent gains, one τ.
+fn fit_vz_pem(segments: &[Segment]) -> Option<AxisFit> {
+    let data: Vec<AxisData> = segments.iter().filter_map(|s| prepare(s, 2)).collect();
+    let (f, excited) = pem::fit_vertical(&data)?;
+    if !excited[0] {
+        return None;
+    }
+    Some(AxisFit {
+        axis: Axis::Vz,
+        gain: f.gains[0],
+        tau_s: Some(f.taus[0]),
+        r2: f.r2,
+        rms: f.rms_m,
+        samples: f.samples,
+        descent_gain: excited[1].then_some(f.gains[1]),
+        latency_s: Some(f.latency_s),
+        attitude_lag_s: None,
+    })
 }
 
 /// One segment prepared for a translation axis: measured body coordinate (or `None`), the
@@ -901,43 +657,6 @@ fn project_out(x: &mut [f64], basis: &[&[f64]], mask: &[bool]) -> Vec<f64> {
     coef.iter().copied().collect()
 }
 
-/// [`project_out`] for several vectors on one basis (the normal matrix inverted once).
-fn project_many(xs: &mut [&mut [f64]], basis: &[&[f64]], mask: &[bool]) {
-    let m = basis.len();
-    let mut a = nalgebra::DMatrix::<f64>::zeros(m, m);
-    for k in 0..mask.len() {
-        if mask[k] {
-            for r in 0..m {
-                for c in r..m {
-                    a[(r, c)] += basis[r][k] * basis[c][k];
-                }
-            }
-        }
-    }
-    for r in 0..m {
-        for c in 0..r {
-            a[(r, c)] = a[(c, r)];
-        }
-    }
-    let Some(inv) = a.try_inverse() else { return };
-    for x in xs.iter_mut() {
-        let mut b = nalgebra::DVector::<f64>::zeros(m);
-        for k in 0..mask.len() {
-            if mask[k] {
-                for r in 0..m {
-                    b[r] += basis[r][k] * x[k];
-                }
-            }
-        }
-        let coef = &inv * b;
-        for k in 0..x.len() {
-            for r in 0..m {
-                x[k] -= coef[r] * basis[r][k];
-            }
-        }
-    }
-}
-
 /// Accumulates the lag-1 products and squares of the residual `r` over consecutive measured
 /// samples (`half`: the stacked x/y boundary, pairs across it are skipped).
 fn lag1(acc: &mut (f64, f64), r: &[f64], mask: &[bool], half: usize) {
@@ -963,204 +682,6 @@ fn inflation(acc: (f64, f64)) -> f64 {
         0.999
     };
     (1.0 + rho) / (1.0 - rho)
-}
-
-/// Time since the segment's first sample, per sample.
-fn elapsed(d: &AxisData) -> Vec<f64> {
-    let mut t = 0.0;
-    d.dt.iter()
-        .map(|dt| {
-            let now = t;
-            t += dt;
-            now
-        })
-        .collect()
-}
-
-/// The nuisance columns of one segment: s₀ (1), v₀ (G), and with `disturbance` a constant
-/// velocity disturbance w (wind) the body lag relaxes toward (T − G).
-fn nuisance(d: &AxisData, g: &[f64], disturbance: bool) -> Vec<Vec<f64>> {
-    let mut cols = vec![vec![1.0; g.len()], g.to_vec()];
-    if disturbance {
-        cols.push(elapsed(d).iter().zip(g).map(|(t, g)| t - g).collect());
-    }
-    cols
-}
-
-struct LagSolution {
-    k: f64,
-    ssr: f64,
-    n: usize,
-    /// Per segment: the fitted coefficients of G and (T − G): v₀ and w (0 without).
-    v0: Vec<(f64, f64)>,
-}
-
-/// The linear least squares in (K, and per segment the nuisance) at a fixed τ.
-fn solve_lag(data: &[AxisData], tau: f64, disturbance: bool) -> LagSolution {
-    let (mut hy, mut hh, mut yy, mut n) = (0.0, 0.0, 0.0, 0);
-    let mut per = Vec::with_capacity(data.len());
-    for d in data {
-        let (g, h) = responses(d, tau);
-        let mask: Vec<bool> = d.y.iter().map(|y| y.is_some()).collect();
-        let cols = nuisance(d, &g, disturbance);
-        let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-        let mut y: Vec<f64> = d.y.iter().map(|y| y.unwrap_or(0.0)).collect();
-        let mut hp = h.clone();
-        project_out(&mut y, &basis, &mask);
-        project_out(&mut hp, &basis, &mask);
-        for k in 0..y.len() {
-            if mask[k] {
-                hy += hp[k] * y[k];
-                hh += hp[k] * hp[k];
-                yy += y[k] * y[k];
-                n += 1;
-            }
-        }
-        per.push((h, mask, cols));
-    }
-    let k = if hh > 0.0 { hy / hh } else { 0.0 };
-    let ssr = (yy - k * hy).max(0.0);
-    let v0 = data
-        .iter()
-        .zip(&per)
-        .map(|(d, (h, mask, cols))| {
-            let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-            let mut r: Vec<f64> = (0..h.len())
-                .map(|i| d.y[i].unwrap_or(0.0) - k * h[i])
-                .collect();
-            let c = project_out(&mut r, &basis, mask);
-            (c[1], c.get(2).copied().unwrap_or(0.0))
-        })
-        .collect();
-    LagSolution { k, ssr, n, v0 }
-}
-
-fn fit_lag(segments: &[Segment], axis: Axis, j: usize, disturbance: bool) -> Option<AxisFit> {
-    let data: Vec<AxisData> = segments
-        .iter()
-        .filter_map(|s| prepare(s, j))
-        .filter(|d| d.y.iter().filter(|y| y.is_some()).count() >= 3)
-        .collect();
-    let excited = data
-        .iter()
-        .any(|d| d.u.iter().zip(&d.dt).any(|(u, dt)| *u != 0.0 && *dt > 0.0));
-    if !excited {
-        return None;
-    }
-    // τ: log grid, then golden section around the best point.
-    let ssr = |tau: f64| solve_lag(&data, tau, disturbance).ssr;
-    let grid = 48;
-    let lt = |i: usize| {
-        (TAU_MIN_S.ln() + (TAU_MAX_S.ln() - TAU_MIN_S.ln()) * i as f64 / grid as f64).exp()
-    };
-    let (best, _) = (0..=grid)
-        .map(|i| (i, ssr(lt(i))))
-        .fold(
-            (0, f64::INFINITY),
-            |acc, (i, s)| {
-                if s < acc.1 {
-                    (i, s)
-                } else {
-                    acc
-                }
-            },
-        );
-    let (mut lo, mut hi) = (
-        lt(best.saturating_sub(1)).ln(),
-        lt((best + 1).min(grid)).ln(),
-    );
-    let phi = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut x1, mut x2) = (hi - phi * (hi - lo), lo + phi * (hi - lo));
-    let (mut f1, mut f2) = (ssr(x1.exp()), ssr(x2.exp()));
-    for _ in 0..60 {
-        if f1 < f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - phi * (hi - lo);
-            f1 = ssr(x1.exp());
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + phi * (hi - lo);
-            f2 = ssr(x2.exp());
-        }
-    }
-    let tau = (0.5 * (lo + hi)).exp();
-    let sol = solve_lag(&data, tau, disturbance);
-    // Information matrix of (K, τ) with s₀, v₀ projected out: columns H (∂/∂K) and
-    // D = K·∂H/∂τ + v₀·∂G/∂τ (∂/∂τ), central differences.
-    let eps = tau * 1e-4;
-    let (mut hh, mut hd, mut dd, mut null_ss) = (0.0, 0.0, 0.0, 0.0);
-    let mut acc = (0.0, 0.0);
-    for (d, (v0, w)) in data.iter().zip(&sol.v0) {
-        let (g, h) = responses(d, tau);
-        let (gp, hp) = responses(d, tau + eps);
-        let (gm, hm) = responses(d, tau - eps);
-        let mask: Vec<bool> = d.y.iter().map(|y| y.is_some()).collect();
-        let ones = vec![1.0; g.len()];
-        let mut dcol: Vec<f64> = (0..g.len())
-            .map(|i| (sol.k * (hp[i] - hm[i]) + (v0 - w) * (gp[i] - gm[i])) / (2.0 * eps))
-            .collect();
-        let mut hcol = h.clone();
-        let cols = nuisance(d, &g, disturbance);
-        let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-        project_out(&mut dcol, &basis, &mask);
-        project_out(&mut hcol, &basis, &mask);
-        let mut resid: Vec<f64> = d.y.iter().map(|y| y.unwrap_or(0.0)).collect();
-        project_out(&mut resid, &basis, &mask);
-        for (r, h) in resid.iter_mut().zip(&hcol) {
-            *r -= sol.k * h;
-        }
-        lag1(&mut acc, &resid, &mask, usize::MAX);
-        // The no-input model: constant-velocity drift.
-        let t: Vec<f64> = (0..g.len())
-            .scan(0.0, |acc, i| {
-                let now = *acc;
-                *acc += d.dt[i];
-                Some(now)
-            })
-            .collect();
-        let mut y0: Vec<f64> = d.y.iter().map(|y| y.unwrap_or(0.0)).collect();
-        project_out(&mut y0, &[&ones, &t], &mask);
-        for k in 0..g.len() {
-            if mask[k] {
-                hh += hcol[k] * hcol[k];
-                hd += hcol[k] * dcol[k];
-                dd += dcol[k] * dcol[k];
-                null_ss += y0[k] * y0[k];
-            }
-        }
-    }
-    let params = 2 + (if disturbance { 3 } else { 2 }) * data.len();
-    let dof = sol.n.saturating_sub(params).max(1) as f64;
-    let sigma2 = sol.ssr / dof * inflation(acc);
-    let det = hh * dd - hd * hd;
-    let (var_k, var_t) = if det > 0.0 {
-        (sigma2 * dd / det, sigma2 * hh / det)
-    } else {
-        (f64::INFINITY, f64::INFINITY)
-    };
-    let r2 = if null_ss > 0.0 {
-        1.0 - sol.ssr / null_ss
-    } else {
-        0.0
-    };
-    Some(AxisFit {
-        axis,
-        gain: Estimate {
-            value: sol.k,
-            ci95: Z95 * var_k.sqrt(),
-        },
-        tau_s: Some(Estimate {
-            value: tau,
-            ci95: Z95 * var_t.sqrt(),
-        }),
-        r2,
-        rms: (sol.ssr / sol.n.max(1) as f64).sqrt(),
-        samples: sol.n,
-    })
 }
 
 fn fit_heading(segments: &[Segment]) -> Option<AxisFit> {
@@ -1235,6 +756,9 @@ fn fit_heading(segments: &[Segment]) -> Option<AxisFit> {
         r2: if yy > 0.0 { 1.0 - ssr / yy } else { 0.0 },
         rms: (ssr / n.max(1) as f64).sqrt(),
         samples: n,
+        descent_gain: None,
+        latency_s: None,
+        attitude_lag_s: None,
     })
 }
 
@@ -1380,37 +904,57 @@ mod tests {
 
     /// Synthetic doublets from the exact model at heading `c`, fine sub-steps, noise σ.
     fn synthetic(k: [f64; 4], tau: [f64; 3], c: f64, sigma: f64, seed: u64) -> Vec<Segment> {
-        synthetic_with(k, tau, c, sigma, seed, [0.0; 2], 0.0)
+        synthetic_with(k, tau, c, sigma, seed, Extra::default())
     }
 
-    /// [`synthetic`] with a constant world wind and a yaw-rate command held during the
-    /// translation tests.
+    /// What the synthetic plant adds to the servo's model.
+    #[derive(Clone, Copy, Default)]
+    struct Extra {
+        /// A world wind `w·g(t)`, `g` a random walk from 1: it drifts through every test.
+        wind: [f64; 2],
+        /// A yaw-rate command held during the translation tests.
+        yaw_rate: f64,
+        /// A first-order lag on roll and pitch, and a latency on every command, seconds.
+        attitude_lag_s: f64,
+        latency_s: f64,
+    }
+
     fn synthetic_with(
         k: [f64; 4],
         tau: [f64; 3],
         c: f64,
         sigma: f64,
         seed: u64,
-        wind: [f64; 2],
-        yaw_rate: f64,
+        extra: Extra,
     ) -> Vec<Segment> {
+        let Extra {
+            wind,
+            yaw_rate,
+            attitude_lag_s,
+            latency_s,
+        } = extra;
         let mut noise = Noise(seed);
         let mut segs = Vec::new();
         let tests: [(usize, f64); 4] = [(0, 0.03), (1, -0.03), (2, 0.3), (3, 0.5)];
         for (axis, amp) in tests {
             let mut seg = Vec::new();
             let (mut p, mut v, mut h) = ([0.3, -0.2, 1.0], [0.02, -0.01, 0.0], c);
+            let mut att = [0.0f64; 2];
+            let mut gust = 1.0f64;
             let dt = 0.01;
-            let n = 700;
-            for i in 0..n {
-                let t = i as f64 * dt;
-                let a = if t < 2.5 {
+            let n = 900;
+            let input = |t: f64| {
+                if (0.0..2.5).contains(&t) {
                     amp
-                } else if t < 5.0 {
+                } else if (2.5..5.0).contains(&t) {
                     -amp
                 } else {
                     0.0
-                };
+                }
+            };
+            for i in 0..n {
+                let t = i as f64 * dt;
+                let a = input(t);
                 let mut cmd = Command::HOVER;
                 match axis {
                     0 => cmd.roll_rad = a,
@@ -1427,15 +971,32 @@ mod tests {
                     position_m: Some(p.map(|x| x + sigma * noise.next())),
                     heading_rad: Some(frames::wrap_angle_rad(h + 0.1 * sigma * noise.next())),
                 });
-                // Fine integration of the body-frame lag.
-                let u = cmd.translation_input();
-                let target = frames::INPUT_TO_BODY
-                    * nalgebra::Vector3::new(k[0] * u[0], k[1] * u[1], k[2] * u[2]);
+                // Fine integration of the body-frame lag, the command `latency_s` late.
+                let mut late = cmd;
+                let a_late = input(t - latency_s);
+                match axis {
+                    0 => late.roll_rad = a_late,
+                    1 => late.pitch_rad = a_late,
+                    2 => late.vz_mps = a_late,
+                    _ => late.yaw_rate_radps = a_late,
+                }
+                let u = late.translation_input();
                 let bt = frames::body_taus_s(tau[0], tau[1], tau[2]);
+                // The gust factor random-walks (0.3 per √s), independent of the tests.
+                gust += 0.3 * dt.sqrt() * noise.next();
                 for _ in 0..10 {
                     let hs = dt / 10.0;
+                    if attitude_lag_s > 0.0 {
+                        for j in 0..2 {
+                            att[j] = u[j] + (att[j] - u[j]) * (-hs / attitude_lag_s).exp();
+                        }
+                    } else {
+                        att = [u[0], u[1]];
+                    }
+                    let target = frames::INPUT_TO_BODY
+                        * nalgebra::Vector3::new(k[0] * att[0], k[1] * att[1], k[2] * u[2]);
                     let r = frames::body_to_world(h);
-                    let w = nalgebra::Vector3::new(wind[0], wind[1], 0.0);
+                    let w = nalgebra::Vector3::new(wind[0] * gust, wind[1] * gust, 0.0);
                     let vb = r.transpose() * (nalgebra::Vector3::from(v) - w);
                     let mut nb = vb;
                     for j in 0..3 {
@@ -1480,7 +1041,7 @@ mod tests {
                     assert!((t.value / tt - 1.0).abs() < 0.05, "{f:?}");
                     assert!((t.value - tt).abs() < 2.0 * t.ci95, "{f:?}");
                 }
-                assert!(f.r2 > 0.99, "{f:?}");
+                assert!(f.r2 > 0.95, "{f:?}");
             }
         }
     }
@@ -1491,7 +1052,17 @@ mod tests {
         // lag couples the two axes, which the joint fit follows.
         let k = [12.0, 20.0, 0.8, 1.3];
         let tau = [1.2, 2.1, 0.6];
-        let segs = synthetic_with(k, tau, 0.4, 0.002, 7, [0.0; 2], 0.8);
+        let segs = synthetic_with(
+            k,
+            tau,
+            0.4,
+            0.002,
+            7,
+            Extra {
+                yaw_rate: 0.8,
+                ..Extra::default()
+            },
+        );
         let (fit, errors) = fit_model(&segs[..2], &[Axis::Roll, Axis::Pitch]);
         assert!(errors.is_empty(), "{errors:?}");
         let (r, p) = (fit.roll.unwrap(), fit.pitch.unwrap());
@@ -1508,19 +1079,40 @@ mod tests {
     }
 
     #[test]
-    fn a_steady_wind_biases_the_plain_fit_and_the_disturbance_fit_recovers() {
+    fn a_drifting_wind_attitude_lag_and_latency_are_modelled() {
+        // What an output-error fit of the servo's model cannot take: a wind that drifts
+        // through every test, a 0.14 s attitude lag and a 40 ms latency. The prediction-error
+        // fit models all three: K and τ within their 95 % intervals (which the drift widens),
+        // the lag and the latency found.
         let k = [12.0, 20.0, 0.8, 1.3];
         let tau = [1.2, 2.1, 0.6];
-        let segs = synthetic_with(k, tau, 0.0, 0.002, 8, [0.3, -0.2], 0.0);
-        let plain = fit_horizontal(&segs[..2], false).0.unwrap();
-        let with = fit_axis_with(&segs[..2], Axis::Roll, true).unwrap();
-        let err = |f: &AxisFit| (f.gain.value / k[0] - 1.0).abs();
-        assert!(err(&with) < 0.05, "{with:?}");
-        assert!(
-            (with.tau_s.unwrap().value / tau[0] - 1.0).abs() < 0.05,
-            "{with:?}"
-        );
-        assert!(err(&plain) > 2.0 * err(&with), "{plain:?} vs {with:?}");
+        let extra = Extra {
+            wind: [0.3, -0.2],
+            attitude_lag_s: 0.14,
+            latency_s: 0.04,
+            ..Extra::default()
+        };
+        let segs = synthetic_with(k, tau, 0.3, 0.0005, 8, extra);
+        let (roll, pitch) = fit_horizontal_pem(&segs[..2]);
+        let vz = fit_vz_pem(&segs[2..3]).unwrap();
+        for (f, kk, tt) in [
+            (roll.clone().unwrap(), k[0], tau[0]),
+            (pitch.unwrap(), k[1], tau[1]),
+            (vz, k[2], tau[2]),
+        ] {
+            // Within the interval, or 1 % where it is narrower than the synthetic plant's own
+            // integration error (the vertical axis has no wind).
+            let t = f.tau_s.unwrap();
+            assert!(
+                (f.gain.value - kk).abs() < f.gain.ci95.max(0.01 * kk),
+                "{f:?}"
+            );
+            assert!((t.value - tt).abs() < t.ci95.max(0.01 * tt), "{f:?}");
+            assert!((f.gain.value / kk - 1.0).abs() < 0.15, "{f:?}");
+            assert!((f.latency_s.unwrap() - 0.04).abs() < 0.01, "{f:?}");
+        }
+        let lag = roll.unwrap().attitude_lag_s.unwrap();
+        assert!((lag - 0.14).abs() < 0.03, "attitude lag {lag}");
     }
 
     #[test]
