@@ -7,7 +7,7 @@
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::script::{Scene, Stage};
 use dronecine_runtime::backend::FlightState;
-use dronecine_runtime::calibrate::{calibrate, Plan};
+use dronecine_runtime::calibrate::{calibrate, Calibration, Plan};
 use dronecine_runtime::flight::{Backends, NoObserver, NullSink};
 use dronecine_runtime::identify::Axis;
 use dronecine_runtime::record::ControllerSetup;
@@ -39,6 +39,27 @@ fn truth_profile() -> Profile {
     p
 }
 
+/// The default calibration flight on a simulator of `plant` from `prior`: the outcome and
+/// the drone's state at the end.
+fn calibrate_on(cfg: &SimConfig, plant: &Profile, prior: &Profile) -> (Calibration, FlightState) {
+    let scene = scene();
+    let sim = Simulator::new(cfg, plant, &scene).unwrap();
+    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
+    let cal = calibrate(
+        Backends {
+            drone: &mut drone,
+            mocap: &mut mocap,
+            clock: &mut clock,
+        },
+        &scene.stage,
+        prior,
+        &Plan::default(),
+        None,
+    )
+    .unwrap();
+    (cal, sim.truth().state)
+}
+
 #[test]
 fn recovers_a_different_plant_within_5_percent_from_the_prior() {
     let prior = Profile::builtin("ardrone2").unwrap();
@@ -49,21 +70,7 @@ fn recovers_a_different_plant_within_5_percent_from_the_prior() {
         ..Effects::none()
     };
     cfg.mocap_position_sigma_m = 0.001; // 1 mm, three times the default
-    let scene = scene();
-    let sim = Simulator::new(&cfg, &truth, &scene).unwrap();
-    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
-    let cal = calibrate(
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &scene.stage,
-        &prior,
-        &Plan::default(),
-        None,
-    )
-    .unwrap();
+    let (cal, end_state) = calibrate_on(&cfg, &truth, &prior);
     assert!(cal.errors.is_empty(), "{:?}", cal.errors);
     let out = cal.profile.as_ref().unwrap();
     let (m, t) = (&out.model, &truth.model);
@@ -106,7 +113,7 @@ fn recovers_a_different_plant_within_5_percent_from_the_prior() {
             }
         }
     }
-    assert_eq!(sim.truth().state, FlightState::Landed);
+    assert_eq!(end_state, FlightState::Landed);
 }
 
 #[test]
@@ -218,21 +225,7 @@ fn on_the_full_simulator_the_identified_profile_flies_the_square_within_10_perce
     prior.model.tau_pitch_s = 1.0;
     prior.model.gain_vz = 0.7;
     prior.model.tau_vz_s = 0.8;
-    let scene = scene();
-    let sim = Simulator::new(&SimConfig::new(3), &nominal, &scene).unwrap();
-    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
-    let cal = calibrate(
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &scene.stage,
-        &prior,
-        &Plan::default(),
-        None,
-    )
-    .unwrap();
+    let (cal, end_state) = calibrate_on(&SimConfig::new(3), &nominal, &prior);
     assert!(cal.errors.is_empty(), "{:?}", cal.errors);
     let identified = cal.profile.clone().unwrap();
     let (m, t) = (&identified.model, &nominal.model);
@@ -270,7 +263,7 @@ fn on_the_full_simulator_the_identified_profile_flies_the_square_within_10_perce
         roll.latency_s, roll.attitude_lag_s
     );
     assert!((roll.latency_s.unwrap() - 0.04).abs() < 0.015, "{roll:?}");
-    assert_eq!(sim.truth().state, FlightState::Landed);
+    assert_eq!(end_state, FlightState::Landed);
     // The square, the identified profile against the nominal one, on two seeded flights.
     for seed in [7, 9] {
         let (with_nominal, with_identified) = (
