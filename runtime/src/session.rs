@@ -95,13 +95,42 @@ impl std::fmt::Display for SessionError {
 
 impl std::error::Error for SessionError {}
 
+/// The servo a flight runs, or why it cannot.
+fn servo(
+    setup: &ControllerSetup,
+    profile: &Profile,
+    rate_hz: f64,
+) -> Result<Box<dyn Controller>, SessionError> {
+    controller_for(setup, profile, rate_hz)
+        .map_err(|e| SessionError::Setup(format!("the servo cannot be set up: {e}")))
+}
+
+/// What the flight loop needs of a simulated or hardware flight (default safety limits).
+fn flight_setup<'a>(
+    script: &'a Script,
+    source: &'a str,
+    scene: &'a Scene,
+    profile: &'a Profile,
+    rate_hz: f64,
+    interrupts: Option<&'a std::sync::atomic::AtomicU32>,
+) -> FlightSetup<'a> {
+    FlightSetup {
+        script,
+        source,
+        scene,
+        profile,
+        rate_hz,
+        safety: Safety::default(),
+        interrupts,
+    }
+}
+
 pub fn fly_simulated(
     f: &SimFlight,
     sink: &mut dyn FlightSink,
     observer: &mut dyn Observer,
 ) -> Result<FlightReport, SessionError> {
-    let mut controller = controller_for(&f.controller, f.profile, f.rate_hz)
-        .map_err(|e| SessionError::Setup(format!("the servo cannot be set up: {e}")))?;
+    let mut controller = servo(&f.controller, f.profile, f.rate_hz)?;
     let mut config = f.sim.clone();
     (config.start_position_m, config.start_heading_rad) = start_pose(f.script, f.scene, f.profile);
     // The actors wait on their marks until the flight loop's "action!".
@@ -117,15 +146,14 @@ pub fn fly_simulated(
         plain = sim.clock();
         &mut plain
     };
-    let setup = FlightSetup {
-        script: f.script,
-        source: f.source,
-        scene: f.scene,
-        profile: f.profile,
-        rate_hz: f.rate_hz,
-        safety: Safety::default(),
-        interrupts: f.interrupts,
-    };
+    let setup = flight_setup(
+        f.script,
+        f.source,
+        f.scene,
+        f.profile,
+        f.rate_hz,
+        f.interrupts,
+    );
     flight::fly(
         &setup,
         controller.as_mut(),
@@ -212,8 +240,7 @@ pub fn fly_hardware(
     sink: &mut dyn FlightSink,
     observer: &mut dyn Observer,
 ) -> Result<FlightReport, SessionError> {
-    let mut controller = controller_for(&f.controller, f.profile, f.rate_hz)
-        .map_err(|e| SessionError::Setup(format!("the servo cannot be set up: {e}")))?;
+    let mut controller = servo(&f.controller, f.profile, f.rate_hz)?;
     let mut hw = connect_hardware(
         f.drone,
         f.mocap,
@@ -221,15 +248,14 @@ pub fn fly_hardware(
         f.scene.actors.iter().map(|a| a.name.as_str()),
         f.profile,
     )?;
-    let setup = FlightSetup {
-        script: f.script,
-        source: f.source,
-        scene: f.scene,
-        profile: f.profile,
-        rate_hz: f.rate_hz,
-        safety: Safety::default(),
-        interrupts: f.interrupts,
-    };
+    let setup = flight_setup(
+        f.script,
+        f.source,
+        f.scene,
+        f.profile,
+        f.rate_hz,
+        f.interrupts,
+    );
     flight::fly(&setup, controller.as_mut(), hw.backends(), sink, observer)
         .map_err(SessionError::Flight)
 }
