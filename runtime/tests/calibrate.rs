@@ -7,7 +7,7 @@
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::script::{Scene, Stage};
 use dronecine_runtime::backend::FlightState;
-use dronecine_runtime::calibrate::{calibrate, Calibration, Plan};
+use dronecine_runtime::calibrate::{calibrate, CalibrateError, Calibration, Plan};
 use dronecine_runtime::flight::{Backends, NoObserver, NullSink};
 use dronecine_runtime::identify::Axis;
 use dronecine_runtime::record::ControllerSetup;
@@ -39,13 +39,19 @@ fn truth_profile() -> Profile {
     p
 }
 
-/// The default calibration flight on a simulator of `plant` from `prior`: the outcome and
+/// A calibration flight on a simulator of `plant` over `scene`, from `prior`: the outcome and
 /// the drone's state at the end.
-fn calibrate_on(cfg: &SimConfig, plant: &Profile, prior: &Profile) -> (Calibration, FlightState) {
-    let scene = scene();
-    let sim = Simulator::new(cfg, plant, &scene).unwrap();
+fn fly_calibration(
+    cfg: &SimConfig,
+    plant: &Profile,
+    prior: &Profile,
+    scene: &Scene,
+    plan: &Plan,
+    interrupts: Option<&std::sync::atomic::AtomicU32>,
+) -> (Result<Calibration, CalibrateError>, FlightState) {
+    let sim = Simulator::new(cfg, plant, scene).unwrap();
     let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
-    let cal = calibrate(
+    let outcome = calibrate(
         Backends {
             drone: &mut drone,
             mocap: &mut mocap,
@@ -53,11 +59,16 @@ fn calibrate_on(cfg: &SimConfig, plant: &Profile, prior: &Profile) -> (Calibrati
         },
         &scene.stage,
         prior,
-        &Plan::default(),
-        None,
-    )
-    .unwrap();
-    (cal, sim.truth().state)
+        plan,
+        interrupts,
+    );
+    (outcome, sim.truth().state)
+}
+
+/// The default calibration flight on the 6 × 6 × 3 m stage; it must succeed.
+fn calibrate_on(cfg: &SimConfig, plant: &Profile, prior: &Profile) -> (Calibration, FlightState) {
+    let (outcome, state) = fly_calibration(cfg, plant, prior, &scene(), &Plan::default(), None);
+    (outcome.unwrap(), state)
 }
 
 #[test]
@@ -129,29 +140,17 @@ fn a_stage_too_small_refuses_the_test_and_lands() {
         },
         ..scene()
     };
-    let sim = Simulator::new(&cfg, &prior, &scene).unwrap();
-    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
     let plan = Plan {
         axes: vec![Axis::Roll],
         ..Plan::default()
     };
-    let err = calibrate(
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &scene.stage,
-        &prior,
-        &plan,
-        None,
-    )
-    .expect_err("refused");
+    let (outcome, state) = fly_calibration(&cfg, &prior, &prior, &scene, &plan, None);
+    let err = outcome.expect_err("refused");
     assert!(
         err.to_string().contains("too small for the roll test"),
         "{err}"
     );
-    assert_eq!(sim.truth().state, FlightState::Landed);
+    assert_eq!(state, FlightState::Landed);
 }
 
 #[test]
@@ -161,25 +160,19 @@ fn an_interrupt_lands_the_drone_and_stops_the_calibration() {
         effects: Effects::none(),
         ..SimConfig::new(5)
     };
-    let scene = scene();
-    let sim = Simulator::new(&cfg, &prior, &scene).unwrap();
-    let (mut drone, mut mocap, mut clock) = (sim.drone(), sim.mocap(), sim.clock());
     // Ctrl-C pressed once before the first test: hover, land, error.
     let interrupts = std::sync::atomic::AtomicU32::new(1);
-    let err = calibrate(
-        Backends {
-            drone: &mut drone,
-            mocap: &mut mocap,
-            clock: &mut clock,
-        },
-        &scene.stage,
+    let (outcome, state) = fly_calibration(
+        &cfg,
         &prior,
+        &prior,
+        &scene(),
         &Plan::default(),
         Some(&interrupts),
-    )
-    .expect_err("interrupted");
+    );
+    let err = outcome.expect_err("interrupted");
     assert!(err.to_string().contains("interrupted"), "{err}");
-    assert_eq!(sim.truth().state, FlightState::Landed);
+    assert_eq!(state, FlightState::Landed);
 }
 
 /// RMS position error of `shots/square.psl` flown by the LQG servo with `servo`'s model on

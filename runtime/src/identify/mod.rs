@@ -304,20 +304,18 @@ pub fn fit_model(segments: &[Segment], axes: &[Axis]) -> (ModelFit, Vec<FitError
     (out, errors)
 }
 
-/// Fits one axis and checks the fit's quality.
+/// Fits one axis and checks the fit's quality ([`fit_model`] on that axis alone).
 pub fn fit_axis(segments: &[Segment], axis: Axis) -> Result<AxisFit, FitError> {
-    let fit = match axis {
-        Axis::Roll => fit_horizontal_pem(segments).0,
-        Axis::Pitch => fit_horizontal_pem(segments).1,
-        Axis::Vz => fit_vz_pem(segments),
-        Axis::Yaw => fit_heading(segments),
+    let (fit, mut errors) = fit_model(segments, &[axis]);
+    match (errors.pop(), fit.get(axis)) {
+        (Some(e), _) => Err(e),
+        (None, Some(f)) => Ok(f.clone()),
+        (None, None) => Err(FitError {
+            axis,
+            problem: FitProblem::NotExcited,
+            fit: None,
+        }),
     }
-    .ok_or(FitError {
-        axis,
-        problem: FitProblem::NotExcited,
-        fit: None,
-    })?;
-    check(fit)
 }
 
 fn check(fit: AxisFit) -> Result<AxisFit, FitError> {

@@ -617,7 +617,8 @@ fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, x0: &[f64], step: &[f64], iters: usize
     simplex.swap_remove(0).0
 }
 
-/// The fit of one family. `T` time constants (`tied`: the search starts from a common τ).
+/// The fit of one family: `T` time constants (the search starts from a grid on a common main
+/// τ, [`Family::grid_taus`]), only those marked in `tau_free` searched.
 fn fit<F, const N: usize, const M: usize, const L: usize, const T: usize>(
     segs: &[Vec<Tick<M, L>>],
     excited: [bool; L],
