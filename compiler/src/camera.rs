@@ -102,7 +102,7 @@ pub struct Orientation {
 pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2]) -> Orientation {
     let d = target_m - position_m;
     let b = d.y.atan2(d.x);
-    let e = d.z.atan2(d.x.hypot(d.y));
+    let e = d.z.atan2(crate::norm_xy(d.x, d.y));
     let xp = screen[0] / lens.sx();
     let yp = screen[1] / lens.sy();
     let n = (1.0 + xp * xp + yp * yp).sqrt();
@@ -131,14 +131,14 @@ pub fn orient_fixed_pitch(
     // component along the heading. Solve r·Sx = x·f for the heading.
     let d = target_m - position_m;
     let b = d.y.atan2(d.x);
-    let rho = d.x.hypot(d.y);
+    let rho = crate::norm_xy(d.x, d.y);
     let xp = screen_x / lens.sx();
     // Let δ = heading − bearing; r = ρ·sin δ, f = cos τ·ρ·cos δ + sin τ·dz.
     // ρ sin δ = x' (cos τ ρ cos δ + sin τ dz)  →  ρ sin δ − x' cos τ ρ cos δ = x' sin τ dz.
     let a = rho;
     let c = -xp * pitch_rad.cos() * rho;
     let rhs = xp * pitch_rad.sin() * d.z;
-    let amp = a.hypot(c);
+    let amp = crate::norm_xy(a, c);
     if amp < 1e-12 {
         return dronecine_grammar::vocab::wrap_angle_rad(b);
     }

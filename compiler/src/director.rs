@@ -930,12 +930,12 @@ impl Director {
                     None => {
                         // Along the path: the target's direction of travel.
                         let a = plan.at(into_s, actors);
-                        let v = if a.v.x.hypot(a.v.y) > 1e-3 {
+                        let v = if crate::norm_xy(a.v.x, a.v.y) > 1e-3 {
                             a.v
                         } else {
                             plan.at((into_s + 0.5).min(duration), actors).p - a.p
                         };
-                        if v.x.hypot(v.y) > 1e-6 {
+                        if crate::norm_xy(v.x, v.y) > 1e-6 {
                             (v.y.atan2(v.x), 0.0)
                         } else {
                             (self.heading.heading_rad, 0.0)
@@ -1002,7 +1002,7 @@ pub fn extrapolate(a: &ActorPose, dt_s: f64) -> ActorPose {
 /// Cylindrical coordinates (radius, angle, height) of `p` about the vertical through `c`.
 fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
     let d = p - c;
-    (d.x.hypot(d.y), d.y.atan2(d.x), p.z)
+    (crate::norm_xy(d.x, d.y), d.y.atan2(d.x), p.z)
 }
 
 /// The point a fraction `s` of the way from `a` to `b`: around the pivot's vertical in
@@ -1049,9 +1049,9 @@ fn fit_duration(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>, t0: f64, limits: &Stee
             let (p0, p1, p2) = (at(k - 1), at(k), at(k + 1));
             let v = (p2 - p0) / (2.0 * h);
             let acc = (p2 - 2.0 * p1 + p0) / (h * h);
-            v_max = v_max.max(v.x.hypot(v.y));
+            v_max = v_max.max(crate::norm_xy(v.x, v.y));
             vz_max = vz_max.max(v.z.abs());
-            a_max = a_max.max(acc.x.hypot(acc.y));
+            a_max = a_max.max(crate::norm_xy(acc.x, acc.y));
         }
         let scale = (v_max / (0.8 * limits.speed_h_mps))
             .max(vz_max / (0.8 * limits.speed_v_mps))

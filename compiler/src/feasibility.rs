@@ -95,7 +95,7 @@ impl Monitor {
     pub fn tilt_needed_rad(&self, v: &Vec3, a: &Vec3) -> f64 {
         let x = self.tau * a.x + v.x;
         let y = self.tau * a.y + v.y;
-        x.hypot(y) / self.gain
+        crate::norm_xy(x, y) / self.gain
     }
 
     pub fn record(&mut self, s: &Sample, goal: &Kinematics, actors: &[ActorPose], in_shot: bool) {
@@ -107,21 +107,21 @@ impl Monitor {
         let v = Vec3::from(s.velocity_mps);
         let a = Vec3::from(s.acceleration_mps2);
         if in_shot {
-            st.demand_speed.see(goal.v.x.hypot(goal.v.y), t);
-            st.demand_accel.see(goal.a.x.hypot(goal.a.y), t);
+            st.demand_speed.see(crate::norm_xy(goal.v.x, goal.v.y), t);
+            st.demand_accel.see(crate::norm_xy(goal.a.x, goal.a.y), t);
             st.lag.see((goal.p - p).norm(), t);
         }
-        st.speed.see(v.x.hypot(v.y), t);
+        st.speed.see(crate::norm_xy(v.x, v.y), t);
         let x = self.tau * a.x + v.x;
         let y = self.tau * a.y + v.y;
-        st.tilt.see(x.hypot(y) / self.gain, t);
+        st.tilt.see(crate::norm_xy(x, y) / self.gain, t);
         st.vz.see(v.z.abs(), t);
         st.yaw_rate.see(s.heading_rate_radps.abs(), t);
         for (i, actor) in actors.iter().enumerate() {
             if p.z > actor.position_m[2] + actor.height_m + self.safety_m {
                 continue;
             }
-            let d = (p.x - actor.position_m[0]).hypot(p.y - actor.position_m[1]);
+            let d = crate::norm_xy(p.x - actor.position_m[0], p.y - actor.position_m[1]);
             let intrusion = self.safety_m - d;
             if intrusion > st.intrusion.value {
                 st.intrusion = Peak {

@@ -1050,7 +1050,7 @@ fn place_blend(
     let centre = blend_centre(from, to, s, actors);
     let cyl = |p: &Vec3| {
         let d = p - centre;
-        (d.x.hypot(d.y), d.y.atan2(d.x), d.z)
+        (crate::norm_xy(d.x, d.y), d.y.atan2(d.x), d.z)
     };
     let (r0, a0, z0) = cyl(&p0.position_m);
     let (r1, a1, z1) = cyl(&p1.position_m);

@@ -73,7 +73,7 @@ pub struct HeadingState {
 
 /// Scale the horizontal part of `v` to at most `h` and the vertical part to at most `z`.
 pub fn truncate_hv(v: Vec3, h: f64, z: f64) -> Vec3 {
-    let n = v.x.hypot(v.y);
+    let n = crate::norm_xy(v.x, v.y);
     let s = if n > h && n > 0.0 { h / n } else { 1.0 };
     Vec3::new(v.x * s, v.y * s, v.z.clamp(-z, z))
 }
