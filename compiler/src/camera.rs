@@ -35,7 +35,8 @@ impl Lens {
 
     /// The camera-frame ray (right, forward, up) through a screen point: `(x/Sx, 1, y/Sy)`.
     pub fn ray(&self, screen: [f64; 2]) -> Vec3 {
-        Vec3::new(screen[0] / self.sx(), 1.0, screen[1] / self.sy())
+        let sx = self.sx();
+        Vec3::new(screen[0] / sx, 1.0, screen[1] / (sx * self.aspect))
     }
 }
 
@@ -83,7 +84,8 @@ impl CameraPose {
         if c.y <= 1e-9 {
             return None;
         }
-        Some([c.x * lens.sx() / c.y, c.z * lens.sy() / c.y])
+        let sx = lens.sx();
+        Some([c.x * sx / c.y, c.z * (sx * lens.aspect) / c.y])
     }
 }
 
@@ -103,8 +105,9 @@ pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2])
     let d = target_m - position_m;
     let b = d.y.atan2(d.x);
     let e = d.z.atan2(crate::norm_xy(d.x, d.y));
-    let xp = screen[0] / lens.sx();
-    let yp = screen[1] / lens.sy();
+    let sx = lens.sx();
+    let xp = screen[0] / sx;
+    let yp = screen[1] / (sx * lens.aspect);
     let n = (1.0 + xp * xp + yp * yp).sqrt();
     let arg = n * e.sin() / (1.0 + yp * yp).sqrt();
     let clamped = !(-1.0..=1.0).contains(&arg);

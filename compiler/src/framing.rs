@@ -281,8 +281,9 @@ fn band_distance_m(
     level: bool,
 ) -> Option<f64> {
     if level {
-        let xp = screen[0] / lens.sx();
-        return (half_m > 0.0).then(|| half_m * lens.sy() * (1.0 + xp * xp).sqrt());
+        let sx = lens.sx();
+        let xp = screen[0] / sx;
+        return (half_m > 0.0).then(|| half_m * sx * lens.aspect * (1.0 + xp * xp).sqrt());
     }
     size::exact_distance_m(
         half_m,
@@ -1137,12 +1138,13 @@ fn place_one(
                 elevation_rad: 0.0,
             },
         );
-        let xp = o.screen[0] / lens.sx();
+        let sx = lens.sx();
+        let xp = o.screen[0] / sx;
         let depth = o.distance_m / (1.0 + xp * xp).sqrt();
         Vec3::new(
             horizontal.x,
             horizontal.y,
-            m.z - o.screen[1] * depth / lens.sy(),
+            m.z - o.screen[1] * depth / (sx * lens.aspect),
         )
     } else {
         sphere::position(
@@ -1208,9 +1210,10 @@ fn place_two(
         // Level camera: the altitude puts the primary's aim point at its screen y.
         let (target, screen) = primary_target(t, actors);
         let rho = (target - c).xy().norm();
-        let xp = screen[0] / lens.sx();
+        let sx = lens.sx();
+        let xp = screen[0] / sx;
         let depth = rho / (1.0 + xp * xp).sqrt();
-        c.z = target.z - screen[1] * depth / lens.sy();
+        c.z = target.z - screen[1] * depth / (sx * lens.aspect);
     }
     let (heading_rad, pitch_rad, f) = if orient {
         orient_visual(&Visual::Two(*t), actors, lens, gimbal, &c)
