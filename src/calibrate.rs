@@ -1,5 +1,5 @@
 //! `dronecine calibrate` and `dronecine identify`: measure the servo's model (K and τ per
-//! axis, K_ψ) by flying doublets around hover (on the embedded simulator by default, or on a
+//! axis, K_ψ) by flying doublets and steps on each input around hover (on the embedded simulator by default, or on a
 //! real AR.Drone 2.0 with NatNet positions, `--drone/--mocap`), or from any flight log; print each fitted value with its 95 % interval, the fit's R² and the
 //! previous profile's value; write the profile (`Profile::to_toml`) only when every fit is
 //! good, else exit 1 naming the test to repeat.
@@ -46,8 +46,8 @@ pub struct CalibrateArgs {
     /// Control rate, Hz.
     #[arg(long, value_name = "HZ", default_value_t = 100.0)]
     rate: f64,
-    /// Tests per axis [default: 12 on roll and pitch, 4 on vz and yaw]. Roll and pitch fly
-    /// doublets (alternating sign), vz steps, yaw doublets then steps.
+    /// Tests per axis [default: 12 on roll and pitch, 4 on vz and yaw]. Each sign in turn; roll
+    /// and pitch fly doublets, the last two short steps; vz and yaw doublets then steps.
     #[arg(long, value_name = "N")]
     repeats: Option<usize>,
     /// Write the calibration report (per axis the measured response against the fitted

@@ -82,7 +82,7 @@ enum Command {
     },
     /// Print the LQG servo's gains for a drone profile (P, K1, N1, poles, Kalman gain, k2).
     Gains(gains::Args),
-    /// Measure the servo's model: fly small doublets on each input around hover (on the
+    /// Measure the servo's model: fly small doublets and steps on each input around hover (on the
     /// embedded simulator by default, or a real drone with --drone/--mocap) and fit K and τ
     /// per axis and K_ψ by least squares.
     ///

@@ -90,10 +90,10 @@ impl Axis {
     /// The test that excites this axis (for "repeat …" messages).
     pub fn test(self) -> &'static str {
         match self {
-            Axis::Roll => "the roll doublets (`dronecine calibrate --axis roll`)",
-            Axis::Pitch => "the pitch doublets (`dronecine calibrate --axis pitch`)",
-            Axis::Vz => "the vertical-speed doublets (`dronecine calibrate --axis vz`)",
-            Axis::Yaw => "the yaw-rate doublets (`dronecine calibrate --axis yaw`)",
+            Axis::Roll => "the roll tests (`dronecine calibrate --axis roll`)",
+            Axis::Pitch => "the pitch tests (`dronecine calibrate --axis pitch`)",
+            Axis::Vz => "the vertical-speed tests (`dronecine calibrate --axis vz`)",
+            Axis::Yaw => "the yaw-rate tests (`dronecine calibrate --axis yaw`)",
         }
     }
 
