@@ -572,8 +572,11 @@ pub fn fly_tests(
 
 /// The calibration report of one axis (SVG): per test (up to four), the measured response
 /// (body-axis position, or the unwrapped heading) against the fitted model's and the previous
-/// profile's, each with its initial state fitted to the test; the fitted values ± 95 % next to
-/// the previous ones in the title. `None` when the axis has no fit.
+/// profile's, each with its initial state and a steady wind fitted to the test by least
+/// squares, both driven by the input as the fit says the drone applied it
+/// ([`identify::as_applied`]: latency, attitude lag, descent gain), so that the two curves
+/// differ by K and τ alone; the fitted values ± 95 % next to the previous ones in the title.
+/// `None` when the axis has no fit.
 pub fn report_svg(
     axis: Axis,
     segments: &[&Segment],
@@ -620,10 +623,19 @@ pub fn report_svg(
                 .collect()
         }))
     };
+    let how = match axis {
+        Axis::Yaw => "start heading fitted",
+        Axis::Vz => "start and steady drift fitted, latency and descent gain as fitted",
+        Axis::Roll | Axis::Pitch => {
+            "start and steady wind fitted, latency and attitude lag as fitted"
+        }
+    };
     let shown: Vec<(Vec<Curve>, Vec<Curve>)> = segments
         .iter()
         .take(4)
-        .filter_map(|s| {
+        .map(|s| identify::as_applied(s, fit))
+        .filter_map(|applied| {
+            let s = &applied;
             match (
                 identify::simulate_fit(s, fit),
                 identify::simulate_fit(s, &prev_fit),
@@ -673,7 +685,9 @@ pub fn report_svg(
         12.0,
         Anchor::Start,
         "#666666",
-        &format!("measured (black), fitted model (blue), previous profile (red, dashed); {unit} against s"),
+        &format!(
+            "measured (black), fitted (blue), previous (red, dashed): {how}; {unit} against s"
+        ),
     );
     for (i, (fitted, prev)) in shown.iter().enumerate() {
         let y0 = top + panel_h * i as f64;

@@ -760,21 +760,89 @@ fn fit_heading(segments: &[Segment]) -> Option<AxisFit> {
     })
 }
 
+/// The commands of a test as the fitted model says the drone applied them, for plotting the
+/// fit against the test: on roll and pitch each tilt delayed by the fitted latency and passed
+/// through the fitted attitude lag; on the vertical axis delayed, and each descent scaled by
+/// the descent's gain over the climb's. Before the test the input is taken as zero (the
+/// drone was held settled). The servo's model has none of these: the plot shows them so that
+/// the fitted and the previous K and τ are compared on the same applied input.
+pub fn as_applied(seg: &[Sample], fit: &AxisFit) -> Segment {
+    let latency_s = fit.latency_s.unwrap_or(0.0).max(0.0);
+    let lag_s = fit.attitude_lag_s.unwrap_or(0.0).max(0.0);
+    let descent = match fit.descent_gain {
+        Some(d) if fit.gain.value > 0.0 && d.value.is_finite() => d.value / fit.gain.value,
+        _ => 1.0,
+    };
+    let mut out = seg.to_vec();
+    let (mut j, mut filtered) = (None::<usize>, [0.0f64; 2]);
+    for k in 0..seg.len() {
+        // The command in force at t_k − latency.
+        let at = seg[k].t_s - latency_s;
+        while seg
+            .get(j.map_or(0, |j| j + 1))
+            .is_some_and(|n| n.t_s <= at + 1e-12)
+        {
+            j = Some(j.map_or(0, |j| j + 1));
+        }
+        let delayed = j.map_or(Command::HOVER, |j| seg[j].command);
+        let c = &mut out[k].command;
+        match fit.axis {
+            Axis::Roll | Axis::Pitch => {
+                // The attitude over this tick: the lag's response to the delayed command,
+                // averaged over the tick (the model holds its input through the tick).
+                let dt = seg.get(k + 1).map_or(0.0, |n| n.t_s - seg[k].t_s);
+                let a = if lag_s > 0.0 {
+                    1.0 - (-dt / lag_s).exp()
+                } else {
+                    1.0
+                };
+                let target = [delayed.roll_rad, delayed.pitch_rad];
+                let mut held = [0.0; 2];
+                for i in 0..2 {
+                    let before = filtered[i];
+                    filtered[i] += a * (target[i] - before);
+                    held[i] = if lag_s > 0.0 {
+                        0.5 * (before + filtered[i])
+                    } else {
+                        target[i]
+                    };
+                }
+                c.roll_rad = held[0];
+                c.pitch_rad = held[1];
+            }
+            Axis::Vz => {
+                let u = delayed.vz_mps;
+                c.vz_mps = if u < 0.0 { u * descent } else { u };
+            }
+            Axis::Yaw => {}
+        }
+    }
+    out
+}
+
 /// The fitted model's response on one segment, for plotting against the measurement: the
 /// measured body coordinate (or unwrapped heading) and the model's, per sample (`None` where
-/// nothing was measured). Initial state from the same least squares as the fit.
+/// nothing was measured). The initial position and velocity and a steady wind (or vertical
+/// drift) from least squares on the segment.
 pub fn simulate_fit(seg: &[Sample], fit: &AxisFit) -> Option<Vec<(f64, Option<f64>, f64)>> {
     match (fit.axis.input_index(), fit.tau_s) {
         (Some(j), Some(tau)) => {
             let d = prepare(seg, j)?;
             let (g, h) = responses(&d, tau.value);
+            // A steady wind (or vertical drift): the response to a constant unit input.
+            let steady = AxisData {
+                y: d.y.clone(),
+                u: vec![1.0; d.u.len()],
+                dt: d.dt.clone(),
+            };
+            let (_, w) = responses(&steady, tau.value);
             let mask: Vec<bool> = d.y.iter().map(|y| y.is_some()).collect();
             let ones = vec![1.0; g.len()];
             let orig: Vec<f64> = (0..g.len())
                 .map(|i| d.y[i].unwrap_or(0.0) - fit.gain.value * h[i])
                 .collect();
             let mut r = orig.clone();
-            project_out(&mut r, &[&ones, &g], &mask);
+            project_out(&mut r, &[&ones, &g, &w], &mask);
             Some(
                 (0..g.len())
                     .map(|i| {
@@ -848,7 +916,8 @@ pub fn segments_from_log(ticks: &[crate::log::LoggedTick], window_s: f64) -> Vec
 
 /// The joint horizontal model's response on one segment (turning or not), for plotting:
 /// per sample the time, the measured world (x, y) and the model's, with `roll` and `pitch`
-/// given as (K, τ) and the initial position and velocity fitted by least squares.
+/// given as (K, τ) and the initial position and velocity and a steady wind fitted by least
+/// squares.
 #[allow(clippy::type_complexity)]
 pub fn simulate_plane(
     seg: &[Sample],
@@ -862,7 +931,7 @@ pub fn simulate_plane(
     }
     let hr = plane_response(&d, taus, Drive::Roll);
     let hp = plane_response(&d, taus, Drive::Pitch);
-    let cols = plane_nuisance(&d, taus, false);
+    let cols = plane_nuisance(&d, taus, true);
     let basis: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
     let forced: Vec<f64> = (0..d.y.len())
         .map(|i| roll.0 * hr[i] + pitch.0 * hp[i])
@@ -1161,5 +1230,114 @@ mod tests {
         let (back, _) = dronecine_compiler::profile::Profile::from_toml("cal", &p.to_toml())
             .expect("the calibrated profile loads");
         assert!((back.model.gain_pitch_mps_per_rad - p.model.gain_pitch_mps_per_rad).abs() < 1e-9);
+    }
+
+    /// The report's curve of a vertical doublet: the drone (descents twice as strong as
+    /// climbs, 40 ms of latency) is matched by the fitted model only on the input as applied.
+    #[test]
+    fn as_applied_delays_the_input_and_scales_descents() {
+        let (k, tau, latency, descent) = (1.0, 1.25, 0.04, 2.0);
+        let dt = 0.01;
+        let mut seg = Segment::new();
+        let (mut z, mut v) = (1.0, 0.0);
+        for i in 0..600 {
+            let t = i as f64 * dt;
+            let cmd = |t: f64| {
+                if (0.0..1.5).contains(&t) {
+                    0.3
+                } else if (1.5..3.0).contains(&t) {
+                    -0.3
+                } else {
+                    0.0
+                }
+            };
+            let mut c = Command::HOVER;
+            c.vz_mps = cmd(t);
+            seg.push(Sample {
+                t_s: t,
+                command: c,
+                position_m: Some([0.0, 0.0, z]),
+                heading_rad: Some(0.0),
+            });
+            // The plant, finely integrated: the command acts `latency` late.
+            for j in 0..100 {
+                let u = cmd(t + j as f64 * dt / 100.0 - latency);
+                let u = if u < 0.0 { descent * u } else { u };
+                v += dt / 100.0 * (k * u - v) / tau;
+                z += dt / 100.0 * v;
+            }
+        }
+        let fit = AxisFit {
+            axis: Axis::Vz,
+            gain: Estimate {
+                value: k,
+                ci95: 0.0,
+            },
+            tau_s: Some(Estimate {
+                value: tau,
+                ci95: 0.0,
+            }),
+            r2: 1.0,
+            rms: 0.0,
+            samples: seg.len(),
+            descent_gain: Some(Estimate {
+                value: descent * k,
+                ci95: 0.0,
+            }),
+            latency_s: Some(latency),
+            attitude_lag_s: None,
+        };
+        let applied = as_applied(&seg, &fit);
+        assert_eq!(applied[3].command.vz_mps, 0.0); // before the latency: nothing yet
+        assert_eq!(applied[10].command.vz_mps, 0.3);
+        assert_eq!(applied[160].command.vz_mps, -0.6); // a descent, twice as strong
+        let worst = |s: &[Sample]| {
+            simulate_fit(s, &fit)
+                .unwrap()
+                .iter()
+                .map(|(_, y, m)| (y.unwrap() - m).abs())
+                .fold(0.0, f64::max)
+        };
+        assert!(worst(&applied) < 0.005, "{}", worst(&applied));
+        assert!(worst(&seg) > 0.05, "{}", worst(&seg));
+    }
+
+    /// Tilts pass through the attitude lag after the latency.
+    #[test]
+    fn as_applied_lags_the_tilt() {
+        let seg: Segment = (0..200)
+            .map(|i| Sample {
+                t_s: i as f64 * 0.01,
+                command: Command {
+                    pitch_rad: 0.1,
+                    ..Command::HOVER
+                },
+                position_m: None,
+                heading_rad: None,
+            })
+            .collect();
+        let fit = AxisFit {
+            axis: Axis::Pitch,
+            gain: Estimate {
+                value: 17.5,
+                ci95: 0.0,
+            },
+            tau_s: Some(Estimate {
+                value: 1.7,
+                ci95: 0.0,
+            }),
+            r2: 1.0,
+            rms: 0.0,
+            samples: 0,
+            descent_gain: None,
+            latency_s: Some(0.05),
+            attitude_lag_s: Some(0.14),
+        };
+        let a = as_applied(&seg, &fit);
+        assert_eq!(a[4].command.pitch_rad, 0.0);
+        // One lag after the latency: 1 − 1/e of the step (the tick's mean, ±half a tick).
+        let at = a[5 + 14].command.pitch_rad / 0.1;
+        assert!((at - (1.0 - (-1.0f64).exp())).abs() < 0.03, "{at}");
+        assert!((a[199].command.pitch_rad - 0.1).abs() < 1e-4);
     }
 }
