@@ -10,9 +10,9 @@ use std::fmt::Write as _;
 use criterion::{criterion_group, criterion_main, Criterion};
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::Script;
-use dronecine_runtime::flight::{FlightSink, NoObserver, NullSink};
-use dronecine_runtime::log::{FlightLogWriter, LogScene};
-use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, TickRecord};
+use dronecine_runtime::flight::{NoObserver, NullSink};
+use dronecine_runtime::log::{FlightLogWriter, LogScene, LogThread};
+use dronecine_runtime::record::{ControllerSetup, FlightHeader};
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::SimConfig;
 
@@ -50,17 +50,6 @@ fn parse(text: &str) -> Script {
     let checked = dronecine_grammar::check(text, &opts);
     assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
     checked.script.unwrap()
-}
-
-struct Log(FlightLogWriter);
-
-impl FlightSink for Log {
-    fn tick(&mut self, r: &TickRecord) -> std::io::Result<()> {
-        self.0.write_tick(r)
-    }
-    fn event(&mut self, e: &Event) -> std::io::Result<()> {
-        self.0.write_event(e)
-    }
 }
 
 fn fly(text: &str, script: &Script, log: Option<&std::path::Path>) {
@@ -114,9 +103,10 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>) {
                 },
             )
             .unwrap();
-            let mut sink = Log(writer);
+            // As `shoot` writes it: on a thread of its own.
+            let mut sink = LogThread::spawn(writer, 100.0).unwrap();
             let r = fly_simulated(&flight, &mut sink, &mut NoObserver).unwrap();
-            sink.0.finish().unwrap();
+            sink.finish().unwrap();
             r
         }
     };

@@ -14,7 +14,9 @@ use dronecine_runtime::control::{
     Estimate, Measurement, Reference, TickFault, TickInput, TickOutput,
 };
 use dronecine_runtime::frames::{ActorPose, Command, Sample};
-use dronecine_runtime::log::{FlightLog, FlightLogWriter, LogError, LogScene, LoggedTick};
+use dronecine_runtime::log::{
+    cdr, FlightLog, FlightLogWriter, LogError, LogScene, LogThread, LoggedTick,
+};
 use dronecine_runtime::record::{
     ControllerSetup, Event, FlightHeader, FramingRecord, Phase, TickRecord,
 };
@@ -257,8 +259,8 @@ fn write_log(path: &Path, ticks: &[Tick], events: &[Event]) {
     w.finish().unwrap();
 }
 
+/// An event's float by bits (on `/events`, JSON, all NaNs are one NaN).
 fn bits(x: f64) -> u64 {
-    // All NaNs are one NaN in the log.
     if x.is_nan() {
         f64::NAN.to_bits()
     } else {
@@ -266,36 +268,37 @@ fn bits(x: f64) -> u64 {
     }
 }
 
-/// Every float of a logged tick, by bits, in a fixed order (plus the discrete fields).
+/// Every float of a logged tick, by its exact bits (`/servo/tick` keeps NaN payloads), in a
+/// fixed order (plus the discrete fields).
 fn tick_bits(t: &LoggedTick) -> Vec<u64> {
     let i = &t.input;
     let r = &i.reference;
-    let mut v = vec![bits(i.t_s), bits(i.dt_s)];
+    let mut v = vec![f64::to_bits(i.t_s), f64::to_bits(i.dt_s)];
     match &i.measurement {
         Some(m) => {
             v.push(1);
-            v.extend(m.position_m.iter().map(|&x| bits(x)));
-            v.push(bits(m.heading_rad));
+            v.extend(m.position_m.iter().map(|&x| f64::to_bits(x)));
+            v.push(f64::to_bits(m.heading_rad));
         }
         None => v.push(0),
     }
-    v.extend(r.position_m.iter().map(|&x| bits(x)));
-    v.extend(r.velocity_mps.iter().map(|&x| bits(x)));
-    v.extend(r.acceleration_mps2.iter().map(|&x| bits(x)));
-    v.push(bits(r.heading_rad));
-    v.push(bits(r.heading_rate_radps));
+    v.extend(r.position_m.iter().map(|&x| f64::to_bits(x)));
+    v.extend(r.velocity_mps.iter().map(|&x| f64::to_bits(x)));
+    v.extend(r.acceleration_mps2.iter().map(|&x| f64::to_bits(x)));
+    v.push(f64::to_bits(r.heading_rad));
+    v.push(f64::to_bits(r.heading_rate_radps));
     let cmd = |c: &Command| {
         [c.roll_rad, c.pitch_rad, c.yaw_rate_radps, c.vz_mps]
-            .map(bits)
+            .map(f64::to_bits)
             .to_vec()
     };
     match &t.output {
         Ok(o) => {
             v.push(1);
             v.extend(cmd(&o.command));
-            v.extend(o.estimate.position_m.iter().map(|&x| bits(x)));
-            v.extend(o.estimate.velocity_mps.iter().map(|&x| bits(x)));
-            v.push(bits(o.estimate.heading_rad));
+            v.extend(o.estimate.position_m.iter().map(|&x| f64::to_bits(x)));
+            v.extend(o.estimate.velocity_mps.iter().map(|&x| f64::to_bits(x)));
+            v.push(f64::to_bits(o.estimate.heading_rad));
             v.push(o.saturated as u64);
         }
         Err(TickFault::NotFinite) => v.push(2),
@@ -362,8 +365,8 @@ fn any_f64() -> impl Strategy<Value = f64> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
-    /// Inputs, outputs and commands come back bit for bit, whatever their values (NaN is one
-    /// NaN, its payload not kept).
+    /// Inputs, outputs and commands come back bit for bit, whatever their values (NaN
+    /// payloads included); events too (their NaN is one NaN).
     #[test]
     fn ticks_round_trip_bit_for_bit(
         values in prop::collection::vec((any_f64(), prop::array::uniform8(any_f64())), 1..40)
@@ -482,6 +485,14 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
             .schema
             .as_ref()
             .unwrap_or_else(|| panic!("{} has no schema", c.topic));
+        if c.topic == "/servo/tick" {
+            // CDR with a ros2msg schema, as Foxglove reads ROS 2 messages.
+            assert_eq!(schema.name, "dronecine/msg/ServoTick");
+            assert_eq!(schema.encoding, "ros2msg");
+            assert_eq!(c.message_encoding, "cdr");
+            assert_eq!(&schema.data[..], cdr::SCHEMA.as_bytes());
+            continue;
+        }
         assert_eq!(schema.encoding, "jsonschema", "{}", c.topic);
         assert_eq!(c.message_encoding, "json", "{}", c.topic);
         let s: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
@@ -489,7 +500,16 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
     }
 
     let by_topic = messages(&bytes);
+    for (k, (_, data)) in by_topic["/servo/tick"].iter().enumerate() {
+        assert_eq!(data.len(), cdr::LEN);
+        let mut want = ticks[k].logged();
+        want.framing.clear(); // on /framing
+        assert_eq!(tick_bits(&cdr::decode(data).unwrap()), tick_bits(&want));
+    }
     for (topic, msgs) in &by_topic {
+        if topic == "/servo/tick" {
+            continue;
+        }
         for (_, data) in msgs {
             let v: serde_json::Value = serde_json::from_slice(data)
                 .unwrap_or_else(|e| panic!("{topic}: {e}: {}", String::from_utf8_lossy(data)));
@@ -735,4 +755,39 @@ fn a_missing_directory_is_an_error_naming_the_path() {
         Err(e) => e,
     };
     assert!(e.to_string().contains("orbit-1.mcap"), "{e}");
+}
+
+/// `shoot` writes through `LogThread`: the file is the one the writer makes on the loop's own
+/// thread, byte for byte (same chunks, same order of ticks and events), across several
+/// batches; and a thread dropped without `finish` (an error path, a panic) still closes it.
+#[test]
+fn the_log_thread_writes_the_same_file_and_closes_it_when_dropped() {
+    use dronecine_runtime::flight::FlightSink;
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let ticks: Vec<Tick> = (0..1234).map(flight_tick).collect();
+    let events = events();
+    let direct = dir.path().join("direct.mcap");
+    write_log(&direct, &ticks, &events);
+    for finish in [true, false] {
+        let threaded = dir.path().join(format!("threaded-{finish}.mcap"));
+        let w = FlightLogWriter::create(&threaded, &header(), &scene_of(&names)).unwrap();
+        let mut sink = LogThread::spawn(w, 100.0).unwrap();
+        for (i, t) in ticks.iter().enumerate() {
+            sink.tick(&t.record()).unwrap();
+            if let Some(e) = events.get(i) {
+                sink.event(e).unwrap();
+            }
+        }
+        if finish {
+            sink.finish().unwrap();
+            assert!(std::fs::read(&threaded).unwrap() == std::fs::read(&direct).unwrap());
+        } else {
+            drop(sink);
+            let log = FlightLog::open(&threaded).unwrap();
+            assert!(!log.truncated, "{:?}", log.damage);
+            assert_eq!(log.ticks.len(), ticks.len());
+            assert_eq!(log.events.len(), events.len());
+        }
+    }
 }

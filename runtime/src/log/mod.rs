@@ -6,7 +6,8 @@
 //! Metadata record `dronecine.flight`: every field of the [`FlightHeader`] under its own name,
 //! each value the field's JSON text (`"script_name"` → `"\"orbit.psl\""`, `"seed"` → `"42"` or
 //! `"null"`, `"controller"` → `{"kind":"lqg",…}`). Attachment: the script text (`text/plain`,
-//! named after the script). All channels are JSON messages with JSON schemas; `log_time =
+//! named after the script). Every channel but `/servo/tick` carries JSON messages with JSON
+//! schemas; `/servo/tick` is CDR with a `ros2msg` schema ([`cdr`]). `log_time =
 //! publish_time =` the tick's `input.t_s` in nanoseconds (negative or non-finite times: 0).
 //!
 //! | topic | schema | when | fields |
@@ -19,7 +20,7 @@
 //! | `/command` | `dronecine.Command` | 30 Hz, and every tick whose `failsafe` is set (and the first after) | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
 //! | `/framing` | `dronecine.Framing` | ticks with framing records | `t_s`, `shot`, `actors[] {actor, name, screen, requested}` (`[x, y]` or null) |
 //! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message` |
-//! | `/servo/tick` | `dronecine.ServoTick` | every tick | `phase`, `shot`, `input` (the [`TickInput`](crate::control::TickInput)), `output` or null, `fault` or null, `command_sent`, `drone_state` |
+//! | `/servo/tick` | `dronecine/msg/ServoTick` (CDR, [`cdr::SCHEMA`]) | every tick | the phase, the shot, the [`TickInput`](crate::control::TickInput), the [`TickOutput`](crate::control::TickOutput) or the fault, the command sent, the drone's state, the latency: 278 bytes |
 //! | `/tf` | `foxglove.FrameTransforms` | 30 Hz (a frame when it moved) | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
 //! | `/scene/stage`, `/scene/drone`, `/scene/actors` | `foxglove.SceneUpdate` | once (actors again when a height changes) | as compile |
 //! | `/camera_calibration` | `foxglove.CameraCalibration` | once | as compile |
@@ -31,24 +32,27 @@
 //!
 //! # Numbers
 //!
-//! Every float is written in its shortest round-trip form, so that parsing it gives back the
-//! same bits (`-0.0` stays `-0.0`, subnormals and `f64::MAX` survive). Non-finite values, which a
-//! faulty tick input may contain, are written differently by topic: on `/servo/tick` and
-//! `/events` as the strings `"NaN"`, `"inf"` and `"-inf"` (so replay gets them back; a NaN's
-//! payload and sign are not kept); on the other topics as `null` (as compile does).
+//! `/servo/tick` holds each float's IEEE 754 bits (NaN payloads included). The JSON topics
+//! write every float in its shortest round-trip form, so that parsing it gives back the same
+//! bits (`-0.0` stays `-0.0`, subnormals and `f64::MAX` survive); non-finite values are
+//! written on `/events` as the strings `"NaN"`, `"inf"` and `"-inf"` (a NaN's payload and sign
+//! are not kept) and on the other topics as `null` (as compile does).
 //!
 //! # Crash safety
 //!
 //! The log is written in place, not through a temporary file: whatever reached the disk stays
 //! readable after a crash. Chunks are built in memory and written whole; a chunk is closed and
-//! the file flushed (to the OS, without `fsync`) at least every second of flight time, so a
-//! crash of the process loses at most the last second; [`FlightLog::open`] reads every complete
-//! chunk before the damage and sets [`FlightLog::truncated`]. A power cut may lose what the OS
-//! had not yet written.
+//! the file flushed (to the OS, without `fsync`) every `flush_period_s` of flight time
+//! ([`LogOptions`]). `shoot` writes through [`LogThread`], which hands the ticks to a writer
+//! thread every quarter second and closes chunks every 0.75 s, so a crash of the process loses
+//! at most the last second; [`FlightLog::open`] reads every complete chunk before the damage
+//! and sets [`FlightLog::truncated`]. A power cut may lose what the OS had not yet written.
 
+pub mod cdr;
 mod reader;
 mod schema;
 mod text;
+mod thread;
 mod writer;
 
 use std::fmt;
@@ -59,6 +63,7 @@ use dronecine_compiler::camera::Lens;
 use dronecine_grammar::script::Stage;
 
 pub use self::reader::{FlightLog, LoggedTick};
+pub use self::thread::{LogThread, BATCH_PERIOD_S};
 pub use self::writer::{FlightLogWriter, LogCompression, LogOptions};
 
 /// The static scene the log draws in Foxglove: the stage, the lens and the actors (their
@@ -220,10 +225,6 @@ mod exact {
             }
             d.deserialize_any(V)
         }
-    }
-
-    pub fn vec3_of(v: [Num; 3]) -> [f64; 3] {
-        [v[0].0, v[1].0, v[2].0]
     }
 }
 

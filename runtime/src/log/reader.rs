@@ -16,9 +16,9 @@ use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::McapError;
 use serde::Deserialize;
 
-use super::exact::{vec3_of, Num};
-use super::{topic, LogError, HEADER_METADATA};
-use crate::control::{Estimate, Measurement, Reference, TickFault, TickInput, TickOutput};
+use super::exact::Num;
+use super::{cdr, topic, LogError, HEADER_METADATA};
+use crate::control::{TickFault, TickInput, TickOutput};
 use crate::frames::Command;
 use crate::record::{Event, FlightHeader, FramingRecord, Phase};
 
@@ -48,118 +48,6 @@ pub struct FlightLog {
     pub truncated: bool,
     /// What stopped the reading when `truncated` (for the user).
     pub damage: Option<String>,
-}
-
-#[derive(Deserialize)]
-struct RawCommand {
-    roll_rad: Num,
-    pitch_rad: Num,
-    yaw_rate_radps: Num,
-    vz_mps: Num,
-}
-
-impl RawCommand {
-    fn command(&self) -> Command {
-        Command {
-            roll_rad: self.roll_rad.0,
-            pitch_rad: self.pitch_rad.0,
-            yaw_rate_radps: self.yaw_rate_radps.0,
-            vz_mps: self.vz_mps.0,
-        }
-    }
-}
-
-#[derive(Deserialize)]
-struct RawMeasurement {
-    position_m: [Num; 3],
-    heading_rad: Num,
-}
-
-#[derive(Deserialize)]
-struct RawReference {
-    position_m: [Num; 3],
-    velocity_mps: [Num; 3],
-    acceleration_mps2: [Num; 3],
-    heading_rad: Num,
-    heading_rate_radps: Num,
-}
-
-#[derive(Deserialize)]
-struct RawInput {
-    t_s: Num,
-    dt_s: Num,
-    measurement: Option<RawMeasurement>,
-    reference: RawReference,
-}
-
-#[derive(Deserialize)]
-struct RawEstimate {
-    position_m: [Num; 3],
-    velocity_mps: [Num; 3],
-    heading_rad: Num,
-}
-
-#[derive(Deserialize)]
-struct RawOutput {
-    command: RawCommand,
-    estimate: RawEstimate,
-    saturated: bool,
-}
-
-#[derive(Deserialize)]
-struct RawTick {
-    phase: Phase,
-    shot: Option<usize>,
-    input: RawInput,
-    output: Option<RawOutput>,
-    fault: Option<TickFault>,
-    command_sent: RawCommand,
-    /// Absent in logs written before it was recorded.
-    #[serde(default)]
-    latency_s: Option<Num>,
-}
-
-impl RawTick {
-    fn tick(self) -> Result<LoggedTick, String> {
-        let i = self.input;
-        let input = TickInput {
-            t_s: i.t_s.0,
-            dt_s: i.dt_s.0,
-            measurement: i.measurement.map(|m| Measurement {
-                position_m: vec3_of(m.position_m),
-                heading_rad: m.heading_rad.0,
-            }),
-            reference: Reference {
-                position_m: vec3_of(i.reference.position_m),
-                velocity_mps: vec3_of(i.reference.velocity_mps),
-                acceleration_mps2: vec3_of(i.reference.acceleration_mps2),
-                heading_rad: i.reference.heading_rad.0,
-                heading_rate_radps: i.reference.heading_rate_radps.0,
-            },
-        };
-        let output = match (self.output, self.fault) {
-            (Some(o), None) => Ok(TickOutput {
-                command: o.command.command(),
-                estimate: Estimate {
-                    position_m: vec3_of(o.estimate.position_m),
-                    velocity_mps: vec3_of(o.estimate.velocity_mps),
-                    heading_rad: o.estimate.heading_rad.0,
-                },
-                saturated: o.saturated,
-            }),
-            (None, Some(fault)) => Err(fault),
-            _ => return Err("exactly one of `output` and `fault` must be set".into()),
-        };
-        Ok(LoggedTick {
-            phase: self.phase,
-            shot: self.shot,
-            input,
-            output,
-            command_sent: self.command_sent.command(),
-            framing: Vec::new(),
-            latency_s: self.latency_s.map(|n| n.0),
-        })
-    }
 }
 
 #[derive(Deserialize)]
@@ -320,6 +208,19 @@ impl ReadState {
         match record {
             Record::Channel(channel) => {
                 let wanted = match channel.topic.as_str() {
+                    topic::SERVO_TICK if channel.message_encoding != cdr::MESSAGE_ENCODING => {
+                        return Err(LogError::BadMessage {
+                            path: self.path.clone(),
+                            topic: topic::SERVO_TICK,
+                            index: 0,
+                            detail: format!(
+                                "its encoding is `{}`; this dronecine reads `{}` (the log was \
+                                 written by an older dronecine: replay it with that version)",
+                                channel.message_encoding,
+                                cdr::MESSAGE_ENCODING
+                            ),
+                        });
+                    }
                     topic::SERVO_TICK => Some(Wanted::Tick),
                     topic::EVENTS => Some(Wanted::Event),
                     topic::FRAMING => Some(Wanted::Framing),
@@ -338,15 +239,12 @@ impl ReadState {
             }
             Record::Message { header, data } => match self.channels.get(&header.channel_id) {
                 Some(Wanted::Tick) => {
-                    let tick = serde_json::from_slice::<RawTick>(&data)
-                        .map_err(|e| e.to_string())
-                        .and_then(RawTick::tick)
-                        .map_err(|detail| LogError::BadMessage {
-                            path: self.path.clone(),
-                            topic: topic::SERVO_TICK,
-                            index: self.ticks.len(),
-                            detail,
-                        })?;
+                    let tick = cdr::decode(&data).map_err(|detail| LogError::BadMessage {
+                        path: self.path.clone(),
+                        topic: topic::SERVO_TICK,
+                        index: self.ticks.len(),
+                        detail,
+                    })?;
                     let mut tick = tick;
                     if let Some((t_bits, framing)) = self.pending_framing.take() {
                         if t_bits == tick.input.t_s.to_bits() {

@@ -9,7 +9,6 @@ pub const MEASUREMENT: &str = "dronecine.Measurement";
 pub const COMMAND: &str = "dronecine.Command";
 pub const FRAMING: &str = "dronecine.Framing";
 pub const EVENT: &str = "dronecine.Event";
-pub const SERVO_TICK: &str = "dronecine.ServoTick";
 
 const DRAFT: &str = "https://json-schema.org/draft/2020-12/schema";
 
@@ -37,16 +36,6 @@ fn exact(description: &str) -> Value {
             { "type": "number" },
             { "type": "string", "enum": ["NaN", "inf", "-inf"] }
         ]
-    })
-}
-
-fn exact_vec3(description: &str) -> Value {
-    json!({
-        "type": "array",
-        "items": exact("Component"),
-        "minItems": 3,
-        "maxItems": 3,
-        "description": description
     })
 }
 
@@ -182,69 +171,5 @@ pub fn event() -> String {
             "message": { "type": "string" }
         }),
         &["t_s", "level", "kind", "message"],
-    )
-}
-
-pub fn servo_tick() -> String {
-    let estimate = json!({
-        "type": "object",
-        "properties": {
-            "position_m": exact_vec3("Position (m)"),
-            "velocity_mps": exact_vec3("Velocity (m/s)"),
-            "heading_rad": exact("Heading (rad)")
-        },
-        "required": ["position_m", "velocity_mps", "heading_rad"]
-    });
-    let command = json!({
-        "type": "object",
-        "properties": command_properties(true),
-        "required": ["roll_rad", "pitch_rad", "yaw_rate_radps", "vz_mps"]
-    });
-    top(
-        SERVO_TICK,
-        "One control tick, exactly (floats in shortest round-trip form; non-finite ones as \"NaN\", \"inf\", \"-inf\"): what replay re-runs",
-        json!({
-            "phase": { "type": "string", "enum": ["TakeOff", "Approach", "Shots", "Landing"] },
-            "shot": nullable(json!({ "type": "integer", "minimum": 0 })),
-            "input": {
-                "type": "object",
-                "description": "The controller's TickInput",
-                "properties": {
-                    "t_s": exact("Flight clock (s)"),
-                    "dt_s": exact("Measured time since the previous tick (s)"),
-                    "measurement": nullable(json!({
-                        "type": "object",
-                        "properties": {
-                            "position_m": exact_vec3("Measured position (m)"),
-                            "heading_rad": exact("Measured heading (rad)")
-                        },
-                        "required": ["position_m", "heading_rad"]
-                    })),
-                    "reference": {
-                        "type": "object",
-                        "properties": {
-                            "position_m": exact_vec3("Position (m)"),
-                            "velocity_mps": exact_vec3("Velocity (m/s)"),
-                            "acceleration_mps2": exact_vec3("Acceleration (m/s²)"),
-                            "heading_rad": exact("Heading (rad)"),
-                            "heading_rate_radps": exact("Heading rate (rad/s)")
-                        },
-                        "required": ["position_m", "velocity_mps", "acceleration_mps2",
-                                     "heading_rad", "heading_rate_radps"]
-                    }
-                },
-                "required": ["t_s", "dt_s", "measurement", "reference"]
-            },
-            "output": nullable(json!({
-                "type": "object",
-                "description": "The controller's TickOutput",
-                "properties": { "command": command.clone(), "estimate": estimate, "saturated": { "type": "boolean" } },
-                "required": ["command", "estimate", "saturated"]
-            })),
-            "fault": nullable(json!({ "type": "string", "enum": ["NotFinite", "TimeNotIncreasing"] })),
-            "command_sent": command,
-            "drone_state": { "type": "string", "enum": ["Landed", "TakingOff", "Flying", "Landing", "Emergency"] }
-        }),
-        &["phase", "shot", "input", "output", "fault", "command_sent", "drone_state"],
     )
 }

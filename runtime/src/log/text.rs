@@ -10,10 +10,10 @@
 use dronecine_compiler::output::json;
 
 use super::exact;
-use crate::backend::{BodyPose, FlightState, MocapFrame};
-use crate::control::{Estimate, TickFault, TickInput, TickOutput};
+use crate::backend::{BodyPose, MocapFrame};
+use crate::control::{Estimate, TickOutput};
 use crate::frames::Command;
-use crate::record::{FramingRecord, Phase, TickRecord};
+use crate::record::FramingRecord;
 
 const SLOTS: usize = 256;
 /// Longest shortest-round-trip text of an f64 (`-2.2250738585072014e-308`: 24 bytes).
@@ -56,32 +56,6 @@ fn bool_json(b: bool) -> &'static [u8] {
         b"true"
     } else {
         b"false"
-    }
-}
-
-fn phase_json(p: Phase) -> &'static [u8] {
-    match p {
-        Phase::TakeOff => b"\"TakeOff\"",
-        Phase::Approach => b"\"Approach\"",
-        Phase::Shots => b"\"Shots\"",
-        Phase::Landing => b"\"Landing\"",
-    }
-}
-
-fn state_json(s: FlightState) -> &'static [u8] {
-    match s {
-        FlightState::Landed => b"\"Landed\"",
-        FlightState::TakingOff => b"\"TakingOff\"",
-        FlightState::Flying => b"\"Flying\"",
-        FlightState::Landing => b"\"Landing\"",
-        FlightState::Emergency => b"\"Emergency\"",
-    }
-}
-
-fn fault_json(f: TickFault) -> &'static [u8] {
-    match f {
-        TickFault::NotFinite => b"\"NotFinite\"",
-        TickFault::TimeNotIncreasing => b"\"TimeNotIncreasing\"",
     }
 }
 
@@ -150,16 +124,6 @@ impl Text {
         self.num(v[1]);
         self.raw(b",");
         self.num(v[2]);
-        self.raw(b"]");
-    }
-
-    fn exact_vec3(&mut self, v: &[f64; 3]) {
-        self.raw(b"[");
-        self.exact(v[0]);
-        self.raw(b",");
-        self.exact(v[1]);
-        self.raw(b",");
-        self.exact(v[2]);
         self.raw(b"]");
     }
 
@@ -283,96 +247,5 @@ impl Text {
             self.raw(b"}");
         }
         self.raw(b"]}");
-    }
-
-    fn exact_command(&mut self, c: &Command) {
-        self.raw(b"{\"roll_rad\":");
-        self.exact(c.roll_rad);
-        self.raw(b",\"pitch_rad\":");
-        self.exact(c.pitch_rad);
-        self.raw(b",\"yaw_rate_radps\":");
-        self.exact(c.yaw_rate_radps);
-        self.raw(b",\"vz_mps\":");
-        self.exact(c.vz_mps);
-        self.raw(b"}");
-    }
-
-    fn exact_input(&mut self, input: &TickInput) {
-        self.raw(b"{\"t_s\":");
-        self.exact(input.t_s);
-        self.raw(b",\"dt_s\":");
-        self.exact(input.dt_s);
-        self.raw(b",\"measurement\":");
-        match &input.measurement {
-            Some(m) => {
-                self.raw(b"{\"position_m\":");
-                self.exact_vec3(&m.position_m);
-                self.raw(b",\"heading_rad\":");
-                self.exact(m.heading_rad);
-                self.raw(b"}");
-            }
-            None => self.raw(b"null"),
-        }
-        self.raw(b",\"reference\":{");
-        // Exact (compile's `/reference` is quantised to 1e-6: replay needs the bits).
-        let r = &input.reference;
-        self.raw(b"\"position_m\":");
-        self.exact_vec3(&r.position_m);
-        self.raw(b",\"velocity_mps\":");
-        self.exact_vec3(&r.velocity_mps);
-        self.raw(b",\"acceleration_mps2\":");
-        self.exact_vec3(&r.acceleration_mps2);
-        self.raw(b",\"heading_rad\":");
-        self.exact(r.heading_rad);
-        self.raw(b",\"heading_rate_radps\":");
-        self.exact(r.heading_rate_radps);
-        self.raw(b"}}");
-    }
-
-    fn exact_output(&mut self, out: &TickOutput) {
-        self.raw(b"{\"command\":");
-        self.exact_command(&out.command);
-        let e = &out.estimate;
-        self.raw(b",\"estimate\":{\"position_m\":");
-        self.exact_vec3(&e.position_m);
-        self.raw(b",\"velocity_mps\":");
-        self.exact_vec3(&e.velocity_mps);
-        self.raw(b",\"heading_rad\":");
-        self.exact(e.heading_rad);
-        self.raw(b"},\"saturated\":");
-        self.raw(bool_json(out.saturated));
-        self.raw(b"}");
-    }
-
-    /// `/servo/tick`: everything replay needs, floats exact.
-    pub(super) fn servo_tick(&mut self, tick: &TickRecord) {
-        self.buf.clear();
-        self.raw(b"{\"phase\":");
-        self.raw(phase_json(tick.phase));
-        self.raw(b",\"shot\":");
-        self.shot(tick.shot);
-        self.raw(b",\"input\":");
-        self.exact_input(&tick.input);
-        match &tick.output {
-            Ok(out) => {
-                self.raw(b",\"output\":");
-                self.exact_output(out);
-                self.raw(b",\"fault\":null");
-            }
-            Err(fault) => {
-                self.raw(b",\"output\":null,\"fault\":");
-                self.raw(fault_json(*fault));
-            }
-        }
-        self.raw(b",\"command_sent\":");
-        self.exact_command(&tick.command_sent);
-        self.raw(b",\"drone_state\":");
-        self.raw(state_json(tick.drone_state));
-        self.raw(b",\"latency_s\":");
-        match tick.latency_s {
-            Some(l) => self.exact(l),
-            None => self.raw(b"null"),
-        }
-        self.raw(b"}");
     }
 }

@@ -24,7 +24,7 @@ use mcap::records::Metadata;
 use mcap::{Attachment, McapError, WriteOptions, Writer};
 
 use super::text::{same_command, Text};
-use super::{schema, topic, LogScene, HEADER_METADATA};
+use super::{cdr, schema, topic, LogScene, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, TickRecord};
 
 /// The frame of the reference pose on `/tf/reference`.
@@ -194,6 +194,25 @@ impl FlightLogWriter {
             .map_err(err)?;
 
         let no_meta = BTreeMap::new();
+        // `/servo/tick` in CDR with a ros2msg schema (see `cdr`); the others JSON.
+        let servo_tick = {
+            let schema_id = writer
+                .add_schema(
+                    cdr::SCHEMA_NAME,
+                    cdr::SCHEMA_ENCODING,
+                    cdr::SCHEMA.as_bytes(),
+                )
+                .map_err(err)?;
+            let id = writer
+                .add_channel(
+                    schema_id,
+                    topic::SERVO_TICK,
+                    cdr::MESSAGE_ENCODING,
+                    &no_meta,
+                )
+                .map_err(err)?;
+            Channel::new(id)
+        };
         let mut channel = |schema_name: &str, schema: String, topic: &str| {
             let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes())?;
             let id = writer.add_channel(schema_id, topic, "json", &no_meta)?;
@@ -216,8 +235,7 @@ impl FlightLogWriter {
             command: channel(schema::COMMAND, schema::command(), topic::COMMAND).map_err(err)?,
             framing: channel(schema::FRAMING, schema::framing(), topic::FRAMING).map_err(err)?,
             events: channel(schema::EVENT, schema::event(), topic::EVENTS).map_err(err)?,
-            servo_tick: channel(schema::SERVO_TICK, schema::servo_tick(), topic::SERVO_TICK)
-                .map_err(err)?,
+            servo_tick,
             tf: Vec::new(),
             stage: channel(
                 foxglove::SCENE_UPDATE,
@@ -426,7 +444,8 @@ impl FlightLogWriter {
             self.put_text(|c| &mut c.framing, ns)?;
         }
 
-        self.text.servo_tick(tick);
+        self.text.buf.clear();
+        cdr::encode(&mut self.text.buf, tick);
         self.put_text(|c| &mut c.servo_tick, ns)?;
 
         if t_s >= self.next_tf_s || !t_s.is_finite() {

@@ -1,0 +1,313 @@
+//! [`LogThread`]: the flight log written on a thread of its own, so that formatting and disk
+//! writes never sit on the control loop (a disk that stalls does not stall the drone, and a
+//! simulated flight uses the machine's second core).
+//!
+//! The loop copies each [`TickRecord`] into a preallocated batch ([`OwnedTick`], its vectors
+//! reused from batch to batch: no allocation per tick) and hands a full batch to the writer
+//! thread over a bounded channel; the writer thread writes it with [`FlightLogWriter`] and
+//! sends the emptied batch back. Events keep their place among the ticks.
+//!
+//! What a crash may lose: a batch is handed over every [`BATCH_PERIOD_S`] of flight time and
+//! the writer closes a chunk every `flush_period_s` (the caller's [`LogOptions`]), so a
+//! process that dies loses at most their sum; `shoot` uses 0.75 s + 0.25 s. A panic of the
+//! loop unwinds through [`Drop`], which hands the last batch over and waits for the writer. A
+//! write error reaches the loop on the next tick after the writer met it (the loop then
+//! lands), and [`LogThread::finish`] returns it.
+//!
+//! [`LogOptions`]: super::LogOptions
+
+use std::io;
+use std::sync::mpsc::{self, Receiver, SyncSender, TryRecvError};
+use std::thread::JoinHandle;
+
+use super::FlightLogWriter;
+use crate::backend::{FlightState, MocapFrame};
+use crate::control::{TickFault, TickInput, TickOutput};
+use crate::flight::FlightSink;
+use crate::frames::{ActorPose, Command, Sample};
+use crate::record::{Event, FramingRecord, Phase, TickRecord};
+
+/// Flight time covered by one batch at most.
+pub const BATCH_PERIOD_S: f64 = 0.25;
+/// Batches in flight: the loop blocks only when the writer is this many batches behind
+/// (two seconds of flight).
+const BATCHES: usize = 8;
+
+/// A [`TickRecord`] with its borrowed parts copied, kept from batch to batch.
+#[derive(Clone, Debug)]
+pub struct OwnedTick {
+    phase: Phase,
+    shot: Option<usize>,
+    sample: Sample,
+    input: TickInput,
+    output: Result<TickOutput, TickFault>,
+    command_sent: Command,
+    has_mocap: bool,
+    mocap: MocapFrame,
+    actors: Vec<ActorPose>,
+    framing: Vec<FramingRecord>,
+    drone_state: FlightState,
+    latency_s: Option<f64>,
+}
+
+impl OwnedTick {
+    fn new(r: &TickRecord) -> OwnedTick {
+        OwnedTick {
+            phase: r.phase,
+            shot: r.shot,
+            sample: *r.sample,
+            input: r.input,
+            output: r.output,
+            command_sent: r.command_sent,
+            has_mocap: r.mocap.is_some(),
+            mocap: r.mocap.cloned().unwrap_or_default(),
+            actors: r.actors.to_vec(),
+            framing: r.framing.to_vec(),
+            drone_state: r.drone_state,
+            latency_s: r.latency_s,
+        }
+    }
+
+    /// Copies `r` in, reusing the vectors' room.
+    fn fill(&mut self, r: &TickRecord) {
+        self.phase = r.phase;
+        self.shot = r.shot;
+        self.sample = *r.sample;
+        self.input = r.input;
+        self.output = r.output;
+        self.command_sent = r.command_sent;
+        self.has_mocap = r.mocap.is_some();
+        if let Some(m) = r.mocap {
+            self.mocap.t_s = m.t_s;
+            self.mocap.received_s = m.received_s;
+            self.mocap.frame = m.frame;
+            self.mocap.drone = m.drone;
+            self.mocap.actors.clear();
+            self.mocap.actors.extend_from_slice(&m.actors);
+        }
+        self.actors.clear();
+        self.actors.extend_from_slice(r.actors);
+        self.framing.clear();
+        self.framing.extend_from_slice(r.framing);
+        self.drone_state = r.drone_state;
+        self.latency_s = r.latency_s;
+    }
+
+    fn record(&self) -> TickRecord<'_> {
+        TickRecord {
+            phase: self.phase,
+            shot: self.shot,
+            sample: &self.sample,
+            input: self.input,
+            output: self.output,
+            command_sent: self.command_sent,
+            mocap: self.has_mocap.then_some(&self.mocap),
+            actors: &self.actors,
+            framing: &self.framing,
+            drone_state: self.drone_state,
+            latency_s: self.latency_s,
+        }
+    }
+}
+
+/// Ticks (the first `len` of `ticks` are live) and the events among them: `(i, event)` comes
+/// before tick `i`.
+#[derive(Default)]
+struct Batch {
+    ticks: Vec<OwnedTick>,
+    len: usize,
+    events: Vec<(usize, Event)>,
+}
+
+impl Batch {
+    fn clear(&mut self) {
+        self.len = 0;
+        self.events.clear();
+    }
+
+    fn is_empty(&self) -> bool {
+        self.len == 0 && self.events.is_empty()
+    }
+}
+
+/// The flight log on its own thread (see the module doc). A [`FlightSink`].
+pub struct LogThread {
+    /// `None` once the thread has been told to stop.
+    full: Option<SyncSender<Batch>>,
+    empty: Receiver<Batch>,
+    /// The writer thread's errors, as they happen.
+    errors: Receiver<io::Error>,
+    batch: Batch,
+    /// Flight time of the batch's first tick.
+    batch_start_s: Option<f64>,
+    max_ticks: usize,
+    handle: Option<JoinHandle<io::Result<()>>>,
+}
+
+impl LogThread {
+    /// Moves `writer` to a new thread; ticks at `rate_hz` (the batch holds
+    /// [`BATCH_PERIOD_S`] of them, whatever their clocks say).
+    pub fn spawn(writer: FlightLogWriter, rate_hz: f64) -> io::Result<LogThread> {
+        let max_ticks = if rate_hz.is_finite() && rate_hz > 0.0 {
+            ((rate_hz * BATCH_PERIOD_S).ceil() as usize).clamp(1, 10_000)
+        } else {
+            25
+        };
+        let (full_tx, full_rx) = mpsc::sync_channel::<Batch>(BATCHES);
+        let (empty_tx, empty_rx) = mpsc::sync_channel::<Batch>(BATCHES + 1);
+        let (err_tx, err_rx) = mpsc::sync_channel::<io::Error>(1);
+        for _ in 0..BATCHES {
+            let _ = empty_tx.send(Batch::default());
+        }
+        let handle = std::thread::Builder::new()
+            .name("flight-log".into())
+            .spawn(move || write_batches(writer, full_rx, empty_tx, err_tx))?;
+        Ok(LogThread {
+            full: Some(full_tx),
+            empty: empty_rx,
+            errors: err_rx,
+            batch: Batch::default(),
+            batch_start_s: None,
+            max_ticks,
+            handle: Some(handle),
+        })
+    }
+
+    /// Hands the current batch to the writer (blocking only when it is [`BATCHES`] behind)
+    /// and takes an emptied one back.
+    fn hand_over(&mut self) -> io::Result<()> {
+        if self.batch.is_empty() {
+            return Ok(());
+        }
+        let Some(full) = &self.full else {
+            return Err(io::Error::other("the flight log is closed"));
+        };
+        let next = match self.empty.recv() {
+            Ok(mut b) => {
+                b.clear();
+                b
+            }
+            Err(_) => return Err(self.thread_error()),
+        };
+        let batch = std::mem::replace(&mut self.batch, next);
+        self.batch_start_s = None;
+        full.send(batch).map_err(|_| self.thread_error())
+    }
+
+    /// The writer thread's error (it stopped).
+    fn thread_error(&mut self) -> io::Error {
+        match self.errors.try_recv() {
+            Ok(e) => e,
+            Err(_) => io::Error::other("the flight log's writer thread stopped"),
+        }
+    }
+
+    /// Hands the last batch over, waits for the writer to finish the file (summary, closing
+    /// magic, `fsync`); the first write error if there was one.
+    pub fn finish(mut self) -> io::Result<()> {
+        self.close()
+    }
+
+    fn close(&mut self) -> io::Result<()> {
+        let handed = self.hand_over();
+        self.full = None; // the writer sees the channel close, finishes the file and returns
+        let joined = match self.handle.take() {
+            Some(h) => h
+                .join()
+                .unwrap_or_else(|_| Err(io::Error::other("the flight log's writer panicked"))),
+            None => Ok(()),
+        };
+        match (handed, joined) {
+            (Err(e), _) => Err(e),
+            // The writer's own error, unless the loop was already given it.
+            (Ok(()), Err(e)) => Err(self.errors.try_recv().unwrap_or(e)),
+            (Ok(()), Ok(())) => Ok(()),
+        }
+    }
+}
+
+impl FlightSink for LogThread {
+    fn tick(&mut self, record: &TickRecord) -> io::Result<()> {
+        match self.errors.try_recv() {
+            Ok(e) => return Err(e),
+            Err(TryRecvError::Empty) => {}
+            Err(TryRecvError::Disconnected) => {
+                return Err(io::Error::other("the flight log's writer thread stopped"))
+            }
+        }
+        let b = &mut self.batch;
+        if b.len < b.ticks.len() {
+            b.ticks[b.len].fill(record);
+        } else {
+            b.ticks.push(OwnedTick::new(record));
+        }
+        b.len += 1;
+        let t_s = record.input.t_s;
+        let start = *self.batch_start_s.get_or_insert(t_s);
+        if b.len >= self.max_ticks || !(t_s - start < BATCH_PERIOD_S) {
+            self.hand_over()?;
+        }
+        Ok(())
+    }
+
+    fn event(&mut self, event: &Event) -> io::Result<()> {
+        let at = self.batch.len;
+        self.batch.events.push((at, event.clone()));
+        Ok(())
+    }
+}
+
+impl Drop for LogThread {
+    fn drop(&mut self) {
+        // Dropped without `finish()` (an error path or a panic's unwinding): hand over what
+        // is recorded and let the writer close the file; errors have nowhere to go.
+        if self.handle.is_some() {
+            let _ = self.close();
+        }
+    }
+}
+
+/// The writer thread: writes each batch, returns it emptied; at the end finishes the file.
+/// After a write error it reports it, stops writing (the file keeps every whole chunk before
+/// it) and keeps returning batches so that the loop never blocks.
+fn write_batches(
+    mut writer: FlightLogWriter,
+    full: Receiver<Batch>,
+    empty: SyncSender<Batch>,
+    errors: SyncSender<io::Error>,
+) -> io::Result<()> {
+    let mut failed = false;
+    let report = |e: io::Error, failed: &mut bool| {
+        if !*failed {
+            *failed = true;
+            let _ = errors.try_send(io::Error::new(e.kind(), e.to_string()));
+        }
+    };
+    while let Ok(batch) = full.recv() {
+        if !failed {
+            if let Err(e) = write_batch(&mut writer, &batch) {
+                report(e, &mut failed);
+            }
+        }
+        let _ = empty.send(batch);
+    }
+    if failed {
+        // Drop closes what it can; the error was reported.
+        return Err(io::Error::other("the flight log could not be written"));
+    }
+    writer.finish()
+}
+
+fn write_batch(writer: &mut FlightLogWriter, batch: &Batch) -> io::Result<()> {
+    let mut events = batch.events.iter().peekable();
+    for (i, tick) in batch.ticks[..batch.len].iter().enumerate() {
+        while let Some((_, e)) = events.next_if(|(at, _)| *at <= i) {
+            writer.write_event(e)?;
+        }
+        writer.write_tick(&tick.record())?;
+    }
+    for (_, e) in events {
+        writer.write_event(e)?;
+    }
+    Ok(())
+}
