@@ -135,6 +135,8 @@ pub struct FlightLogWriter {
     flush_every_ticks: u64,
     /// Where `/tf` puts the drone on ticks without an estimate.
     last_estimate: Option<([f64; 3], f64)>,
+    /// A second handle on the file, for syncing it from another thread.
+    sync_file: Option<File>,
 }
 
 fn mcap_err(path: &Path, e: McapError) -> io::Error {
@@ -173,6 +175,7 @@ impl FlightLogWriter {
             .open(path)
             .map_err(|e| annotate(path, e))?;
         let err = |e| mcap_err(path, e);
+        let sync_file = file.try_clone().ok();
         let compression = match options.compression {
             LogCompression::None => None,
             LogCompression::Lz4 => Some(mcap::Compression::Lz4),
@@ -322,6 +325,7 @@ impl FlightLogWriter {
             ticks_since_flush: 0,
             flush_every_ticks,
             last_estimate: None,
+            sync_file,
         };
         log.write_static(&scene.lens, &scene.stage, scene.actor_heights_m)?;
         log.flush()?;
@@ -544,6 +548,14 @@ impl FlightLogWriter {
             .map_err(|e| annotate(&path, e.into_error()))?
             .sync_all()
             .map_err(|e| annotate(&path, e))
+    }
+
+    /// A handle on the log's file for `sync_data` from another thread while this one writes
+    /// ([`LogThread`](super::LogThread) syncs every few seconds, so that the final `fsync` of
+    /// [`finish`](Self::finish) has only the tail left to write, and a power cut loses less).
+    /// `None` when the OS could not duplicate the handle.
+    pub fn sync_handle(&self) -> Option<File> {
+        self.sync_file.as_ref().and_then(|f| f.try_clone().ok())
     }
 
     /// The log's path.
