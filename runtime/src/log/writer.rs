@@ -33,9 +33,10 @@ const REFERENCE_FRAME: &str = "reference";
 /// Chunk compression of the flight log.
 ///
 /// Measured (`benches/log.rs`, CPU time of one core on the shared 2-core development machine,
-/// 100 Hz, two actors): no compression 3.6 µs a tick (an hour: 1.38 s; a simulated flight
-/// logs 2.4 kB a tick, 850 MB an hour); LZ4 7.4 µs a tick, about a quarter of the size. The default is no compression: the flight loop's budget is
-/// CPU time per tick, and a flight of minutes is a few hundred megabytes at most.
+/// 100 Hz, two actors): no compression 1.9 µs a tick (an hour: 0.86 s; a simulated flight
+/// logs 1.6 kB a tick, 580 MB an hour); LZ4 about twice the CPU time for about a quarter of
+/// the size (measured with the JSON `/servo/tick`: 7.4 µs against 3.6 µs). The default is no
+/// compression: a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
     /// The default (see above).
