@@ -5,14 +5,15 @@
 //!
 //! With the MCAP flight log on, the `mcap` crate's chunk writer grows a fresh buffer for each
 //! chunk (one a second) and its record encoder allocates now and then: a handful of
-//! allocations a second, bounded here; dronecine's own log code reuses its buffers.
+//! allocations a second, bounded here; dronecine's own log code reuses its buffers. Written
+//! as `shoot` writes it, on its own thread (`LogThread`), the loop's thread allocates nothing.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use dronecine_compiler::profile::Profile;
 use dronecine_runtime::flight::{FlightSink, Observer, Progress};
-use dronecine_runtime::log::{FlightLogWriter, LogScene};
+use dronecine_runtime::log::{FlightLogWriter, LogScene, LogThread};
 use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::SimConfig;
@@ -94,9 +95,18 @@ impl FlightSink for Log {
     }
 }
 
+#[derive(Clone, Copy, PartialEq)]
+enum Sink {
+    None,
+    /// The writer on the loop's thread.
+    Direct,
+    /// `LogThread`, as `shoot` writes it.
+    Thread,
+}
+
 /// Flies the script; returns (shot-tick intervals, allocating intervals after warm-up as
 /// (time, count)).
-fn fly(with_log: bool) -> (usize, Vec<(f64, usize)>) {
+fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
     let opts = dronecine_grammar::Options {
         known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
         base_dir: None,
@@ -134,9 +144,17 @@ fn fly(with_log: bool) -> (usize, Vec<(f64, usize)>) {
         },
     )
     .unwrap();
-    let mut log = Log(writer);
+    let mut log = Some(Log(writer));
+    let mut thread = None;
+    if mode == Sink::Thread {
+        thread = Some(LogThread::spawn(log.take().unwrap().0, 100.0).unwrap());
+    }
     let mut null = dronecine_runtime::flight::NullSink;
-    let sink: &mut dyn FlightSink = if with_log { &mut log } else { &mut null };
+    let sink: &mut dyn FlightSink = match (mode, &mut log, &mut thread) {
+        (Sink::Direct, Some(log), _) => log,
+        (Sink::Thread, _, Some(thread)) => thread,
+        _ => &mut null,
+    };
     let mut watch = Watch::default();
     let report = fly_simulated(
         &SimFlight {
@@ -155,7 +173,11 @@ fn fly(with_log: bool) -> (usize, Vec<(f64, usize)>) {
         &mut watch,
     )
     .unwrap();
-    log.0.finish().unwrap();
+    match (log, thread) {
+        (Some(log), _) => log.0.finish().unwrap(),
+        (_, Some(thread)) => thread.finish().unwrap(),
+        _ => {}
+    }
     assert!(report.completed);
     // The first second of the shots warms the buffers up.
     let start = watch.first_shot_s.unwrap();
@@ -169,7 +191,7 @@ fn fly(with_log: bool) -> (usize, Vec<(f64, usize)>) {
 
 #[test]
 fn a_flight_tick_allocates_nothing() {
-    let (intervals, late) = fly(false);
+    let (intervals, late) = fly(Sink::None);
     assert!(intervals > 1500, "{intervals} intervals");
     assert!(
         late.is_empty(),
@@ -181,11 +203,25 @@ fn a_flight_tick_allocates_nothing() {
 
 #[test]
 fn with_the_flight_log_only_the_mcap_chunks_allocate() {
-    let (intervals, late) = fly(true);
+    let (intervals, late) = fly(Sink::Direct);
     let total: usize = late.iter().map(|(_, n)| n).sum();
     // ~16 s of shots: a chunk a second, a few allocations each.
     assert!(
         total < 40 * 16,
         "{total} allocations over {intervals} ticks"
+    );
+}
+
+/// `shoot`'s log: the loop copies each tick into a reused batch and hands it to the writer
+/// thread; on the loop's thread nothing allocates once the batches are warm.
+#[test]
+fn with_the_log_on_its_own_thread_the_loop_allocates_nothing() {
+    let (intervals, late) = fly(Sink::Thread);
+    assert!(intervals > 1500, "{intervals} intervals");
+    assert!(
+        late.is_empty(),
+        "{} of {intervals} shot ticks allocated after warm-up: {:?}",
+        late.len(),
+        &late[..late.len().min(10)]
     );
 }

@@ -57,21 +57,37 @@ pub struct OwnedTick {
     latency_s: Option<f64>,
 }
 
+/// Room for this many actors in each preallocated tick (more grow a tick's vectors once).
+const ACTORS: usize = 8;
+
 impl OwnedTick {
-    fn new(r: &TickRecord) -> OwnedTick {
+    /// A blank tick with room for [`ACTORS`] actors.
+    fn empty() -> OwnedTick {
         OwnedTick {
-            phase: r.phase,
-            shot: r.shot,
-            sample: *r.sample,
-            input: r.input,
-            output: r.output,
-            command_sent: r.command_sent,
-            has_mocap: r.mocap.is_some(),
-            mocap: r.mocap.cloned().unwrap_or_default(),
-            actors: r.actors.to_vec(),
-            framing: r.framing.to_vec(),
-            drone_state: r.drone_state,
-            latency_s: r.latency_s,
+            phase: Phase::TakeOff,
+            shot: None,
+            sample: Sample {
+                t_s: 0.0,
+                position_m: [0.0; 3],
+                velocity_mps: [0.0; 3],
+                acceleration_mps2: [0.0; 3],
+                heading_rad: 0.0,
+                heading_rate_radps: 0.0,
+                camera_pitch_rad: 0.0,
+                shot: 0,
+            },
+            input: TickInput::default(),
+            output: Ok(TickOutput::default()),
+            command_sent: Command::HOVER,
+            has_mocap: false,
+            mocap: MocapFrame {
+                actors: Vec::with_capacity(ACTORS),
+                ..MocapFrame::default()
+            },
+            actors: Vec::with_capacity(ACTORS),
+            framing: Vec::with_capacity(ACTORS),
+            drone_state: FlightState::Landed,
+            latency_s: None,
         }
     }
 
@@ -119,7 +135,6 @@ impl OwnedTick {
 
 /// Ticks (the first `len` of `ticks` are live) and the events among them: `(i, event)` comes
 /// before tick `i`.
-#[derive(Default)]
 struct Batch {
     ticks: Vec<OwnedTick>,
     len: usize,
@@ -127,6 +142,15 @@ struct Batch {
 }
 
 impl Batch {
+    /// A batch whose ticks are all allocated up front: filling it allocates nothing.
+    fn new(ticks: usize) -> Batch {
+        Batch {
+            ticks: (0..ticks).map(|_| OwnedTick::empty()).collect(),
+            len: 0,
+            events: Vec::with_capacity(4),
+        }
+    }
+
     fn clear(&mut self) {
         self.len = 0;
         self.events.clear();
@@ -167,7 +191,7 @@ impl LogThread {
         let (empty_tx, empty_rx) = mpsc::sync_channel::<Batch>(BATCHES + 1);
         let (err_tx, err_rx) = mpsc::sync_channel::<io::Error>(1);
         for _ in 0..BATCHES {
-            let _ = empty_tx.send(Batch::default());
+            let _ = empty_tx.send(Batch::new(max_ticks));
         }
         // The syncer: data reaches the disk while the flight goes on. It ends when the
         // LogThread drops its sender; a failed sync is left to `finish`'s own `fsync`.
@@ -190,7 +214,7 @@ impl LogThread {
             full: Some(full_tx),
             empty: empty_rx,
             errors: err_rx,
-            batch: Batch::default(),
+            batch: Batch::new(max_ticks),
             batch_start_s: None,
             max_ticks,
             handle: Some(handle),
@@ -270,11 +294,10 @@ impl FlightSink for LogThread {
             }
         }
         let b = &mut self.batch;
-        if b.len < b.ticks.len() {
-            b.ticks[b.len].fill(record);
-        } else {
-            b.ticks.push(OwnedTick::new(record));
+        if b.len == b.ticks.len() {
+            b.ticks.push(OwnedTick::empty()); // not reached: a batch holds max_ticks
         }
+        b.ticks[b.len].fill(record);
         b.len += 1;
         let t_s = record.input.t_s;
         let start = *self.batch_start_s.get_or_insert(t_s);
