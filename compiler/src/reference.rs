@@ -7,8 +7,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// One sample of the 6D reference.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// One sample of the 6D reference (`Default`: at rest at the origin at t = 0, heading +x,
+/// camera level, shot 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Sample {
     pub t_s: f64,
     pub position_m: [f64; 3],

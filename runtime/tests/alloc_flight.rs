@@ -189,9 +189,8 @@ fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
     (watch.intervals, late)
 }
 
-#[test]
-fn a_flight_tick_allocates_nothing() {
-    let (intervals, late) = fly(Sink::None);
+/// Every shot tick after the warm-up allocated nothing.
+fn assert_none_late((intervals, late): (usize, Vec<(f64, usize)>)) {
     assert!(intervals > 1500, "{intervals} intervals");
     assert!(
         late.is_empty(),
@@ -199,6 +198,11 @@ fn a_flight_tick_allocates_nothing() {
         late.len(),
         &late[..late.len().min(10)]
     );
+}
+
+#[test]
+fn a_flight_tick_allocates_nothing() {
+    assert_none_late(fly(Sink::None));
 }
 
 #[test]
@@ -216,12 +220,5 @@ fn with_the_flight_log_only_the_mcap_chunks_allocate() {
 /// thread; on the loop's thread nothing allocates once the batches are warm.
 #[test]
 fn with_the_log_on_its_own_thread_the_loop_allocates_nothing() {
-    let (intervals, late) = fly(Sink::Thread);
-    assert!(intervals > 1500, "{intervals} intervals");
-    assert!(
-        late.is_empty(),
-        "{} of {intervals} shot ticks allocated after warm-up: {:?}",
-        late.len(),
-        &late[..late.len().min(10)]
-    );
+    assert_none_late(fly(Sink::Thread));
 }

@@ -427,13 +427,7 @@ mod tests {
     fn sample(t_s: f64) -> Sample {
         Sample {
             t_s,
-            position_m: [0.0; 3],
-            velocity_mps: [0.0; 3],
-            acceleration_mps2: [0.0; 3],
-            heading_rad: 0.0,
-            heading_rate_radps: 0.0,
-            camera_pitch_rad: 0.0,
-            shot: 0,
+            ..Sample::default()
         }
     }
 

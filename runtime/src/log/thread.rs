@@ -66,16 +66,7 @@ impl OwnedTick {
         OwnedTick {
             phase: Phase::TakeOff,
             shot: None,
-            sample: Sample {
-                t_s: 0.0,
-                position_m: [0.0; 3],
-                velocity_mps: [0.0; 3],
-                acceleration_mps2: [0.0; 3],
-                heading_rad: 0.0,
-                heading_rate_radps: 0.0,
-                camera_pitch_rad: 0.0,
-                shot: 0,
-            },
+            sample: Sample::default(),
             input: TickInput::default(),
             output: Ok(TickOutput::default()),
             command_sent: Command::HOVER,
