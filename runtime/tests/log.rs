@@ -791,3 +791,32 @@ fn the_log_thread_writes_the_same_file_and_closes_it_when_dropped() {
         }
     }
 }
+
+/// A log from before `/servo/tick` was CDR: replay says why it cannot read it and what to do.
+#[test]
+fn a_json_servo_tick_from_an_older_dronecine_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("old.mcap");
+    let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+    let mut w = mcap::Writer::new(file).unwrap();
+    let schema = w
+        .add_schema("dronecine.ServoTick", "jsonschema", b"{}")
+        .unwrap();
+    let channel = w
+        .add_channel(schema, "/servo/tick", "json", &BTreeMap::new())
+        .unwrap();
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: 0,
+        log_time: 0,
+        publish_time: 0,
+    };
+    w.write_to_known_channel(&header, b"{}").unwrap();
+    w.finish().unwrap();
+    drop(w);
+    let e = FlightLog::open(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("old.mcap") && e.contains("`json`") && e.contains("older dronecine"),
+        "{e}"
+    );
+}
