@@ -91,8 +91,7 @@ pub fn encode(buf: &mut Vec<u8>, tick: &TickRecord) {
     r.acceleration_mps2.iter().for_each(|&x| f(x));
     f(r.heading_rad);
     f(r.heading_rate_radps);
-    let out_ok = tick.output.as_ref().ok();
-    let o = out_ok.copied().unwrap_or_default();
+    let o = tick.output.unwrap_or_default();
     let command = |c: &Command, f: &mut dyn FnMut(f64)| {
         f(c.roll_rad);
         f(c.pitch_rad);

@@ -286,7 +286,8 @@ impl FlightSink for LogThread {
         }
         let b = &mut self.batch;
         if b.len == b.ticks.len() {
-            b.ticks.push(OwnedTick::empty()); // not reached: a batch holds max_ticks
+            // Only after a failed hand-over (the batch was kept): the loop is landing.
+            b.ticks.push(OwnedTick::empty());
         }
         b.ticks[b.len].fill(record);
         b.len += 1;
