@@ -100,21 +100,9 @@ impl Tick {
             output: self.output,
             command_sent: self.command_sent,
             latency_s: self.mocap.as_ref().map(|_| 0.0037),
-            // Read back with the tick it was written with (a finite time), screen points
-            // with a non-finite coordinate as none.
-            framing: if self.input.t_s.is_finite() {
-                let finite = |p: Option<[f64; 2]>| p.filter(|p| p.iter().all(|v| v.is_finite()));
-                self.framing
-                    .iter()
-                    .map(|f| FramingRecord {
-                        actor: f.actor,
-                        screen: finite(f.screen),
-                        requested: finite(f.requested),
-                    })
-                    .collect()
-            } else {
-                Vec::new()
-            },
+            // Both exact, on /servo/tick.
+            actors: self.actors.clone(),
+            framing: self.framing.clone(),
         }
     }
 }
@@ -307,6 +295,25 @@ fn tick_bits(t: &LoggedTick) -> Vec<u64> {
     v.extend(cmd(&t.command_sent));
     v.push(t.phase as u64);
     v.push(t.shot.map_or(u64::MAX, |s| s as u64));
+    v.push(t.actors.len() as u64);
+    for a in &t.actors {
+        let floats = a.position_m.iter().chain(&a.velocity_mps).chain([
+            &a.facing_rad,
+            &a.facing_rate_radps,
+            &a.height_m,
+        ]);
+        v.extend(floats.map(|x| x.to_bits()));
+    }
+    v.push(t.framing.len() as u64);
+    for f in &t.framing {
+        v.push(f.actor as u64);
+        for p in [f.screen, f.requested] {
+            match p {
+                Some(p) => v.extend([1, p[0].to_bits(), p[1].to_bits()]),
+                None => v.push(0),
+            }
+        }
+    }
     v
 }
 
@@ -501,10 +508,9 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
 
     let by_topic = messages(&bytes);
     for (k, (_, data)) in by_topic["/servo/tick"].iter().enumerate() {
-        assert_eq!(data.len(), cdr::LEN);
-        let mut want = ticks[k].logged();
-        want.framing.clear(); // on /framing
-        assert_eq!(tick_bits(&cdr::decode(data).unwrap()), tick_bits(&want));
+        let decoded = cdr::decode(data).unwrap();
+        assert!(decoded.extended && data.len() > cdr::FIXED_LEN);
+        assert_eq!(tick_bits(&decoded.tick), tick_bits(&ticks[k].logged()));
     }
     for (topic, msgs) in &by_topic {
         if topic == "/servo/tick" {
@@ -517,11 +523,11 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
         }
     }
     let n = ticks.len();
-    assert_eq!(by_topic["/reference"].len(), n);
     assert_eq!(by_topic["/servo/tick"].len(), n);
     // The plot topics at 30 Hz over 3 s (/command also on every failsafe tick and the one
-    // after; /measurement on ticks with a mocap frame); /servo/tick has every tick exactly.
-    for topic in ["/estimate", "/measurement"] {
+    // after; /measurement on ticks with a mocap frame, /framing on ticks with framing);
+    // /servo/tick has every tick exactly.
+    for topic in ["/reference", "/actors", "/estimate", "/measurement"] {
         let m = by_topic[topic].len();
         assert!((85..=91).contains(&m), "{m} {topic} messages");
     }
@@ -607,13 +613,19 @@ fn reference_actors_and_camera_are_exactly_compiles() {
 
     let flown = messages(&std::fs::read(&flight).unwrap());
     let compiled = messages(&std::fs::read(&compiled).unwrap());
-    for topic in ["/reference", "/actors", "/camera", "/camera_calibration"] {
-        let a: Vec<&Vec<u8>> = flown[topic].iter().map(|(_, d)| d).collect();
-        let b: Vec<&Vec<u8>> = compiled[topic].iter().map(|(_, d)| d).collect();
-        assert_eq!(a, b, "{topic}");
+    for topic in ["/camera", "/camera_calibration"] {
+        assert_eq!(flown[topic], compiled[topic], "{topic}");
     }
-    // Same log times too (the static topics: compile's first sample is at t = 0).
-    assert_eq!(flown["/reference"], compiled["/reference"]);
+    // The flight's /reference and /actors at 30 Hz: each message byte for byte compile's of
+    // the same tick (same log time), a third of them.
+    for topic in ["/reference", "/actors"] {
+        let (a, b) = (&flown[topic], &compiled[topic]);
+        assert!((35..=41).contains(&a.len()), "{} {topic}", a.len());
+        assert_eq!(b.len(), ticks.len());
+        for m in a {
+            assert!(b.contains(m), "{topic} at {} ns", m.0);
+        }
+    }
 }
 
 #[test]

@@ -1,17 +1,25 @@
 //! `/servo/tick` in CDR (OMG XCDR1, little-endian, the encoding of ROS 2 messages), with a
-//! `ros2msg` schema Foxglove decodes: every field replay needs, every float bit for bit
-//! (NaN payloads and `-0.0` included), 278 bytes a tick where the JSON form took about 1.1 kB.
+//! `ros2msg` schema Foxglove decodes: every field replay needs, the actors as the director saw
+//! them and the framing, every float bit for bit (NaN payloads and `-0.0` included): 470
+//! bytes a tick with two actors framed.
 //!
-//! The message is a 4-byte encapsulation header (`00 01 00 00`: CDR, little-endian) and a
-//! fixed layout, the fields in [`SCHEMA`]'s order, each aligned to its size from the end of the
-//! header. The 64-bit floats come first, so no padding is needed: offsets in [`SCHEMA`].
-//! A field that is absent (no measurement, a faulted tick's output, no latency) is zero with
-//! its flag clear.
+//! The message is a 4-byte encapsulation header (`00 01 00 00`: CDR, little-endian), a fixed
+//! part of 274 bytes, then two sequences (a `uint32` count, then the elements). Every field is
+//! aligned to its size from the end of the header: the fixed part's 64-bit floats come first,
+//! so it needs no padding (offsets in [`SCHEMA`]); the actors' count sits at 276 after two
+//! bytes of padding, the actors from 280 (72 bytes each); the framing's count follows them, and
+//! each framing element starts at the next multiple of 8 (40 bytes apart, the last one 38).
+//! A field that is absent (no measurement, a faulted tick's output, no latency, an actor
+//! behind the camera) is zero with its flag clear.
+//!
+//! A message of exactly [`FIXED_LEN`] bytes is the tick of a log written before the actors
+//! and the framing moved here (such a log has its framing on the JSON `/framing` topic at
+//! every tick): [`decode`] reads it with empty sequences and says so.
 
 use crate::backend::FlightState;
 use crate::control::{Estimate, Measurement, Reference, TickFault, TickInput, TickOutput};
-use crate::frames::Command;
-use crate::record::{Phase, TickRecord};
+use crate::frames::{ActorPose, Command};
+use crate::record::{FramingRecord, Phase, TickRecord};
 
 use super::LoggedTick;
 
@@ -64,10 +72,35 @@ uint8 drone_state                    # 270
 bool has_measurement                 # 271
 bool saturated                       # 272
 bool has_latency                     # 273
+dronecine/ActorPose[] actors         # 276: count; from 280, 72 bytes each
+dronecine/FramedActor[] framing      # count after the actors; elements 8-aligned, 40 bytes apart
+================================================================================
+MSG: dronecine/ActorPose
+# An actor as the director saw it this tick (tracked pose and velocity).
+float64[3] position_m                # feet on the floor
+float64[3] velocity_mps
+float64 facing_rad                   # counter-clockwise from +x
+float64 facing_rate_radps
+float64 height_m
+================================================================================
+MSG: dronecine/FramedActor
+# Where an actor is on screen and where the script puts it (holds only).
+float64[2] screen                    # zero unless has_screen (the actor is in front of the camera)
+float64[2] requested                 # zero unless has_requested
+uint32 actor                         # index in the scene's actors
+bool has_screen
+bool has_requested
 ";
 
-/// Bytes of one message, header included.
-pub const LEN: usize = 4 + 274;
+/// Bytes of the fixed part, header included (a message with no actors and no framing is 8
+/// bytes longer: the two counts).
+pub const FIXED_LEN: usize = 4 + 274;
+/// Bytes of one actor in the `actors` sequence.
+const ACTOR_LEN: usize = 72;
+/// Bytes from one framing element to the next (the last one is 2 shorter).
+const FRAMED_STRIDE: usize = 40;
+const FRAMED_LEN: usize = 38;
+const LEN: usize = FIXED_LEN;
 const HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Appends the CDR message of `tick` to `buf`.
@@ -129,14 +162,50 @@ pub fn encode(buf: &mut Vec<u8>, tick: &TickRecord) {
     out[276] = u8::from(o.saturated);
     out[277] = u8::from(tick.latency_s.is_some());
     buf.extend_from_slice(&out);
+    encode_sequences(buf, tick);
 }
 
-/// Reads a message written by [`encode`]; a message of another length or encapsulation, or
-/// with an unknown enum value, is an error that says which.
-pub fn decode(data: &[u8]) -> Result<LoggedTick, String> {
-    if data.len() != LEN {
+/// Appends the actors and the framing after the fixed part (which `buf` ends with).
+fn encode_sequences(buf: &mut Vec<u8>, tick: &TickRecord) {
+    let origin = buf.len() - (FIXED_LEN - 4);
+    let align = |buf: &mut Vec<u8>, to: usize| {
+        let pad = (to - (buf.len() - origin) % to) % to;
+        buf.extend_from_slice(&[0u8; 8][..pad]);
+    };
+    let count = |buf: &mut Vec<u8>, n: usize| {
+        align(buf, 4);
+        buf.extend_from_slice(&u32::try_from(n).unwrap_or(u32::MAX).to_le_bytes());
+    };
+    let floats = |buf: &mut Vec<u8>, xs: &[f64]| {
+        for x in xs {
+            buf.extend_from_slice(&x.to_le_bytes());
+        }
+    };
+    count(buf, tick.actors.len());
+    for a in tick.actors {
+        align(buf, 8);
+        floats(buf, &a.position_m);
+        floats(buf, &a.velocity_mps);
+        floats(buf, &[a.facing_rad, a.facing_rate_radps, a.height_m]);
+    }
+    count(buf, tick.framing.len());
+    for f in tick.framing {
+        align(buf, 8);
+        floats(buf, &f.screen.unwrap_or_default());
+        floats(buf, &f.requested.unwrap_or_default());
+        buf.extend_from_slice(&u32::try_from(f.actor).unwrap_or(u32::MAX).to_le_bytes());
+        buf.push(u8::from(f.screen.is_some()));
+        buf.push(u8::from(f.requested.is_some()));
+    }
+}
+
+/// Reads a message written by [`encode`] (or an older fixed-length one: see the module doc,
+/// then `extended` is false); a message that is cut or too long, of another encapsulation, or
+/// with an unknown enum value or an impossible count, is an error that says which.
+pub fn decode(data: &[u8]) -> Result<Decoded, String> {
+    if data.len() < LEN {
         return Err(format!(
-            "a CDR /servo/tick message is {LEN} bytes, this one {}",
+            "a CDR /servo/tick message is at least {LEN} bytes, this one {}",
             data.len()
         ));
     }
@@ -207,15 +276,107 @@ pub fn decode(data: &[u8]) -> Result<LoggedTick, String> {
         }),
         Some(fault) => Err(fault),
     };
-    Ok(LoggedTick {
+    let mut tick = LoggedTick {
         phase,
         shot: usize::try_from(shot).ok(),
         input,
         output,
         command_sent: cmd(28),
+        actors: Vec::new(),
         framing: Vec::new(),
         latency_s: flag(277, "has_latency")?.then(|| f(32)),
-    })
+    };
+    let extended = data.len() > LEN;
+    if extended {
+        decode_sequences(&data[4..], &mut tick)?;
+    }
+    Ok(Decoded { tick, extended })
+}
+
+/// A decoded `/servo/tick`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decoded {
+    pub tick: LoggedTick,
+    /// The message has the actors and framing sequences (else it is an older fixed-length
+    /// tick, whose framing is on `/framing`).
+    pub extended: bool,
+}
+
+/// Reads the two sequences after the fixed part; `body` is the message after its header.
+fn decode_sequences(body: &[u8], tick: &mut LoggedTick) -> Result<(), String> {
+    let mut at = LEN - 4;
+    let align = |at: &mut usize, to: usize| *at = at.div_ceil(to) * to;
+    let take = |at: &mut usize, n: usize, what: &str| -> Result<std::ops::Range<usize>, String> {
+        let r = *at..*at + n;
+        if r.end > body.len() {
+            return Err(format!(
+                "the message ends at byte {} in {what} (it needs {} bytes)",
+                body.len() + 4,
+                r.end + 4
+            ));
+        }
+        *at = r.end;
+        Ok(r)
+    };
+    let f = |r: &std::ops::Range<usize>, i: usize| {
+        let s = r.start + 8 * i;
+        f64::from_le_bytes(body[s..s + 8].try_into().expect("8 bytes"))
+    };
+    let count = |at: &mut usize, what: &str, each: usize| -> Result<usize, String> {
+        align(at, 4);
+        let r = take(at, 4, what)?;
+        let n = u32::from_le_bytes(body[r].try_into().expect("4 bytes")) as usize;
+        // Each element takes at least `each - 7` bytes: a count the rest cannot hold is damage
+        // (and is refused before anything is allocated for it).
+        if n.saturating_mul(each - 7) > body.len() - *at {
+            return Err(format!(
+                "{what}: a count of {n} in a message of {} bytes",
+                body.len() + 4
+            ));
+        }
+        Ok(n)
+    };
+    let n = count(&mut at, "the actors' count", ACTOR_LEN)?;
+    tick.actors.reserve_exact(n);
+    for _ in 0..n {
+        align(&mut at, 8);
+        let r = take(&mut at, ACTOR_LEN, "an actor")?;
+        tick.actors.push(ActorPose {
+            position_m: [f(&r, 0), f(&r, 1), f(&r, 2)],
+            velocity_mps: [f(&r, 3), f(&r, 4), f(&r, 5)],
+            facing_rad: f(&r, 6),
+            facing_rate_radps: f(&r, 7),
+            height_m: f(&r, 8),
+        });
+    }
+    let n = count(&mut at, "the framing's count", FRAMED_STRIDE)?;
+    tick.framing.reserve_exact(n);
+    for _ in 0..n {
+        align(&mut at, 8);
+        let r = take(&mut at, FRAMED_LEN, "a framing element")?;
+        let flag = |b: u8, name: &str| match b {
+            0 => Ok(false),
+            1 => Ok(true),
+            b => Err(format!("`{name}` is {b}, not a bool")),
+        };
+        let actor = u32::from_le_bytes(body[r.start + 32..r.start + 36].try_into().expect("4"));
+        let screen = flag(body[r.start + 36], "has_screen")?;
+        let requested = flag(body[r.start + 37], "has_requested")?;
+        tick.framing.push(FramingRecord {
+            actor: actor as usize,
+            screen: screen.then(|| [f(&r, 0), f(&r, 1)]),
+            requested: requested.then(|| [f(&r, 2), f(&r, 3)]),
+        });
+    }
+    if at != body.len() {
+        return Err(format!(
+            "{} bytes after the framing (the message is {} bytes, its fields end at {})",
+            body.len() - at,
+            body.len() + 4,
+            at + 4
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -282,7 +443,9 @@ mod tests {
         };
         let mut buf = Vec::new();
         encode(&mut buf, &record(&s, Ok(out)));
-        assert_eq!(buf.len(), 278);
+        // The fixed part and two empty sequences.
+        assert_eq!(buf.len(), 278 + 2 + 4 + 4);
+        assert_eq!(&buf[278..], &[0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
         assert_eq!(&buf[..4], &[0, 1, 0, 0]);
         let at = |off: usize| f64::from_le_bytes(buf[4 + off..12 + off].try_into().unwrap());
         assert_eq!(at(0), 12.5);
@@ -302,7 +465,7 @@ mod tests {
         assert_eq!(at(248), -0.4);
         assert_eq!(at(256), 2.5e-5);
         assert_eq!(&buf[4 + 264..4 + 268], &3i32.to_le_bytes());
-        assert_eq!(&buf[4 + 268..], &[2, 0, 2, 1, 1, 1]);
+        assert_eq!(&buf[4 + 268..4 + 274], &[2, 0, 2, 1, 1, 1]);
         // The schema's comments give the same offsets.
         for (field, off) in [
             ("float64 estimate_heading_rad", 216),
@@ -313,6 +476,96 @@ mod tests {
             let line = SCHEMA.lines().find(|l| l.starts_with(field)).unwrap();
             assert!(line.contains(&format!("# {off}")), "{line}");
         }
+    }
+
+    const ACTORS: [ActorPose; 2] = [
+        ActorPose {
+            position_m: [1.0, 2.0, 0.0],
+            velocity_mps: [0.5, -0.5, 0.0],
+            facing_rad: 0.25,
+            facing_rate_radps: -0.125,
+            height_m: 1.8,
+        },
+        ActorPose {
+            position_m: [-1.0, 0.0, 0.0],
+            velocity_mps: [0.0; 3],
+            facing_rad: -0.0,
+            facing_rate_radps: 0.0,
+            height_m: 1.65,
+        },
+    ];
+    const FRAMING: [FramingRecord; 2] = [
+        FramingRecord {
+            actor: 0,
+            screen: Some([-0.33, 0.1]),
+            requested: Some([-1.0 / 3.0, 0.0]),
+        },
+        FramingRecord {
+            actor: 1,
+            screen: None,
+            requested: Some([1.0 / 3.0, 0.0]),
+        },
+    ];
+
+    /// The sequences' layout: counts aligned to 4, elements to 8, from the end of the header
+    /// (offsets written out by hand from the CDR rules).
+    #[test]
+    fn the_sequences_layout_is_the_schemas() {
+        let s = sample();
+        let mut r = record(&s, Ok(TickOutput::default()));
+        r.actors = &ACTORS;
+        r.framing = &FRAMING;
+        let mut buf = Vec::new();
+        encode(&mut buf, &r);
+        let body = &buf[4..];
+        let f = |off: usize| f64::from_le_bytes(body[off..off + 8].try_into().unwrap());
+        let u = |off: usize| u32::from_le_bytes(body[off..off + 4].try_into().unwrap());
+        assert_eq!(&body[274..276], &[0, 0], "padding to the count");
+        assert_eq!(u(276), 2);
+        // Actor 0 at 280, actor 1 at 352 (72 bytes each).
+        assert_eq!(f(280), 1.0);
+        assert_eq!(f(280 + 24), 0.5);
+        assert_eq!(f(280 + 48), 0.25);
+        assert_eq!(f(280 + 56), -0.125);
+        assert_eq!(f(280 + 64), 1.8);
+        assert_eq!(f(352), -1.0);
+        assert_eq!(f(352 + 48).to_bits(), (-0.0f64).to_bits());
+        assert_eq!(f(352 + 64), 1.65);
+        // The framing's count right after (424, 4-aligned), its first element at 432.
+        assert_eq!(u(424), 2);
+        assert_eq!(&body[428..432], &[0; 4]);
+        assert_eq!(f(432), -0.33);
+        assert_eq!(f(432 + 16), -1.0 / 3.0);
+        assert_eq!(u(432 + 32), 0);
+        assert_eq!(&body[432 + 36..432 + 40], &[1, 1, 0, 0]);
+        // The second at 472: no screen (zeros, flag clear).
+        assert_eq!(f(472), 0.0);
+        assert_eq!(f(472 + 16), 1.0 / 3.0);
+        assert_eq!(u(472 + 32), 1);
+        assert_eq!(&body[472 + 36..], &[0, 1]);
+        assert_eq!(buf.len(), 514);
+        let back = decode(&buf).unwrap();
+        assert!(back.extended);
+        assert_eq!(back.tick.actors, ACTORS);
+        assert_eq!(back.tick.framing, FRAMING);
+    }
+
+    /// A tick of an older log (the fixed part only) still reads, with empty sequences.
+    #[test]
+    fn a_fixed_length_tick_of_an_older_log_reads() {
+        let s = sample();
+        let mut r = record(&s, Ok(TickOutput::default()));
+        r.actors = &ACTORS;
+        r.framing = &FRAMING;
+        let mut buf = Vec::new();
+        encode(&mut buf, &r);
+        let old = decode(&buf[..FIXED_LEN]).unwrap();
+        assert!(!old.extended);
+        assert!(old.tick.actors.is_empty() && old.tick.framing.is_empty());
+        let new = decode(&buf).unwrap().tick;
+        assert_eq!(old.tick.input.t_s, new.input.t_s);
+        assert_eq!(old.tick.command_sent, new.command_sent);
+        assert_eq!(old.tick.output, new.output);
     }
 
     #[test]
@@ -332,7 +585,7 @@ mod tests {
                 }
                 let mut buf = Vec::new();
                 encode(&mut buf, &r);
-                let back = decode(&buf).unwrap();
+                let back = decode(&buf).unwrap().tick;
                 assert_eq!(back.shot, shot);
                 assert_eq!(back.latency_s, latency);
                 assert_eq!(back.output, output);
@@ -348,8 +601,26 @@ mod tests {
     fn damaged_messages_are_errors() {
         let s = sample();
         let mut buf = Vec::new();
-        encode(&mut buf, &record(&s, Ok(TickOutput::default())));
-        assert!(decode(&buf[..100]).unwrap_err().contains("278 bytes"));
+        let mut r = record(&s, Ok(TickOutput::default()));
+        r.actors = &ACTORS;
+        r.framing = &FRAMING;
+        encode(&mut buf, &r);
+        assert!(decode(&buf[..100]).unwrap_err().contains("at least 278 bytes"));
+        // Cut anywhere in the sequences.
+        for len in [FIXED_LEN + 1, FIXED_LEN + 5, 300, 431, 440, 513] {
+            let e = decode(&buf[..len]).unwrap_err();
+            assert!(e.contains("ends at byte") || e.contains("a count of"), "{len}: {e}");
+        }
+        let mut long = buf.clone();
+        long.push(0);
+        assert!(decode(&long).unwrap_err().contains("1 bytes after the framing"));
+        // A count the message cannot hold is refused before anything is allocated for it.
+        let mut huge = buf.clone();
+        huge[4 + 276..4 + 280].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(decode(&huge).unwrap_err().contains("a count of 4294967295"));
+        let mut bad_flag = buf.clone();
+        bad_flag[4 + 432 + 36] = 2;
+        assert!(decode(&bad_flag).unwrap_err().contains("has_screen"));
         let mut big_endian = buf.clone();
         big_endian[1] = 0;
         assert!(decode(&big_endian).unwrap_err().contains("encapsulation"));

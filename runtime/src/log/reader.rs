@@ -19,7 +19,7 @@ use serde::Deserialize;
 use super::exact::Num;
 use super::{cdr, topic, LogError, HEADER_METADATA};
 use crate::control::{TickFault, TickInput, TickOutput};
-use crate::frames::Command;
+use crate::frames::{ActorPose, Command};
 use crate::record::{Event, FlightHeader, FramingRecord, Phase};
 
 /// One tick as replay needs it.
@@ -30,7 +30,9 @@ pub struct LoggedTick {
     pub input: TickInput,
     pub output: Result<TickOutput, TickFault>,
     pub command_sent: Command,
-    /// The tick's `/framing` records (empty outside holds).
+    /// The actors as the director saw them (empty in a log of an older dronecine).
+    pub actors: Vec<ActorPose>,
+    /// The tick's framing records (empty outside holds).
     pub framing: Vec<FramingRecord>,
     /// Mocap frame arrival → command sent, seconds (`None` without a new frame).
     pub latency_s: Option<f64>,
@@ -197,7 +199,8 @@ struct ReadState {
     header: Option<FlightHeader>,
     ticks: Vec<LoggedTick>,
     events: Vec<Event>,
-    /// A `/framing` message waiting for its tick (written just before it, same `t_s`).
+    /// A `/framing` message waiting for its tick (written just before it, same `t_s`): the
+    /// framing of a log whose ticks do not carry it (an older dronecine's).
     pending_framing: Option<(u64, Vec<FramingRecord>)>,
     records: usize,
     footer: bool,
@@ -239,15 +242,15 @@ impl ReadState {
             }
             Record::Message { header, data } => match self.channels.get(&header.channel_id) {
                 Some(Wanted::Tick) => {
-                    let tick = cdr::decode(&data).map_err(|detail| LogError::BadMessage {
+                    let decoded = cdr::decode(&data).map_err(|detail| LogError::BadMessage {
                         path: self.path.clone(),
                         topic: topic::SERVO_TICK,
                         index: self.ticks.len(),
                         detail,
                     })?;
-                    let mut tick = tick;
+                    let mut tick = decoded.tick;
                     if let Some((t_bits, framing)) = self.pending_framing.take() {
-                        if t_bits == tick.input.t_s.to_bits() {
+                        if !decoded.extended && t_bits == tick.input.t_s.to_bits() {
                             tick.framing = framing;
                         }
                     }

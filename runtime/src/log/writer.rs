@@ -1,8 +1,9 @@
 //! [`FlightLogWriter`]: streams the flight's ticks and events into the MCAP log (contents and
 //! crash behaviour in the module doc of `log`).
 //!
-//! Per tick the writer formats JSON into one reused buffer (`text.rs`, the compiler's
-//! hand-written JSON helpers behind a cache of float texts) and hands it to the MCAP writer,
+//! Per tick the writer encodes `/servo/tick` (CDR, `cdr.rs`) and, at the plot and `/tf`
+//! rates, formats JSON (`text.rs`, the compiler's hand-written JSON helpers behind a cache of
+//! float texts), each into one reused buffer handed to the MCAP writer,
 //! whose in-memory chunk buffer is reused from chunk to chunk; chunks carry no message
 //! indexes (readers scan the ≤ 1 s chunks). The only allocation on the per-tick path is the
 //! compiler's `foxglove::Frames::message` (a 40-byte time stamp, on `/tf` ticks, 30 Hz).
@@ -51,9 +52,10 @@ pub struct LogOptions {
     pub compression: LogCompression,
     /// Rate of `/tf` (Foxglove's 3D view).
     pub tf_hz: f64,
-    /// Rate of `/estimate`, `/measurement` and `/command` (Foxglove's plots; `/servo/tick`
-    /// holds every tick's exact controller input and output). A `/command` whose `failsafe`
-    /// flag is set, and the first after it, are written whatever the rate.
+    /// Rate of `/reference`, `/actors`, `/estimate`, `/measurement`, `/command` and
+    /// `/framing` (Foxglove's plots; `/servo/tick` holds every tick's exact controller input
+    /// and output, actors and framing). A `/command` whose `failsafe` flag is set, and the
+    /// first after it, are written whatever the rate.
     pub plot_hz: f64,
     /// Flight time between two chunk closes and flushes: what a crash may lose. Also closed
     /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say.
@@ -125,10 +127,13 @@ pub struct FlightLogWriter {
     /// The reused message buffer and float texts.
     text: Text,
     next_tf_s: f64,
-    /// When `/estimate`, `/measurement` and `/command` are next due (`plot_hz`).
+    /// When the plot topics are next due (`plot_hz`): `/reference` with `/actors`,
+    /// `/estimate`, `/measurement`, `/command`, `/framing`.
+    next_reference_s: f64,
     next_estimate_s: f64,
     next_measurement_s: f64,
     next_command_s: f64,
+    next_framing_s: f64,
     /// The last `/command` written had its `failsafe` flag set.
     command_failsafe: bool,
     next_flush_s: f64,
@@ -318,9 +323,11 @@ impl FlightLogWriter {
             heights_m: Vec::new(),
             text: Text::new(),
             next_tf_s: f64::NEG_INFINITY,
+            next_reference_s: f64::NEG_INFINITY,
             next_estimate_s: f64::NEG_INFINITY,
             next_measurement_s: f64::NEG_INFINITY,
             next_command_s: f64::NEG_INFINITY,
+            next_framing_s: f64::NEG_INFINITY,
             command_failsafe: false,
             next_flush_s: options.flush_period_s,
             ticks_since_flush: 0,
@@ -404,20 +411,22 @@ impl FlightLogWriter {
         let t_s = tick.input.t_s;
         let ns = ns_from_s(t_s);
         let output = tick.output.as_ref().ok();
-        let text = &mut self.text;
 
-        // /reference, exactly as compile; its fields are also /servo/tick's reference.
-        text.buf.clear();
-        write_reference(&mut text.buf, tick.sample);
-        self.put_text(|c| &mut c.reference, ns)?;
-
-        self.text.buf.clear();
-        write_actors(&mut self.text.buf, t_s, &self.actor_prefixes, tick.actors);
-        self.put_text(|c| &mut c.actors, ns)?;
-
-        // The plot topics at `plot_hz` (each on the first tick that has one when due).
+        // The plot topics at `plot_hz` (each on the first tick that has one when due); every
+        // tick's exact values are on /servo/tick.
         let hz = self.options.plot_hz;
         let due = |next_s: f64| t_s >= next_s || !t_s.is_finite();
+
+        // /reference and /actors, exactly as compile writes them.
+        if due(self.next_reference_s) {
+            self.next_reference_s = advance(self.next_reference_s, t_s, hz);
+            self.text.buf.clear();
+            write_reference(&mut self.text.buf, tick.sample);
+            self.put_text(|c| &mut c.reference, ns)?;
+            self.text.buf.clear();
+            write_actors(&mut self.text.buf, t_s, &self.actor_prefixes, tick.actors);
+            self.put_text(|c| &mut c.actors, ns)?;
+        }
         if let Some(out) = output {
             if due(self.next_estimate_s) {
                 self.next_estimate_s = advance(self.next_estimate_s, t_s, hz);
@@ -443,7 +452,8 @@ impl FlightLogWriter {
             self.put_text(|c| &mut c.command, ns)?;
         }
 
-        if !tick.framing.is_empty() {
+        if !tick.framing.is_empty() && due(self.next_framing_s) {
+            self.next_framing_s = advance(self.next_framing_s, t_s, hz);
             self.text
                 .framing(t_s, tick.shot, &self.framing_names, tick.framing);
             self.put_text(|c| &mut c.framing, ns)?;
