@@ -7,9 +7,12 @@
 //! thread over a bounded channel; the writer thread writes it with [`FlightLogWriter`] and
 //! sends the emptied batch back. Events keep their place among the ticks.
 //!
-//! Every two seconds of flight a third thread, which mostly waits on the disk, syncs the
-//! file's data (`sync_data`): a power cut loses less, and the final `fsync` has only the tail
-//! left to write.
+//! Every two seconds of flight, and at most once every two seconds of wall-clock time, a third
+//! thread, which mostly waits on the disk, syncs the file's data (`sync_data`): a power cut
+//! loses less, and the final `fsync` has only the tail left to write. (A simulated flight runs
+//! thousands of times faster than real time: syncing every two seconds of its flight would
+//! ask the disk for hundreds of syncs a second; what a power cut loses is counted in wall-clock
+//! time.)
 //!
 //! What a crash may lose: a batch is handed over every [`BATCH_PERIOD_S`] of flight time and
 //! the writer closes a chunk every `flush_period_s` (the caller's [`LogOptions`]), so a
@@ -23,6 +26,7 @@
 use std::io;
 use std::sync::mpsc::{self, Receiver, SyncSender, TryRecvError};
 use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 use super::FlightLogWriter;
 use crate::backend::{FlightState, MocapFrame};
@@ -37,8 +41,10 @@ pub const BATCH_PERIOD_S: f64 = 0.25;
 /// (two seconds of flight).
 const BATCHES: usize = 8;
 /// The file's data is synced to the disk (`sync_data`, on a third thread that mostly waits)
-/// after every this many batches (two seconds of flight).
+/// after every this many batches (two seconds of flight)…
 const SYNC_EVERY_BATCHES: u64 = 8;
+/// …and at most this often in wall-clock time.
+const SYNC_PERIOD: Duration = Duration::from_secs(2);
 
 /// A [`TickRecord`] with its borrowed parts copied, kept from batch to batch.
 #[derive(Clone, Debug)]
@@ -166,6 +172,8 @@ pub struct LogThread {
     handle: Option<JoinHandle<io::Result<()>>>,
     /// Asks the syncer thread to `sync_data` (never blocks: a sync under way absorbs the ask).
     sync: Option<SyncSender<()>>,
+    /// When a sync was last asked for.
+    last_sync: Option<Instant>,
     batches_sent: u64,
 }
 
@@ -210,6 +218,7 @@ impl LogThread {
             max_ticks,
             handle: Some(handle),
             sync,
+            last_sync: None,
             batches_sent: 0,
         })
     }
@@ -234,8 +243,11 @@ impl LogThread {
         self.batch_start_s = None;
         full.send(batch).map_err(|_| self.thread_error())?;
         self.batches_sent += 1;
-        if self.batches_sent % SYNC_EVERY_BATCHES == 0 {
+        if self.batches_sent % SYNC_EVERY_BATCHES == 0
+            && self.last_sync.is_none_or(|t| t.elapsed() >= SYNC_PERIOD)
+        {
             if let Some(sync) = &self.sync {
+                self.last_sync = Some(Instant::now());
                 let _ = sync.try_send(());
             }
         }
