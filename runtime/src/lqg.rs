@@ -319,34 +319,59 @@ impl Estimator {
     /// Predicts over Δ with the translation input `u = [φ, θ, ż]` and yaw-rate command that
     /// were sent, at the estimated heading.
     pub fn predict(&mut self, dt_s: f64, u: &Vector3<f64>, yaw_rate_command_radps: f64) {
-        let a1 = self.model.a1(dt_s, self.c);
-        let b1 = self.model.b1(dt_s, self.c);
-        let mut a = Matrix9::zeros();
-        a.fixed_view_mut::<6, 6>(0, 0).copy_from(&a1);
-        for i in 6..9 {
-            a[(i, i)] = 1.0;
-        }
+        // A = [[I − L, 0, L], [Δ I, I, 0], [0, 0, I]] (the L block only with the wind
+        // estimate), B = [G; 0; 0]: the products are taken block by block, a quarter of the
+        // multiplications of the dense 9×9 A P Aᵀ (`predict_dense` in the tests is that).
+        let (lag, g) = self.model.lag_and_input(dt_s, self.c);
+        let m = Matrix3::identity() - lag;
+        let wind = self.disturbance_diffusion > 0.0;
+        let v = self.x.fixed_rows::<3>(0).into_owned();
         let d = self.x.fixed_rows::<3>(6).into_owned();
-        let x1 = a1 * self.x.fixed_rows::<6>(0) + b1 * u;
-        self.x.fixed_rows_mut::<6>(0).copy_from(&x1);
-        if self.disturbance_diffusion > 0.0 {
-            // v ← … + L d, with L = I − A_vv the world-frame lag.
-            let lag = Matrix3::identity() - a1.fixed_view::<3, 3>(0, 0);
-            a.fixed_view_mut::<3, 3>(0, 6).copy_from(&lag);
-            let dv = lag * d;
-            for i in 0..3 {
-                self.x[i] += dv[i];
-            }
+        let mut v1 = m * v + g * u;
+        if wind {
+            v1 += lag * d;
         }
-        let mut p = a * self.p * a.transpose();
-        let mut pvp = p.fixed_view_mut::<6, 6>(0, 0);
+        let p1 = self.x.fixed_rows::<3>(3) + v * dt_s;
+        self.x.fixed_rows_mut::<3>(0).copy_from(&v1);
+        self.x.fixed_rows_mut::<3>(3).copy_from(&p1);
+
+        // Q = A P, by block rows.
+        let p = &self.p;
+        let (pv, pp, pd) = (
+            p.fixed_rows::<3>(0),
+            p.fixed_rows::<3>(3),
+            p.fixed_rows::<3>(6),
+        );
+        let mut q = Matrix9::zeros();
+        let mut qv = m * pv;
+        if wind {
+            qv += lag * pd;
+        }
+        q.fixed_rows_mut::<3>(0).copy_from(&qv);
+        q.fixed_rows_mut::<3>(3).copy_from(&(pv * dt_s + pp));
+        q.fixed_rows_mut::<3>(6).copy_from(&pd);
+        // P' = Q Aᵀ, by block columns.
+        let (qcv, qcp, qcd) = (
+            q.fixed_columns::<3>(0),
+            q.fixed_columns::<3>(3),
+            q.fixed_columns::<3>(6),
+        );
+        let mut pn = Matrix9::zeros();
+        let mut cv = qcv * m.transpose();
+        if wind {
+            cv += qcd * lag.transpose();
+        }
+        pn.fixed_columns_mut::<3>(0).copy_from(&cv);
+        pn.fixed_columns_mut::<3>(3).copy_from(&(qcv * dt_s + qcp));
+        pn.fixed_columns_mut::<3>(6).copy_from(&qcd);
+        let mut pvp = pn.fixed_view_mut::<6, 6>(0, 0);
         pvp += self.process;
-        if self.disturbance_diffusion > 0.0 {
+        if wind {
             for i in 6..9 {
-                p[(i, i)] += self.disturbance_diffusion * dt_s;
+                pn[(i, i)] += self.disturbance_diffusion * dt_s;
             }
         }
-        self.p = (p + p.transpose()) * 0.5;
+        self.p = (pn + pn.transpose()) * 0.5;
         self.c = self
             .model
             .heading_step(self.c, dt_s, yaw_rate_command_radps);
@@ -373,8 +398,10 @@ impl Estimator {
     pub fn update(&mut self, m: &Measurement) {
         let s = self.p.fixed_view::<3, 3>(3, 3).into_owned() + self.measurement;
         let pht: Matrix9x3 = self.p.fixed_view::<9, 3>(0, 3).into_owned();
-        // Kᵀ = S⁻¹ (H P) with S symmetric.
-        if let Some(kt) = dare::solve_linear(&s, &pht.transpose()) {
+        // Kᵀ = S⁻¹ (H P), S symmetric positive definite (a covariance plus the measurement
+        // noise, so well conditioned): S⁻¹ in closed form; a non-finite or non-positive
+        // determinant skips the correction.
+        if let Some(kt) = inverse_spd3(&s).map(|si| si * pht.transpose()) {
             let k: Matrix9x3 = kt.transpose();
             let y = Vector3::from(m.position_m) - self.x.fixed_rows::<3>(3);
             self.x += k * y;
@@ -413,6 +440,26 @@ impl Estimator {
             heading_rad: self.c,
         }
     }
+}
+
+/// The inverse of a symmetric 3×3 matrix by its cofactors (the upper triangle is read), or
+/// `None` when its determinant is not finite and positive (not positive definite, or
+/// damaged).
+fn inverse_spd3(s: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let (a, b, c) = (s[(0, 0)], s[(0, 1)], s[(0, 2)]);
+    let (d, e, f) = (s[(1, 1)], s[(1, 2)], s[(2, 2)]);
+    let c00 = d * f - e * e;
+    let c01 = c * e - b * f;
+    let c02 = b * e - c * d;
+    let det = a * c00 + b * c01 + c * c02;
+    if !(det.is_finite() && det > 0.0) {
+        return None;
+    }
+    let c11 = a * f - c * c;
+    let c12 = b * c - a * e;
+    let c22 = a * d - b * b;
+    let k = 1.0 / det;
+    Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, c22) * k)
 }
 
 /// Whether a tick input can be used: every number finite and Δ > 0.
@@ -706,9 +753,9 @@ impl LqgServo {
         }
         let mut u = -k1 * (x - xr);
         // G⁻¹ (M_D T_D M_Dᵀ v_ref + Δ a_ref): holds v_ref and follows a_ref.
-        let g = self.model.input_matrix(dt_s, c);
+        let (lag, g) = self.model.lag_and_input(dt_s, c);
         // With the wind estimate d: the lag pulls toward G u + d, so hold v_ref − d.
-        let mut target = self.model.world_lag(dt_s, c) * (v_ref - self.estimator.disturbance_mps());
+        let mut target = lag * (v_ref - self.estimator.disturbance_mps());
         if !self.options.paper_prefilter {
             target += Vector3::from(r.acceleration_mps2) * dt_s;
         }
@@ -773,5 +820,114 @@ impl Controller for LqgServo {
             estimate: self.estimator.estimate(),
             saturated,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The prediction as A P Aᵀ with the dense 9×9 A (what `predict` computes block by block).
+    fn predict_dense(e: &mut Estimator, dt_s: f64, u: &Vector3<f64>, yaw: f64) {
+        let a1 = e.model.a1(dt_s, e.c);
+        let b1 = e.model.b1(dt_s, e.c);
+        let mut a = Matrix9::zeros();
+        a.fixed_view_mut::<6, 6>(0, 0).copy_from(&a1);
+        for i in 6..9 {
+            a[(i, i)] = 1.0;
+        }
+        let d = e.x.fixed_rows::<3>(6).into_owned();
+        let x1 = a1 * e.x.fixed_rows::<6>(0) + b1 * u;
+        e.x.fixed_rows_mut::<6>(0).copy_from(&x1);
+        if e.disturbance_diffusion > 0.0 {
+            let lag = Matrix3::identity() - a1.fixed_view::<3, 3>(0, 0);
+            a.fixed_view_mut::<3, 3>(0, 6).copy_from(&lag);
+            let dv = lag * d;
+            for i in 0..3 {
+                e.x[i] += dv[i];
+            }
+        }
+        let mut p = a * e.p * a.transpose();
+        let mut pvp = p.fixed_view_mut::<6, 6>(0, 0);
+        pvp += e.process;
+        if e.disturbance_diffusion > 0.0 {
+            for i in 6..9 {
+                p[(i, i)] += e.disturbance_diffusion * dt_s;
+            }
+        }
+        e.p = (p + p.transpose()) * 0.5;
+        e.c = e.model.heading_step(e.c, dt_s, yaw);
+        e.pc += e.heading_process;
+    }
+
+    /// The Kalman correction with a general linear solve (what `update` does by Cholesky).
+    fn update_dense(e: &mut Estimator, m: &Measurement) {
+        let s = e.p.fixed_view::<3, 3>(3, 3).into_owned() + e.measurement;
+        let pht: Matrix9x3 = e.p.fixed_view::<9, 3>(0, 3).into_owned();
+        let kt = dare::solve_linear(&s, &pht.transpose()).unwrap();
+        let k: Matrix9x3 = kt.transpose();
+        let y = Vector3::from(m.position_m) - e.x.fixed_rows::<3>(3);
+        e.x += k * y;
+        let p = e.p - k * pht.transpose();
+        e.p = (p + p.transpose()) * 0.5;
+        let kc = e.pc / (e.pc + e.heading_measurement);
+        e.c = frames::wrap_angle_rad(e.c + kc * frames::wrap_angle_rad(m.heading_rad - e.c));
+        e.pc *= 1.0 - kc;
+    }
+
+    #[test]
+    fn the_closed_form_inverse_inverts_and_refuses_what_is_not_positive_definite() {
+        let s = Matrix3::new(4.0, 1.0, 0.5, 1.0, 3.0, -0.25, 0.5, -0.25, 2.0);
+        let inv = inverse_spd3(&s).unwrap();
+        assert!((inv * s - Matrix3::identity()).amax() < 1e-15);
+        let indefinite = Matrix3::new(1.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert_eq!(inverse_spd3(&indefinite), None);
+        assert_eq!(inverse_spd3(&(s * f64::NAN)), None);
+        assert_eq!(inverse_spd3(&Matrix3::zeros()), None);
+    }
+
+    /// Block-wise prediction and closed-form correction against the dense products, over a
+    /// flight of varying Δ, heading, inputs and missing measurements, with and without the
+    /// wind estimate (which couples v and d).
+    #[test]
+    fn the_structured_filter_is_the_dense_one() {
+        let profile = Profile::builtin("ardrone2").unwrap();
+        for wind in [false, true] {
+            let mut fast = if wind {
+                Estimator::with_disturbance(&profile)
+            } else {
+                Estimator::new(&profile)
+            };
+            fast.reset(&Measurement {
+                position_m: [0.5, -1.0, 1.2],
+                heading_rad: 2.9,
+            });
+            let mut dense = fast.clone();
+            for k in 0..2000 {
+                let t = k as f64 * 0.01;
+                let dt = 0.01 + 0.004 * (k as f64 * 0.37).sin();
+                let u = Vector3::new(0.1 * (t * 1.3).sin(), -0.08 * (t * 0.7).cos(), 0.3);
+                let yaw = 0.8 * (t * 0.5).sin();
+                fast.predict(dt, &u, yaw);
+                predict_dense(&mut dense, dt, &u, yaw);
+                if k % 7 != 3 {
+                    let m = Measurement {
+                        position_m: [t.cos(), 0.5 * t.sin(), 1.2 + 0.1 * (3.0 * t).sin()],
+                        heading_rad: 2.9 + 0.4 * t,
+                    };
+                    fast.update(&m);
+                    update_dense(&mut dense, &m);
+                }
+                let dx = (fast.x - dense.x).amax();
+                let dp = (fast.p - dense.p).amax() / dense.p.amax();
+                assert!(
+                    dx < 1e-9 && dp < 1e-9,
+                    "wind {wind}, tick {k}: {dx:e} {dp:e}"
+                );
+                assert_eq!(fast.c.to_bits(), dense.c.to_bits());
+            }
+            // The filter did follow the measurements (the comparison is not of two idle states).
+            assert!(fast.x[3].abs() > 0.1 && fast.p[(3, 3)] < 0.01);
+        }
     }
 }

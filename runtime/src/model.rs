@@ -82,6 +82,14 @@ impl ModelParams {
             * self.input_to_body_velocity()
     }
 
+    /// [`ModelParams::world_lag`] and [`ModelParams::input_matrix`] together (one rotation,
+    /// one body lag): what the Kalman filter's prediction needs each tick.
+    pub fn lag_and_input(&self, dt_s: f64, heading_rad: f64) -> (Matrix3<f64>, Matrix3<f64>) {
+        let m = frames::body_to_world(heading_rad);
+        let mt = m * Matrix3::from_diagonal(&self.body_lag(dt_s));
+        (mt * m.transpose(), mt * self.input_to_body_velocity())
+    }
+
     /// A1(Δ, c).
     pub fn a1(&self, dt_s: f64, heading_rad: f64) -> Matrix6<f64> {
         let mut a = Matrix6::identity();

@@ -605,15 +605,22 @@ mod tests {
         r.actors = &ACTORS;
         r.framing = &FRAMING;
         encode(&mut buf, &r);
-        assert!(decode(&buf[..100]).unwrap_err().contains("at least 278 bytes"));
+        assert!(decode(&buf[..100])
+            .unwrap_err()
+            .contains("at least 278 bytes"));
         // Cut anywhere in the sequences.
         for len in [FIXED_LEN + 1, FIXED_LEN + 5, 300, 431, 440, 513] {
             let e = decode(&buf[..len]).unwrap_err();
-            assert!(e.contains("ends at byte") || e.contains("a count of"), "{len}: {e}");
+            assert!(
+                e.contains("ends at byte") || e.contains("a count of"),
+                "{len}: {e}"
+            );
         }
         let mut long = buf.clone();
         long.push(0);
-        assert!(decode(&long).unwrap_err().contains("1 bytes after the framing"));
+        assert!(decode(&long)
+            .unwrap_err()
+            .contains("1 bytes after the framing"));
         // A count the message cannot hold is refused before anything is allocated for it.
         let mut huge = buf.clone();
         huge[4 + 276..4 + 280].copy_from_slice(&u32::MAX.to_le_bytes());
