@@ -7,12 +7,14 @@
 //! thread over a bounded channel; the writer thread writes it with [`FlightLogWriter`] and
 //! sends the emptied batch back. Events keep their place among the ticks.
 //!
-//! Every two seconds of flight, and at most once every two seconds of wall-clock time, a third
-//! thread, which mostly waits on the disk, syncs the file's data (`sync_data`): a power cut
-//! loses less, and the final `fsync` has only the tail left to write. (A simulated flight runs
-//! thousands of times faster than real time: syncing every two seconds of its flight would
-//! ask the disk for hundreds of syncs a second; what a power cut loses is counted in wall-clock
-//! time.)
+//! A third thread, which mostly waits on the disk, syncs the file's data (`sync_data`): every
+//! two seconds of flight when two seconds of wall-clock time have passed since the last sync
+//! (a flight in real time: every two seconds), and every 32 s of flight whatever the clock
+//! says (a simulated flight, thousands of times faster than real time). A power cut loses
+//! less, and the disk writes while the flight goes on, so the final `fsync` has only the tail
+//! left: measured on an hour of simulated flight (500 MB of log), syncing only by the clock
+//! left 0.21 s of final `fsync` and took 1.20 s, syncing also every 32 s of flight 1.07 s;
+//! syncing every two seconds of flight (1,800 syncs) was slower again.
 //!
 //! What a crash may lose: a batch is handed over every [`BATCH_PERIOD_S`] of flight time and
 //! the writer closes a chunk every `flush_period_s` (the caller's [`LogOptions`]), so a
@@ -43,8 +45,10 @@ const BATCHES: usize = 8;
 /// The file's data is synced to the disk (`sync_data`, on a third thread that mostly waits)
 /// after every this many batches (two seconds of flight)…
 const SYNC_EVERY_BATCHES: u64 = 8;
-/// …and at most this often in wall-clock time.
+/// …once this much wall-clock time has passed since the last one…
 const SYNC_PERIOD: Duration = Duration::from_secs(2);
+/// …and after every this many batches whatever the clock says (32 s of flight).
+const SYNC_ANYWAY_BATCHES: u64 = 128;
 
 /// A [`TickRecord`] with its borrowed parts copied, kept from batch to batch.
 #[derive(Clone, Debug)]
@@ -244,7 +248,8 @@ impl LogThread {
         full.send(batch).map_err(|_| self.thread_error())?;
         self.batches_sent += 1;
         if self.batches_sent % SYNC_EVERY_BATCHES == 0
-            && self.last_sync.is_none_or(|t| t.elapsed() >= SYNC_PERIOD)
+            && (self.batches_sent % SYNC_ANYWAY_BATCHES == 0
+                || self.last_sync.is_none_or(|t| t.elapsed() >= SYNC_PERIOD))
         {
             if let Some(sync) = &self.sync {
                 self.last_sync = Some(Instant::now());
