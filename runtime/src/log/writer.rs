@@ -34,10 +34,10 @@ const REFERENCE_FRAME: &str = "reference";
 /// Chunk compression of the flight log.
 ///
 /// Measured (`benches/log.rs`, CPU time of one core on the shared 2-core development machine,
-/// 100 Hz, two actors): no compression 1.9 µs a tick (an hour: 0.86 s; a simulated flight
-/// logs 1.6 kB a tick, 580 MB an hour); LZ4 about twice the CPU time for about a quarter of
-/// the size (measured with the JSON `/servo/tick`: 7.4 µs against 3.6 µs). The default is no
-/// compression: a flight of minutes is a few hundred megabytes at most.
+/// 100 Hz, two actors): no compression 1.4 µs a tick and 1.3 kB (an hour: 0.63 s and 471
+/// MB); LZ4 3.5 µs a tick and 560 bytes: less than half the size for two and a half times
+/// the CPU time, which would make the log thread slower than the simulated flight it logs.
+/// The default is no compression: a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
     /// The default (see above).
