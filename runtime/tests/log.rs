@@ -832,3 +832,118 @@ fn a_json_servo_tick_from_an_older_dronecine_is_refused_by_name() {
         "{e}"
     );
 }
+
+/// A log of the previous format — `/servo/tick` the 278-byte fixed part only, the framing on
+/// `/framing` (JSON) at every tick — still replays: its framing is read from `/framing`.
+#[test]
+fn a_log_with_fixed_length_ticks_reads_its_framing_from_the_json_topic() {
+    let dir = tempfile::tempdir().unwrap();
+    let new = dir.path().join("new.mcap");
+    let old = dir.path().join("old.mcap");
+    let ticks: Vec<Tick> = (0..250).map(flight_tick).collect();
+    write_log(&new, &ticks, &[]);
+
+    // Rewrite it as the previous dronecine wrote it.
+    let bytes = std::fs::read(&new).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let meta_index = summary
+        .metadata_indexes
+        .iter()
+        .find(|m| m.name == "dronecine.flight")
+        .unwrap();
+    let meta = mcap::read::metadata(&bytes, meta_index).unwrap();
+    let mut w = mcap::Writer::new(std::io::BufWriter::new(
+        std::fs::File::create(&old).unwrap(),
+    ))
+    .unwrap();
+    w.write_metadata(&meta).unwrap();
+    let tick_schema = w
+        .add_schema(
+            cdr::SCHEMA_NAME,
+            cdr::SCHEMA_ENCODING,
+            cdr::SCHEMA.as_bytes(),
+        )
+        .unwrap();
+    let tick_channel = w
+        .add_channel(tick_schema, "/servo/tick", "cdr", &BTreeMap::new())
+        .unwrap();
+    let framing_schema = w
+        .add_schema("dronecine.Framing", "jsonschema", b"{}")
+        .unwrap();
+    let framing_channel = w
+        .add_channel(framing_schema, "/framing", "json", &BTreeMap::new())
+        .unwrap();
+    let mut framed = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic != "/servo/tick" {
+            continue;
+        }
+        let tick = cdr::decode(&m.data).unwrap().tick;
+        let header = |channel_id| mcap::records::MessageHeader {
+            channel_id,
+            sequence: 0,
+            log_time: m.log_time,
+            publish_time: m.log_time,
+        };
+        if !tick.framing.is_empty() {
+            let point = |p: Option<[f64; 2]>| p.map(|p| p.to_vec());
+            let actors: Vec<serde_json::Value> = tick
+                .framing
+                .iter()
+                .map(|f| {
+                    serde_json::json!({"actor": f.actor, "name": "x",
+                        "screen": point(f.screen), "requested": point(f.requested)})
+                })
+                .collect();
+            let json = serde_json::json!({"t_s": tick.input.t_s, "shot": tick.shot,
+                "actors": actors});
+            w.write_to_known_channel(&header(framing_channel), json.to_string().as_bytes())
+                .unwrap();
+            framed += 1;
+        }
+        w.write_to_known_channel(&header(tick_channel), &m.data[..cdr::FIXED_LEN])
+            .unwrap();
+    }
+    w.finish().unwrap();
+    drop(w);
+    assert!(framed > 200);
+
+    let (a, b) = (
+        FlightLog::open(&new).unwrap(),
+        FlightLog::open(&old).unwrap(),
+    );
+    assert!(!b.truncated, "{:?}", b.damage);
+    assert_eq!(a.ticks.len(), b.ticks.len());
+    for (x, y) in a.ticks.iter().zip(&b.ticks) {
+        assert_eq!(tick_bits(y), {
+            let mut old_form = x.clone();
+            old_form.actors.clear();
+            tick_bits(&old_form)
+        });
+    }
+    // The framing came from /framing (the ticks carry none), and it is the same.
+    assert!(b.ticks.iter().filter(|t| !t.framing.is_empty()).count() == framed);
+    assert!(b.ticks.iter().all(|t| t.actors.is_empty()));
+}
+
+/// A short LZ4 log decompresses to more than its file's length: still read whole.
+#[test]
+fn a_short_compressed_log_reads_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lz4.mcap");
+    let names = names();
+    let options = dronecine_runtime::log::LogOptions {
+        compression: dronecine_runtime::log::LogCompression::Lz4,
+        ..Default::default()
+    };
+    let ticks: Vec<Tick> = (0..150).map(flight_tick).collect();
+    let mut w = FlightLogWriter::create_with(&path, &header(), &scene_of(&names), options).unwrap();
+    for t in &ticks {
+        w.write_tick(&t.record()).unwrap();
+    }
+    w.finish().unwrap();
+    let log = FlightLog::open(&path).unwrap();
+    assert!(!log.truncated, "{:?}", log.damage);
+    assert_eq!(log.ticks.len(), ticks.len());
+}

@@ -118,7 +118,7 @@ impl FlightLog {
             LinearReaderOptions::default()
                 .with_validate_chunk_crcs(true)
                 .with_prevalidate_chunk_crcs(true)
-                .with_record_length_limit(usize::try_from(len).unwrap_or(usize::MAX)),
+                .with_record_length_limit(record_length_limit(len)),
         );
         let mut state = ReadState {
             path: path.to_path_buf(),
@@ -183,6 +183,15 @@ impl FlightLog {
             damage,
         })
     }
+}
+
+/// The largest record (or decompressed chunk) the reader accepts in a file of `len` bytes:
+/// what a damaged length field cannot exceed, so it is refused instead of allocated. A
+/// compressed chunk decompresses to more than the file holds (LZ4's ratio reaches 255; a
+/// short LZ4 flight log's first chunk is larger than the whole file), hence the factor.
+fn record_length_limit(len: u64) -> usize {
+    let limit = len.saturating_mul(256).max(16 << 20);
+    usize::try_from(limit).unwrap_or(usize::MAX)
 }
 
 fn describe(e: &McapError) -> String {
