@@ -507,16 +507,22 @@ mod tests {
         },
     ];
 
-    /// The sequences' layout: counts aligned to 4, elements to 8, from the end of the header
-    /// (offsets written out by hand from the CDR rules).
-    #[test]
-    fn the_sequences_layout_is_the_schemas() {
+    /// A tick with both actors and their framing, encoded.
+    fn with_sequences() -> Vec<u8> {
         let s = sample();
         let mut r = record(&s, Ok(TickOutput::default()));
         r.actors = &ACTORS;
         r.framing = &FRAMING;
         let mut buf = Vec::new();
         encode(&mut buf, &r);
+        buf
+    }
+
+    /// The sequences' layout: counts aligned to 4, elements to 8, from the end of the header
+    /// (offsets written out by hand from the CDR rules).
+    #[test]
+    fn the_sequences_layout_is_the_schemas() {
+        let buf = with_sequences();
         let body = &buf[4..];
         let f = |off: usize| f64::from_le_bytes(body[off..off + 8].try_into().unwrap());
         let u = |off: usize| u32::from_le_bytes(body[off..off + 4].try_into().unwrap());
@@ -553,12 +559,7 @@ mod tests {
     /// A tick of an older log (the fixed part only) still reads, with empty sequences.
     #[test]
     fn a_fixed_length_tick_of_an_older_log_reads() {
-        let s = sample();
-        let mut r = record(&s, Ok(TickOutput::default()));
-        r.actors = &ACTORS;
-        r.framing = &FRAMING;
-        let mut buf = Vec::new();
-        encode(&mut buf, &r);
+        let buf = with_sequences();
         let old = decode(&buf[..FIXED_LEN]).unwrap();
         assert!(!old.extended);
         assert!(old.tick.actors.is_empty() && old.tick.framing.is_empty());
@@ -599,12 +600,7 @@ mod tests {
 
     #[test]
     fn damaged_messages_are_errors() {
-        let s = sample();
-        let mut buf = Vec::new();
-        let mut r = record(&s, Ok(TickOutput::default()));
-        r.actors = &ACTORS;
-        r.framing = &FRAMING;
-        encode(&mut buf, &r);
+        let buf = with_sequences();
         assert!(decode(&buf[..100])
             .unwrap_err()
             .contains("at least 278 bytes"));
