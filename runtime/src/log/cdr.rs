@@ -100,12 +100,11 @@ const ACTOR_LEN: usize = 72;
 /// Bytes from one framing element to the next (the last one is 2 shorter).
 const FRAMED_STRIDE: usize = 40;
 const FRAMED_LEN: usize = 38;
-const LEN: usize = FIXED_LEN;
 const HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Appends the CDR message of `tick` to `buf`.
 pub fn encode(buf: &mut Vec<u8>, tick: &TickRecord) {
-    let mut out = [0u8; LEN];
+    let mut out = [0u8; FIXED_LEN];
     out[..4].copy_from_slice(&HEADER);
     let mut at = 4;
     let mut f = |x: f64| {
@@ -203,9 +202,9 @@ fn encode_sequences(buf: &mut Vec<u8>, tick: &TickRecord) {
 /// then `extended` is false); a message that is cut or too long, of another encapsulation, or
 /// with an unknown enum value or an impossible count, is an error that says which.
 pub fn decode(data: &[u8]) -> Result<Decoded, String> {
-    if data.len() < LEN {
+    if data.len() < FIXED_LEN {
         return Err(format!(
-            "a CDR /servo/tick message is at least {LEN} bytes, this one {}",
+            "a CDR /servo/tick message is at least {FIXED_LEN} bytes, this one {}",
             data.len()
         ));
     }
@@ -226,11 +225,7 @@ pub fn decode(data: &[u8]) -> Result<Decoded, String> {
         yaw_rate_radps: f(i + 2),
         vz_mps: f(i + 3),
     };
-    let flag = |at: usize, name: &str| match data[at] {
-        0 => Ok(false),
-        1 => Ok(true),
-        b => Err(format!("`{name}` is {b}, not a bool")),
-    };
+    let flag = |at: usize, name: &str| bool_of(data[at], name);
     let shot = i32::from_le_bytes(data[268..272].try_into().expect("4 bytes"));
     let phase = match data[272] {
         0 => Phase::TakeOff,
@@ -286,11 +281,20 @@ pub fn decode(data: &[u8]) -> Result<Decoded, String> {
         framing: Vec::new(),
         latency_s: flag(277, "has_latency")?.then(|| f(32)),
     };
-    let extended = data.len() > LEN;
+    let extended = data.len() > FIXED_LEN;
     if extended {
         decode_sequences(&data[4..], &mut tick)?;
     }
     Ok(Decoded { tick, extended })
+}
+
+/// A CDR `bool` (one byte, 0 or 1); another value is damage, named by its field.
+fn bool_of(b: u8, name: &str) -> Result<bool, String> {
+    match b {
+        0 => Ok(false),
+        1 => Ok(true),
+        b => Err(format!("`{name}` is {b}, not a bool")),
+    }
 }
 
 /// A decoded `/servo/tick`.
@@ -304,7 +308,7 @@ pub struct Decoded {
 
 /// Reads the two sequences after the fixed part; `body` is the message after its header.
 fn decode_sequences(body: &[u8], tick: &mut LoggedTick) -> Result<(), String> {
-    let mut at = LEN - 4;
+    let mut at = FIXED_LEN - 4;
     let align = |at: &mut usize, to: usize| *at = at.div_ceil(to) * to;
     let take = |at: &mut usize, n: usize, what: &str| -> Result<std::ops::Range<usize>, String> {
         let r = *at..*at + n;
@@ -354,14 +358,9 @@ fn decode_sequences(body: &[u8], tick: &mut LoggedTick) -> Result<(), String> {
     for _ in 0..n {
         align(&mut at, 8);
         let r = take(&mut at, FRAMED_LEN, "a framing element")?;
-        let flag = |b: u8, name: &str| match b {
-            0 => Ok(false),
-            1 => Ok(true),
-            b => Err(format!("`{name}` is {b}, not a bool")),
-        };
         let actor = u32::from_le_bytes(body[r.start + 32..r.start + 36].try_into().expect("4"));
-        let screen = flag(body[r.start + 36], "has_screen")?;
-        let requested = flag(body[r.start + 37], "has_requested")?;
+        let screen = bool_of(body[r.start + 36], "has_screen")?;
+        let requested = bool_of(body[r.start + 37], "has_requested")?;
         tick.framing.push(FramingRecord {
             actor: actor as usize,
             screen: screen.then(|| [f(&r, 0), f(&r, 1)]),
