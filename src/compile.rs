@@ -172,14 +172,10 @@ pub fn run(a: &Args) -> ExitCode {
         .unwrap_or_else(|| r.name.clone());
     let actor_names: Vec<String> = scene.actors.iter().map(|x| x.name.clone()).collect();
     let lens = match scene.lens {
-        Some(l) => dronecine_compiler::camera::Lens {
-            fov_x_rad: l.fov_x_rad,
-            aspect: l.aspect,
-        },
-        None => dronecine_compiler::camera::Lens {
-            fov_x_rad: profile.camera.fov_x_rad,
-            aspect: profile.camera.aspect,
-        },
+        Some(l) => dronecine_compiler::camera::Lens::new(l.fov_x_rad, l.aspect),
+        None => {
+            dronecine_compiler::camera::Lens::new(profile.camera.fov_x_rad, profile.camera.aspect)
+        }
     };
     let info = RunInfo {
         script_name: &script_name,

@@ -55,14 +55,8 @@ fn shipped() -> Vec<(String, Script)> {
 fn lens_of(script: &Script) -> Lens {
     let p = ardrone();
     match script.scene.as_ref().unwrap().lens {
-        Some(l) => Lens {
-            fov_x_rad: l.fov_x_rad,
-            aspect: l.aspect,
-        },
-        None => Lens {
-            fov_x_rad: p.camera.fov_x_rad,
-            aspect: p.camera.aspect,
-        },
+        Some(l) => Lens::new(l.fov_x_rad, l.aspect),
+        None => Lens::new(p.camera.fov_x_rad, p.camera.aspect),
     }
 }
 

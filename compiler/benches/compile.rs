@@ -68,10 +68,7 @@ fn bench(c: &mut Criterion) {
                     script_text: &src,
                     profile_name: &profile.name,
                     rate_hz: 100.0,
-                    lens: dronecine_compiler::camera::Lens {
-                        fov_x_rad: 84f64.to_radians(),
-                        aspect: 16.0 / 9.0,
-                    },
+                    lens: dronecine_compiler::camera::Lens::new(84f64.to_radians(), 16.0 / 9.0),
                     stage: scene.stage,
                     actor_names: &names,
                 };

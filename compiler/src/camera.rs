@@ -12,21 +12,67 @@ use serde::{Deserialize, Serialize};
 pub type Vec3 = Vector3<f64>;
 
 /// A pinhole lens: horizontal field of view and frame aspect (width over height).
+///
+/// `Sx = 1/tan(fovX/2)` is computed once, in [`Lens::new`]: the director projects through
+/// the lens a dozen times a tick, and `tan` was a tenth of a simulated flight's loop.
+/// Serialised as its two fields (`fov_x_rad`, `aspect`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "LensFields", into = "LensFields")]
 pub struct Lens {
-    pub fov_x_rad: f64,
-    pub aspect: f64,
+    fov_x_rad: f64,
+    aspect: f64,
+    sx: f64,
+}
+
+/// The serialised form of a [`Lens`].
+#[derive(Clone, Copy, Serialize, Deserialize)]
+struct LensFields {
+    fov_x_rad: f64,
+    aspect: f64,
+}
+
+impl From<LensFields> for Lens {
+    fn from(f: LensFields) -> Lens {
+        Lens::new(f.fov_x_rad, f.aspect)
+    }
+}
+
+impl From<Lens> for LensFields {
+    fn from(l: Lens) -> LensFields {
+        LensFields {
+            fov_x_rad: l.fov_x_rad,
+            aspect: l.aspect,
+        }
+    }
 }
 
 impl Lens {
+    pub fn new(fov_x_rad: f64, aspect: f64) -> Lens {
+        Lens {
+            fov_x_rad,
+            aspect,
+            sx: 1.0 / (fov_x_rad / 2.0).tan(),
+        }
+    }
+
+    /// Horizontal field of view.
+    pub fn fov_x_rad(&self) -> f64 {
+        self.fov_x_rad
+    }
+
+    /// Frame width over height.
+    pub fn aspect(&self) -> f64 {
+        self.aspect
+    }
+
     /// `Sx = 1/tan(fovX/2)`.
     pub fn sx(&self) -> f64 {
-        1.0 / (self.fov_x_rad / 2.0).tan()
+        self.sx
     }
 
     /// `Sy = 1/tan(fovY/2)` with `tan(fovY/2) = tan(fovX/2)/aspect`.
     pub fn sy(&self) -> f64 {
-        self.sx() * self.aspect
+        self.sx * self.aspect
     }
 
     pub fn fov_y_rad(&self) -> f64 {
@@ -85,7 +131,7 @@ impl CameraPose {
             return None;
         }
         let sx = lens.sx();
-        Some([c.x * sx / c.y, c.z * (sx * lens.aspect) / c.y])
+        Some([c.x * sx / c.y, c.z * (sx * lens.aspect()) / c.y])
     }
 }
 
@@ -107,7 +153,7 @@ pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2])
     let e = d.z.atan2(crate::norm_xy(d.x, d.y));
     let sx = lens.sx();
     let xp = screen[0] / sx;
-    let yp = screen[1] / (sx * lens.aspect);
+    let yp = screen[1] / (sx * lens.aspect());
     let n = (1.0 + xp * xp + yp * yp).sqrt();
     let arg = n * e.sin() / (1.0 + yp * yp).sqrt();
     let clamped = !(-1.0..=1.0).contains(&arg);
@@ -156,10 +202,7 @@ mod tests {
     use super::*;
 
     fn lens() -> Lens {
-        Lens {
-            fov_x_rad: 84f64.to_radians(),
-            aspect: 16.0 / 9.0,
-        }
+        Lens::new(84f64.to_radians(), 16.0 / 9.0)
     }
 
     #[test]

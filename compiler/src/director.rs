@@ -161,14 +161,8 @@ impl Director {
     /// returned by [`Director::finish`].
     pub fn new(script: &Script, scene: &Scene, profile: &Profile) -> Director {
         let lens = match scene.lens {
-            Some(l) => Lens {
-                fov_x_rad: l.fov_x_rad,
-                aspect: l.aspect,
-            },
-            None => Lens {
-                fov_x_rad: profile.camera.fov_x_rad,
-                aspect: profile.camera.aspect,
-            },
+            Some(l) => Lens::new(l.fov_x_rad, l.aspect),
+            None => Lens::new(profile.camera.fov_x_rad, profile.camera.aspect),
         };
         let lim = &profile.limits;
         let limits = SteerLimits {

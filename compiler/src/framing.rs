@@ -283,7 +283,7 @@ fn band_distance_m(
     if level {
         let sx = lens.sx();
         let xp = screen[0] / sx;
-        return (half_m > 0.0).then(|| half_m * sx * lens.aspect * (1.0 + xp * xp).sqrt());
+        return (half_m > 0.0).then(|| half_m * sx * lens.aspect() * (1.0 + xp * xp).sqrt());
     }
     size::exact_distance_m(
         half_m,
@@ -328,7 +328,11 @@ fn minimise(f: impl Fn(f64) -> f64, lo: f64, hi: f64) -> (f64, f64) {
 // solve
 
 fn check_lens(lens: &Lens) -> Result<(), FramingError> {
-    if lens.fov_x_rad > 0.0 && lens.fov_x_rad < PI && lens.aspect > 0.0 && lens.aspect.is_finite() {
+    if lens.fov_x_rad() > 0.0
+        && lens.fov_x_rad() < PI
+        && lens.aspect() > 0.0
+        && lens.aspect().is_finite()
+    {
         Ok(())
     } else {
         Err(FramingError::InvalidLens)
@@ -1144,7 +1148,7 @@ fn place_one(
         Vec3::new(
             horizontal.x,
             horizontal.y,
-            m.z - o.screen[1] * depth / (sx * lens.aspect),
+            m.z - o.screen[1] * depth / (sx * lens.aspect()),
         )
     } else {
         sphere::position(
@@ -1213,7 +1217,7 @@ fn place_two(
         let sx = lens.sx();
         let xp = screen[0] / sx;
         let depth = rho / (1.0 + xp * xp).sqrt();
-        c.z = target.z - screen[1] * depth / (sx * lens.aspect);
+        c.z = target.z - screen[1] * depth / (sx * lens.aspect());
     }
     let (heading_rad, pitch_rad, f) = if orient {
         orient_visual(&Visual::Two(*t), actors, lens, gimbal, &c)

@@ -127,10 +127,7 @@ mod tests {
     use super::*;
 
     fn lens() -> Lens {
-        Lens {
-            fov_x_rad: 84f64.to_radians(),
-            aspect: 16.0 / 9.0,
-        }
+        Lens::new(84f64.to_radians(), 16.0 / 9.0)
     }
 
     #[test]

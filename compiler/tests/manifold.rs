@@ -20,10 +20,7 @@ use std::f64::consts::PI;
 const NAMES: [&str; 3] = ["A", "B", "C"];
 
 fn lens(fov_deg: f64) -> Lens {
-    Lens {
-        fov_x_rad: fov_deg.to_radians(),
-        aspect: 16.0 / 9.0,
-    }
+    Lens::new(fov_deg.to_radians(), 16.0 / 9.0)
 }
 
 fn gimbal() -> Gimbal {

@@ -27,10 +27,7 @@ fn info(names: &[String]) -> RunInfo<'_> {
         script_text: SCRIPT,
         profile_name: "ardrone2",
         rate_hz: RATE_HZ,
-        lens: Lens {
-            fov_x_rad: 84f64.to_radians(),
-            aspect: 16.0 / 9.0,
-        },
+        lens: Lens::new(84f64.to_radians(), 16.0 / 9.0),
         stage: Stage {
             size_m: [8.0, 6.0, 3.0],
         },

@@ -37,10 +37,7 @@ fn shot(start_s: f64, end_s: f64, label: &str, kind: ShotKind) -> ShotInfo {
 }
 
 fn lens_84() -> Lens {
-    Lens {
-        fov_x_rad: 84f64.to_radians(),
-        aspect: 16.0 / 9.0,
-    }
+    Lens::new(84f64.to_radians(), 16.0 / 9.0)
 }
 
 /// A scene to preview (owned, borrowed by `PreviewInput`).
@@ -367,10 +364,7 @@ fn head_lands_where_the_projection_puts_it() {
     // (3, 0, 1.6), looking −x (its right is +y). Head centre at 0.935·1.80 = 1.683 m:
     // x = 0.5·1/3 = 0.166667, y = (1.683 − 1.6)·(16/9)/3 = 0.0491852; radius 0.065·1.80 = 0.117 m
     // → 0.117·(16/9)/3 = 0.0693333.
-    let lens = Lens {
-        fov_x_rad: FRAC_PI_2,
-        aspect: 16.0 / 9.0,
-    };
+    let lens = Lens::new(FRAC_PI_2, 16.0 / 9.0);
     let pose = pose_looking_at(Vec3::new(3.0, 0.0, 1.6), PI);
     let f = figure(&pose, &lens, &actor(0.0, 0.5, 0.0, 1.8)).unwrap();
     assert!(

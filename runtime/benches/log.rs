@@ -172,10 +172,7 @@ fn write(path: &Path, ticks: &[Tick], n: usize, compression: LogCompression) -> 
         stage: Stage {
             size_m: [8.0, 6.0, 3.0],
         },
-        lens: Lens {
-            fov_x_rad: 84f64.to_radians(),
-            aspect: 16.0 / 9.0,
-        },
+        lens: Lens::new(84f64.to_radians(), 16.0 / 9.0),
         actor_names: &names,
         actor_heights_m: &[1.7, 1.8],
     };

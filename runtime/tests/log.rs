@@ -35,10 +35,7 @@ fn stage() -> Stage {
 }
 
 fn lens() -> Lens {
-    Lens {
-        fov_x_rad: 84f64.to_radians(),
-        aspect: 16.0 / 9.0,
-    }
+    Lens::new(84f64.to_radians(), 16.0 / 9.0)
 }
 
 fn header() -> FlightHeader {

@@ -573,8 +573,8 @@ pub fn path_scene(ns: u64, segments: &[(usize, Vec<[f64; 3]>)]) -> Vec<u8> {
 /// fields of view.
 pub fn camera_calibration(ns: u64, lens: &Lens) -> Vec<u8> {
     let w = IMAGE_WIDTH_PX;
-    let aspect = if lens.aspect.is_finite() && lens.aspect > 0.0 {
-        lens.aspect
+    let aspect = if lens.aspect().is_finite() && lens.aspect() > 0.0 {
+        lens.aspect()
     } else {
         16.0 / 9.0
     };
@@ -730,16 +730,13 @@ mod tests {
 
     #[test]
     fn calibration_frustum_has_the_lens_fields_of_view() {
-        let lens = Lens {
-            fov_x_rad: 84f64.to_radians(),
-            aspect: 4.0 / 3.0,
-        };
+        let lens = Lens::new(84f64.to_radians(), 4.0 / 3.0);
         let v: Value = serde_json::from_slice(&camera_calibration(0, &lens)).unwrap();
         let (w, h) = (v["width"].as_f64().unwrap(), v["height"].as_f64().unwrap());
         let k: Vec<f64> = serde_json::from_value(v["K"].clone()).unwrap();
         let fov_x = 2.0 * (w / 2.0 / k[0]).atan();
         let fov_y = 2.0 * (h / 2.0 / k[4]).atan();
-        assert!((fov_x - lens.fov_x_rad).abs() < 1e-12);
+        assert!((fov_x - lens.fov_x_rad()).abs() < 1e-12);
         assert!((fov_y - lens.fov_y_rad()).abs() < 1e-12);
         assert_eq!(v["frame_id"], CAMERA);
     }

@@ -616,9 +616,9 @@ pub fn actor_prefix(name: &str) -> Vec<u8> {
 /// The `/camera` message.
 pub fn camera_message(lens: &crate::camera::Lens) -> Vec<u8> {
     let mut camera = b"{\"fov_x_rad\":".to_vec();
-    json::micro(&mut camera, lens.fov_x_rad);
+    json::micro(&mut camera, lens.fov_x_rad());
     camera.extend_from_slice(b",\"aspect\":");
-    json::micro(&mut camera, lens.aspect);
+    json::micro(&mut camera, lens.aspect());
     camera.push(b'}');
     camera
 }

@@ -289,10 +289,7 @@ mod tests {
 
     #[test]
     fn segment_behind_is_cut_at_the_near_plane() {
-        let lens = Lens {
-            fov_x_rad: std::f64::consts::FRAC_PI_2,
-            aspect: 16.0 / 9.0,
-        };
+        let lens = Lens::new(std::f64::consts::FRAC_PI_2, 16.0 / 9.0);
         let pose = CameraPose {
             position_m: Vec3::zeros(),
             heading_rad: 0.0,

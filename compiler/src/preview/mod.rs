@@ -123,11 +123,11 @@ impl PreviewInput<'_> {
                 self.actor_names.len()
             ));
         }
-        if !(self.lens.fov_x_rad.is_finite()
-            && self.lens.fov_x_rad > 0.0
-            && self.lens.fov_x_rad < std::f64::consts::PI
-            && self.lens.aspect.is_finite()
-            && self.lens.aspect > 0.0)
+        if !(self.lens.fov_x_rad().is_finite()
+            && self.lens.fov_x_rad() > 0.0
+            && self.lens.fov_x_rad() < std::f64::consts::PI
+            && self.lens.aspect().is_finite()
+            && self.lens.aspect() > 0.0)
         {
             return bad(format!("preview: unusable lens {:?}", self.lens));
         }

@@ -322,7 +322,7 @@ fn fmt0(v: f64) -> String {
 
 /// The contact sheet.
 pub fn storyboard(input: &PreviewInput) -> Svg {
-    let aspect = input.lens.aspect.clamp(0.5, 3.0);
+    let aspect = input.lens.aspect().clamp(0.5, 3.0);
     let frame_h = (FRAME_W / aspect).round();
     let row_h = HEADER_H + frame_h + CAPTION_H + ROW_GAP;
     let width = 2.0 * MARGIN + 3.0 * FRAME_W + 2.0 * GAP;
@@ -345,8 +345,8 @@ pub fn storyboard(input: &PreviewInput) -> Svg {
         MUTED,
         &format!(
             "lens {}° horizontal, {}:1 · faint lines: thirds · ψ heading, τ camera pitch · distances on the floor",
-            fmt0(input.lens.fov_x_rad.to_degrees()),
-            num(input.lens.aspect)
+            fmt0(input.lens.fov_x_rad().to_degrees()),
+            num(input.lens.aspect())
         ),
     );
     let names = shot_names(input.shots);
