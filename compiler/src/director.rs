@@ -119,6 +119,8 @@ pub struct Director {
     axes: Vec<(Vec3, f64)>,
     /// Per plan, the actors each end's composition names (by index), for the solve memo.
     framed: Vec<[Vec<usize>; 2]>,
+    /// Per plan, each end's composition prepared for solving (`None` for paths).
+    prepared: Vec<[Option<framing::Prepared>; 2]>,
     /// The last few composition solves (see [`Solved`]), replaced round robin.
     solved: Vec<Solved>,
     /// The boxes of the last tick's blended visual, reused by the next one.
@@ -215,6 +217,15 @@ impl Director {
                 _ => [Vec::new(), Vec::new()],
             })
             .collect();
+        let prepare = |c: &Composition| Some(framing::Prepared::new(c, &names, &lens));
+        let prepared = plans
+            .iter()
+            .map(|plan| match plan {
+                Plan::Hold(c) => [prepare(c), None],
+                Plan::Move { from, to } => [prepare(from), prepare(to)],
+                _ => [None, None],
+            })
+            .collect();
         let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
         let margin = profile.safety.stage_margin_m;
         let stage_lo = Vec3::new(lo[0] + margin, lo[1] + margin, lo[2] + margin);
@@ -246,6 +257,7 @@ impl Director {
             ahead: Vec::with_capacity(scene.actors.len()),
             axes: Vec::with_capacity(scene.actors.len()),
             framed,
+            prepared,
             solved: Vec::with_capacity(SOLVED_SLOTS),
             blend_spare: None,
             next_solved: 0,
@@ -718,7 +730,10 @@ impl Director {
                 })
             }
         };
-        let result = framing::solve(comp, &self.names, actors, &self.lens, &self.gimbal);
+        let result = match &self.prepared[index][end] {
+            Some(prepared) => prepared.solve(comp, actors, &self.lens, &self.gimbal),
+            None => framing::solve(comp, &self.names, actors, &self.lens, &self.gimbal),
+        };
         if known {
             // A full memo reuses the oldest slot and its pose buffer: no allocation per tick.
             let slot = if self.solved.len() < SOLVED_SLOTS {

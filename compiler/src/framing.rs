@@ -339,14 +339,15 @@ fn check_lens(lens: &Lens) -> Result<(), FramingError> {
     }
 }
 
-fn lookup<S: AsRef<str>>(
-    name: &str,
-    names: &[S],
-    actors: &[ActorPose],
-) -> Result<usize, FramingError> {
-    let i = names
-        .iter()
-        .position(|n| n.as_ref() == name)
+/// The index of actor `name` in `names` (the first that matches), found once per composition
+/// ([`Prepared`]).
+fn name_index<S: AsRef<str>>(name: &str, names: &[S]) -> Option<usize> {
+    names.iter().position(|n| n.as_ref() == name)
+}
+
+/// The subject's actor, found at `index` by [`name_index`], with a pose a solve can use.
+fn lookup(name: &str, index: Option<usize>, actors: &[ActorPose]) -> Result<usize, FramingError> {
+    let i = index
         .filter(|i| *i < actors.len())
         .ok_or_else(|| FramingError::UnknownActor(name.to_string()))?;
     let p = &actors[i];
@@ -369,9 +370,8 @@ fn check_screen(s: &Subject) -> Result<(), FramingError> {
 
 /// Solve a composition against the actors' poses. `names[i]` names `actors[i]`.
 ///
-/// Accepted shapes: one framing of one actor; one framing of two actors; two framings of one
-/// actor each (over the shoulder, foreground first). See the module documentation for the
-/// defaults and for what is exact.
+/// The same as [`Prepared::new`] then [`Prepared::solve`]; a caller that solves one
+/// composition every tick prepares it once.
 pub fn solve<S: AsRef<str>>(
     comp: &Composition,
     names: &[S],
@@ -379,46 +379,109 @@ pub fn solve<S: AsRef<str>>(
     lens: &Lens,
     gimbal: &Gimbal,
 ) -> Result<Visual, FramingError> {
-    check_lens(lens)?;
-    let subjects: usize = comp.framings.iter().map(|f| f.subjects.len()).sum();
-    let unsupported = FramingError::Unsupported {
-        framings: comp.framings.len(),
-        subjects,
-    };
-    let elevation = sphere::elevation_rad(comp.camera_angle);
-    let level = fixed_pitch(gimbal);
-    // The two actors of a two-actor composition: screens checked, names found, distinct.
-    let pair_of = |sa: &Subject, sb: &Subject, sizes: (Size, Size)| {
-        check_screen(sa)?;
-        check_screen(sb)?;
-        let (a, b) = (
-            lookup(&sa.actor, names, actors)?,
-            lookup(&sb.actor, names, actors)?,
-        );
-        if a == b {
-            return Err(FramingError::SameActor(sa.actor.clone()));
+    Prepared::new(comp, names, lens).solve(comp, actors, lens, gimbal)
+}
+
+/// What a solve of one composition needs that does not depend on the actors' poses: the
+/// subjects' indices among the scene's names, the camera angle's elevation and, for two
+/// actors, the angle α between their screen points (an `acos` and two rays a solve would
+/// otherwise repeat). Built for one composition, names list and lens; [`Prepared::solve`]
+/// gives exactly what [`solve`] gives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prepared {
+    /// Each subject's index in `names`, in the order of the composition's framings.
+    indices: [Option<usize>; 2],
+    elevation: f64,
+    /// α of the two subjects' screen points (NaN for one subject or non-finite screens).
+    alpha: f64,
+}
+
+impl Prepared {
+    pub fn new<S: AsRef<str>>(comp: &Composition, names: &[S], lens: &Lens) -> Prepared {
+        let mut subjects = comp.framings.iter().flat_map(|f| f.subjects.iter());
+        let (sa, sb) = (subjects.next(), subjects.next());
+        let alpha = match (sa, sb) {
+            (Some(sa), Some(sb)) => {
+                let (screen_a, screen_b) = pair_screens(sa, sb);
+                toric::alpha_from_screens(lens, screen_a, screen_b)
+            }
+            _ => f64::NAN,
+        };
+        Prepared {
+            indices: [
+                sa.and_then(|s| name_index(&s.actor, names)),
+                sb.and_then(|s| name_index(&s.actor, names)),
+            ],
+            elevation: sphere::elevation_rad(comp.camera_angle),
+            alpha,
         }
-        Pair::new(a, b, sa, sb, sizes, actors, elevation, level, lens)
-    };
-    match comp.framings.as_slice() {
-        [f] if f.subjects.len() == 1 => {
-            let s = &f.subjects[0];
-            check_screen(s)?;
-            let i = lookup(&s.actor, names, actors)?;
-            solve_one(i, s, f.size, &actors[i], elevation, level, lens).map(Visual::One)
-        }
-        [f] if f.subjects.len() == 2 => {
-            let (sa, sb) = (&f.subjects[0], &f.subjects[1]);
-            let pair = pair_of(sa, sb, (f.size, f.size))?;
-            solve_together(pair, sa, f.size, actors, lens).map(Visual::Two)
-        }
-        [fg, bg] if fg.subjects.len() == 1 && bg.subjects.len() == 1 => {
-            let (sa, sb) = (&fg.subjects[0], &bg.subjects[0]);
-            let pair = pair_of(sa, sb, (fg.size, bg.size))?;
-            solve_over_shoulder(pair, sa, sb, bg.size, actors, lens).map(Visual::Two)
-        }
-        _ => Err(unsupported),
     }
+
+    /// Solve `comp` (the composition this was prepared for) against the actors' poses.
+    pub fn solve(
+        &self,
+        comp: &Composition,
+        actors: &[ActorPose],
+        lens: &Lens,
+        gimbal: &Gimbal,
+    ) -> Result<Visual, FramingError> {
+        check_lens(lens)?;
+        let subjects: usize = comp.framings.iter().map(|f| f.subjects.len()).sum();
+        let unsupported = FramingError::Unsupported {
+            framings: comp.framings.len(),
+            subjects,
+        };
+        let elevation = self.elevation;
+        let level = fixed_pitch(gimbal);
+        // The two actors of a two-actor composition: screens checked, names found, distinct.
+        let pair_of = |sa: &Subject, sb: &Subject, sizes: (Size, Size)| {
+            check_screen(sa)?;
+            check_screen(sb)?;
+            let (a, b) = (
+                lookup(&sa.actor, self.indices[0], actors)?,
+                lookup(&sb.actor, self.indices[1], actors)?,
+            );
+            if a == b {
+                return Err(FramingError::SameActor(sa.actor.clone()));
+            }
+            Pair::new(a, b, sa, sb, sizes, actors, elevation, level, self.alpha)
+        };
+        match comp.framings.as_slice() {
+            [f] if f.subjects.len() == 1 => {
+                let s = &f.subjects[0];
+                check_screen(s)?;
+                let i = lookup(&s.actor, self.indices[0], actors)?;
+                solve_one(i, s, f.size, &actors[i], elevation, level, lens).map(Visual::One)
+            }
+            [f] if f.subjects.len() == 2 => {
+                let (sa, sb) = (&f.subjects[0], &f.subjects[1]);
+                let pair = pair_of(sa, sb, (f.size, f.size))?;
+                solve_together(pair, sa, f.size, actors, lens).map(Visual::Two)
+            }
+            [fg, bg] if fg.subjects.len() == 1 && bg.subjects.len() == 1 => {
+                let (sa, sb) = (&fg.subjects[0], &bg.subjects[0]);
+                let pair = pair_of(sa, sb, (fg.size, bg.size))?;
+                solve_over_shoulder(pair, sa, sb, bg.size, actors, lens).map(Visual::Two)
+            }
+            _ => Err(unsupported),
+        }
+    }
+}
+
+/// The two subjects' screen points: A at x = −1/3 and B at +1/3 unless written (one written
+/// x puts the other on the other side), y = 0 unless written.
+fn pair_screens(sa: &Subject, sb: &Subject) -> ([f64; 2], [f64; 2]) {
+    let third = 1.0 / 3.0;
+    let (xa, xb) = match (sa.screen_x, sb.screen_x) {
+        (Some(xa), Some(xb)) => (xa, xb),
+        (Some(xa), None) => (xa, if xa > 0.0 { -third } else { third }),
+        (None, Some(xb)) => (if xb < 0.0 { third } else { -third }, xb),
+        (None, None) => (-third, third),
+    };
+    (
+        [xa, sa.screen_y.unwrap_or(0.0)],
+        [xb, sb.screen_y.unwrap_or(0.0)],
+    )
 }
 
 fn solve_one(
@@ -445,7 +508,7 @@ fn solve_one(
     })
 }
 
-/// The common set-up of a two-actor solve: bands, aim points, screens, α.
+/// The common set-up of a two-actor solve: bands, aim points, screens, α (from [`Prepared`]).
 struct Pair {
     a: usize,
     b: usize,
@@ -475,7 +538,7 @@ impl Pair {
         actors: &[ActorPose],
         elevation: f64,
         level: bool,
-        lens: &Lens,
+        alpha: f64,
     ) -> Result<Pair, FramingError> {
         let (pa, pb) = (&actors[a], &actors[b]);
         let (ba, ta) = size::band(sizes.0, pa.height_m);
@@ -485,16 +548,7 @@ impl Pair {
         let ma = band_centre(pa, band_a);
         let mb = band_centre(pb, band_b);
         toric::frame(&ma, &mb).map_err(|_| FramingError::ActorsCoincide)?;
-        let third = 1.0 / 3.0;
-        let (xa, xb) = match (sa.screen_x, sb.screen_x) {
-            (Some(xa), Some(xb)) => (xa, xb),
-            (Some(xa), None) => (xa, if xa > 0.0 { -third } else { third }),
-            (None, Some(xb)) => (if xb < 0.0 { third } else { -third }, xb),
-            (None, None) => (-third, third),
-        };
-        let screen_a = [xa, sa.screen_y.unwrap_or(0.0)];
-        let screen_b = [xb, sb.screen_y.unwrap_or(0.0)];
-        let alpha = toric::alpha_from_screens(lens, screen_a, screen_b);
+        let (screen_a, screen_b) = pair_screens(sa, sb);
         if alpha.is_nan() || alpha <= 1e-9 {
             return Err(FramingError::ScreensCoincide);
         }
@@ -666,7 +720,7 @@ fn solve_together(
     let mut candidates = [(0.0, Primary::A); 4];
     let mut count = 0;
     if let Some(d) = pair.distance_a(lens) {
-        for th in toric::theta_for_distance_to_a(alpha, ab, d) {
+        for th in toric::theta_for_distance_to_a_on(alpha, r, d) {
             if dist_a(th) <= dist_b(th) + 1e-9 {
                 candidates[count] = (th, Primary::A);
                 count += 1;
@@ -674,7 +728,7 @@ fn solve_together(
         }
     }
     if let Some(d) = pair.distance_b(lens) {
-        for th in toric::theta_for_distance_to_b(alpha, ab, d) {
+        for th in toric::theta_for_distance_to_b_on(alpha, r, d) {
             if dist_b(th) <= dist_a(th) + 1e-9 {
                 candidates[count] = (th, Primary::B);
                 count += 1;

@@ -195,10 +195,19 @@ fn keep_valid(alpha_rad: f64, thetas: [f64; 2]) -> Roots {
 /// θ = π − 2α ± 2β' with β' = arccos(d/2r), kept in (0, 2(π − α)). Empty when no point of the
 /// torus is that far from A (d above 2r when α < π/2, above |AB| otherwise).
 pub fn theta_for_distance_to_a(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Roots {
-    if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(ab_m) {
+    if check_alpha(alpha_rad).is_err() || !positive(ab_m) {
         return Roots::default();
     }
-    let ratio = distance_m / (2.0 * radius_m(ab_m, alpha_rad));
+    theta_for_distance_to_a_on(alpha_rad, radius_m(ab_m, alpha_rad), distance_m)
+}
+
+/// [`theta_for_distance_to_a`] on the circle of radius `radius_m` ([`radius_m`]), for a caller
+/// that already has it (the framing solve needs it for both actors).
+pub fn theta_for_distance_to_a_on(alpha_rad: f64, radius_m: f64, distance_m: f64) -> Roots {
+    if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(radius_m) {
+        return Roots::default();
+    }
+    let ratio = distance_m / (2.0 * radius_m);
     if ratio > 1.0 {
         return Roots::default();
     }
@@ -215,10 +224,18 @@ pub fn theta_for_distance_to_a(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Ro
 /// Every θ at which the camera is `distance_m` from B: `sin(θ/2) = d/(2r)`, θ = π ∓ 2β',
 /// kept in (0, 2(π − α)).
 pub fn theta_for_distance_to_b(alpha_rad: f64, ab_m: f64, distance_m: f64) -> Roots {
-    if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(ab_m) {
+    if check_alpha(alpha_rad).is_err() || !positive(ab_m) {
         return Roots::default();
     }
-    let ratio = distance_m / (2.0 * radius_m(ab_m, alpha_rad));
+    theta_for_distance_to_b_on(alpha_rad, radius_m(ab_m, alpha_rad), distance_m)
+}
+
+/// [`theta_for_distance_to_b`] on the circle of radius `radius_m`.
+pub fn theta_for_distance_to_b_on(alpha_rad: f64, radius_m: f64, distance_m: f64) -> Roots {
+    if check_alpha(alpha_rad).is_err() || !positive(distance_m) || !positive(radius_m) {
+        return Roots::default();
+    }
+    let ratio = distance_m / (2.0 * radius_m);
     if ratio > 1.0 {
         return Roots::default();
     }

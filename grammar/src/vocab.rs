@@ -274,7 +274,12 @@ pub fn is_keyword(word: &str) -> bool {
 }
 
 /// Wrap an angle to (−π, π]: the one angle-wrap convention of the project.
+///
+/// An angle already in (−π, π] comes back bit for bit (and without the cost of `fmod`).
 pub fn wrap_angle_rad(a: f64) -> f64 {
+    if a > -PI && a <= PI {
+        return a;
+    }
     let w = a.rem_euclid(2.0 * PI); // [0, 2π)
     if w > PI {
         w - 2.0 * PI
@@ -345,6 +350,16 @@ mod tests {
         assert!((wrap_angle_rad(3.0 * PI / 2.0) + FRAC_PI_2).abs() < 1e-12);
         assert!((wrap_angle_rad(-7.0 * PI) - PI).abs() < 1e-9);
         assert_eq!(wrap_angle_rad(0.0), 0.0);
+    }
+
+    #[test]
+    fn wrap_keeps_in_range_angles_bit_for_bit() {
+        // Through 2π and back, −1e-20 used to come out as 0 and −0.3 two ulps off.
+        for a in [-1e-20, -0.3, -FRAC_PI_2, -PI + 1e-15, 1e-300, -0.0, 3.0, PI] {
+            assert_eq!(wrap_angle_rad(a).to_bits(), a.to_bits(), "{a}");
+        }
+        assert_eq!(wrap_angle_rad(f64::NAN).is_nan(), true);
+        assert!((wrap_angle_rad(PI + 1e-9) - (-PI + 1e-9)).abs() < 1e-12);
     }
 
     #[test]
