@@ -358,7 +358,7 @@ mod tests {
         for a in [-1e-20, -0.3, -FRAC_PI_2, -PI + 1e-15, 1e-300, -0.0, 3.0, PI] {
             assert_eq!(wrap_angle_rad(a).to_bits(), a.to_bits(), "{a}");
         }
-        assert_eq!(wrap_angle_rad(f64::NAN).is_nan(), true);
+        assert!(wrap_angle_rad(f64::NAN).is_nan());
         assert!((wrap_angle_rad(PI + 1e-9) - (-PI + 1e-9)).abs() < 1e-12);
     }
 
