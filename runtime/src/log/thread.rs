@@ -7,6 +7,13 @@
 //! thread over a bounded channel; the writer thread writes it with [`FlightLogWriter`] and
 //! sends the emptied batch back. Events keep their place among the ticks.
 //!
+//! The writer thread polls for full batches (sleeping 0.1 ms, doubling up to 20 ms while none
+//! comes) instead of blocking on the channel: a blocked receiver makes every hand-over wake
+//! it, a system call and a cross-core wake-up on the loop's thread. Measured on an hour of
+//! simulated flight (14,400 hand-overs) with a writer that only returned the batches: 0.87 s
+//! with a blocking receiver, 0.66 s polling (0.62 s without a log). In a real-time flight the
+//! writer wakes about 50 times a second and writes a batch at most 20 ms after it is full.
+//!
 //! A third thread, which mostly waits on the disk, syncs the file's data (`sync_data`): every
 //! two seconds of flight when two seconds of wall-clock time have passed since the last sync
 //! (a flight in real time: every two seconds), and every 32 s of flight whatever the clock
@@ -49,6 +56,10 @@ const SYNC_EVERY_BATCHES: u64 = 8;
 const SYNC_PERIOD: Duration = Duration::from_secs(2);
 /// …and after every this many batches whatever the clock says (32 s of flight).
 const SYNC_ANYWAY_BATCHES: u64 = 128;
+/// The writer thread's first sleep when no batch is waiting…
+const POLL_MIN: Duration = Duration::from_micros(100);
+/// …doubled while none comes, up to this.
+const POLL_MAX: Duration = Duration::from_millis(20);
 
 /// A [`TickRecord`] with its borrowed parts copied, kept from batch to batch.
 #[derive(Clone, Debug)]
@@ -349,7 +360,20 @@ fn write_batches(
             let _ = errors.try_send(io::Error::new(e.kind(), e.to_string()));
         }
     };
-    while let Ok(batch) = full.recv() {
+    let mut idle = POLL_MIN;
+    loop {
+        let batch = match full.try_recv() {
+            Ok(b) => {
+                idle = POLL_MIN;
+                b
+            }
+            Err(TryRecvError::Empty) => {
+                std::thread::sleep(idle);
+                idle = (idle * 2).min(POLL_MAX);
+                continue;
+            }
+            Err(TryRecvError::Disconnected) => break,
+        };
         if !failed {
             if let Err(e) = write_batch(&mut writer, &batch) {
                 report(e, &mut failed);

@@ -52,11 +52,13 @@ pub struct LogOptions {
     pub compression: LogCompression,
     /// Rate of `/tf` (Foxglove's 3D view).
     pub tf_hz: f64,
-    /// Rate of `/reference`, `/actors`, `/estimate`, `/measurement`, `/command` and
-    /// `/framing` (Foxglove's plots; `/servo/tick` holds every tick's exact controller input
-    /// and output, actors and framing). A `/command` whose `failsafe` flag is set, and the
+    /// Rate of `/reference`, `/actors`, `/estimate`, `/command` and `/framing` (Foxglove's
+    /// plots; `/servo/tick` holds every tick's exact controller input and output, actors and
+    /// framing, which Foxglove plots too). A `/command` whose `failsafe` flag is set, and the
     /// first after it, are written whatever the rate.
     pub plot_hz: f64,
+    /// Rate of `/measurement`: the actors' raw measured poses are kept nowhere else.
+    pub measurement_hz: f64,
     /// Flight time between two chunk closes and flushes: what a crash may lose. Also closed
     /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say.
     pub flush_period_s: f64,
@@ -67,7 +69,8 @@ impl Default for LogOptions {
         Self {
             compression: LogCompression::None,
             tf_hz: 30.0,
-            plot_hz: 30.0,
+            plot_hz: 10.0,
+            measurement_hz: 30.0,
             flush_period_s: 1.0,
         }
     }
@@ -127,8 +130,8 @@ pub struct FlightLogWriter {
     /// The reused message buffer and float texts.
     text: Text,
     next_tf_s: f64,
-    /// When the plot topics are next due (`plot_hz`): `/reference` with `/actors`,
-    /// `/estimate`, `/measurement`, `/command`, `/framing`.
+    /// When the plot topics are next due (`plot_hz`; `/measurement` at `measurement_hz`):
+    /// `/reference` with `/actors`, `/estimate`, `/measurement`, `/command`, `/framing`.
     next_reference_s: f64,
     next_estimate_s: f64,
     next_measurement_s: f64,
@@ -438,7 +441,8 @@ impl FlightLogWriter {
 
         if let Some(frame) = tick.mocap {
             if due(self.next_measurement_s) {
-                self.next_measurement_s = advance(self.next_measurement_s, t_s, hz);
+                self.next_measurement_s =
+                    advance(self.next_measurement_s, t_s, self.options.measurement_hz);
                 self.text.measurement(frame);
                 self.put_text(|c| &mut c.measurement, ns)?;
             }
