@@ -118,3 +118,23 @@ fn transition_front_to_34backright() {
     let framing = lqg.figures.rms_framing_error.expect("the script has holds");
     assert!(framing <= 0.05, "framing error {framing}");
 }
+
+/// Two walking actors held in a two-shot. The target, RMS framing error ≤ 0.05, is
+/// not met (0.090, README): a level, fixed camera cannot put two actors of different heights
+/// at different distances on the same screen line (0.067 on a perfect flight of this
+/// script). What is met is held here: the LQG flight within 5 cm and framing under 0.1, at
+/// most half the PID baseline's framing error on the same seeded flight.
+#[test]
+fn two_moving_actors_held_in_a_two_shot() {
+    let (lqg, pid) = lqg_against_pid("shots/two-actors.psl");
+    assert!(lqg.figures.rms_position_error_m <= 0.05);
+    assert!(lqg.figures.rms_position_error_m <= 0.5 * pid.figures.rms_position_error_m);
+    let framing = lqg.figures.rms_framing_error.expect("the script has holds");
+    let pid_framing = pid.figures.rms_framing_error.expect("the script has holds");
+    eprintln!("shots/two-actors.psl: framing LQG {framing:.3}, PID {pid_framing:.3}");
+    assert!(framing <= 0.1, "framing error {framing}");
+    assert!(
+        framing <= 0.5 * pid_framing,
+        "{framing} against PID {pid_framing}"
+    );
+}
