@@ -33,9 +33,9 @@ const REFERENCE_FRAME: &str = "reference";
 
 /// Chunk compression of the flight log.
 ///
-/// Measured (`benches/log.rs`, CPU time of one core on the shared 2-core development machine,
-/// 100 Hz, two actors): no compression 1.4 µs a tick and 1.3 kB (an hour: 0.63 s and 471
-/// MB); LZ4 3.5 µs a tick and 560 bytes: less than half the size for two and a half times
+/// Measured (`benches/log.rs`, CPU time of one core on the 2-core development machine,
+/// 100 Hz, two actors): no compression 1.07 µs a tick and 1.07 kB (an hour: 0.49 s and 384
+/// MB); LZ4 2.7 µs a tick and 478 bytes: less than half the size for two and a half times
 /// the CPU time, which would make the log thread slower than the simulated flight it logs.
 /// The default is no compression: a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
