@@ -327,6 +327,28 @@ impl Director {
         (heading.is_finite() && pitch.is_finite()).then_some((heading, pitch))
     }
 
+    /// The visual of a two-shot hold being flown this tick, moved [`EPS_S`] ahead along θ at
+    /// its exact rate ([`framing::two_shot_theta_rate`]), if that applies and stays on the
+    /// torus.
+    fn held_two_shot_ahead(&self, actors: &[ActorPose]) -> Option<framing::Visual> {
+        let Phase::Shot { index, .. } = self.phase else {
+            return None;
+        };
+        let (Some(Plan::Hold(_)), Some(v @ framing::Visual::Two(t))) =
+            (self.plans.get(index), &self.visual)
+        else {
+            return None;
+        };
+        let rate = framing::two_shot_theta_rate(v, actors, &self.lens, &self.gimbal)?;
+        let theta = t.toric.theta_rad + rate * EPS_S;
+        let max = 2.0 * (std::f64::consts::PI - t.toric.alpha_rad);
+        (theta > 0.0 && theta < max).then(|| {
+            let mut t = *t;
+            t.toric.theta_rad = theta;
+            framing::Visual::Two(t)
+        })
+    }
+
     /// The visual of a one-actor hold being flown this tick, if that is what it is.
     fn held_one_actor(&self) -> Option<&framing::Visual> {
         let Phase::Shot { index, .. } = self.phase else {
@@ -383,6 +405,10 @@ impl Director {
                 let target_ahead = if self.hold_stands_still(actors, &ahead) {
                     // The same solve against the same poses: the same target, bit for bit.
                     target
+                } else if let Some(v) = self.held_two_shot_ahead(actors) {
+                    // A two-shot held while the actors walk: its θ carried by its exact rate
+                    // instead of a second solve.
+                    framing::position_m(&v, &ahead, &self.lens, &self.gimbal)
                 } else {
                     self.target(t_s + EPS_S, &ahead, false)
                 };

@@ -1563,6 +1563,50 @@ pub fn body_axis_distances_m(point_m: &Vec3, actors: &[ActorPose]) -> Vec<f64> {
         .collect()
 }
 
+/// How fast a two-shot's θ turns while the actors walk with their velocities, for a visual
+/// whose θ is a root of its sized actor's distance constraint with a level camera (a
+/// two-actor framing without profile: what [`solve`] gives each tick). From θ = θ₀ + 2s·β',
+/// β' = arccos(ρ), ρ = d·sin α/|AB| (θ₀ = π − 2α when A has the size, π when B has it; s = ±1
+/// the root): `dθ/dt = 2s·ρ/(|AB|·√(1 − ρ²)) · d|AB|/dt`. α, φ, the bands and the screens
+/// do not change while the actors keep their heights, so this and the actors' velocities
+/// give the held framing's motion without solving again. `None` when it does not apply:
+/// another visual, a gimbal (θ is then refined against the elevation), a θ that is not that
+/// root (a profile's vantage), or a root near the tangent (ρ > 0.999).
+pub fn two_shot_theta_rate(
+    v: &Visual,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+) -> Option<f64> {
+    let Visual::Two(t) = v else {
+        return None;
+    };
+    if !fixed_pitch(gimbal) || t.over_shoulder || !valid_indices(v, actors.len()) {
+        return None;
+    }
+    let (pa, pb) = (&actors[t.a], &actors[t.b]);
+    let ab_m = band_centre(pb, t.band_b_m) - band_centre(pa, t.band_a_m);
+    let ab = ab_m.norm();
+    let alpha = t.toric.alpha_rad;
+    let (band, screen, theta0) = match t.primary {
+        Primary::A => (t.band_a_m, t.screen_a, PI - 2.0 * alpha),
+        Primary::B => (t.band_b_m, t.screen_b, PI),
+    };
+    let d = band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, 0.0, true)?;
+    let ratio = d / (2.0 * toric::radius_m(ab, alpha));
+    if !(ratio < 0.999 && ratio > 0.0) {
+        return None;
+    }
+    let theta = t.toric.theta_rad;
+    let s = if theta >= theta0 { 1.0 } else { -1.0 };
+    if (theta0 + s * 2.0 * ratio.acos() - theta).abs() > 1e-9 {
+        return None;
+    }
+    let relative_mps = Vec3::from(pb.velocity_mps) - Vec3::from(pa.velocity_mps);
+    let ab_rate_mps = ab_m.dot(&relative_mps) / ab;
+    Some(s * 2.0 * ratio / (ab * (1.0 - ratio * ratio).sqrt()) * ab_rate_mps)
+}
+
 /// Feed-forward velocity of [`place`]'s position for a held visual while the actors move with
 /// their velocities and turn rates: the §2 formula (`Ṗ + d·∂û/∂θ·ḣ`) for one actor, the exact
 /// derivative of the placement (central difference of the smooth map, actors extrapolated

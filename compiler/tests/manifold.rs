@@ -379,6 +379,77 @@ fn feed_forward_velocity_matches_placement_derivative() {
     }
 }
 
+/// A two-shot held by a level camera while both actors walk: `two_shot_theta_rate` is the
+/// derivative of the θ that `solve` finds (central difference of re-solves), whichever actor
+/// has the size and whichever root; it declines a gimbal and a profile's vantage.
+#[test]
+fn two_shot_theta_rate_is_the_derivative_of_the_solved_theta() {
+    let l = lens(92.0);
+    let mut checked = 0;
+    for (size, (xa, xb), (hb, vb)) in [
+        (Size::MS, (None, None), (1.65, [-0.3, 0.5, 0.0])),
+        (Size::MCU, (Some(-0.5), Some(0.2)), (1.9, [0.6, -0.1, 0.0])),
+        (Size::FS, (None, Some(0.4)), (1.8, [0.0, 0.0, 0.0])),
+        (Size::MLS, (Some(0.3), Some(-0.3)), (1.5, [-0.7, -0.4, 0.0])),
+    ] {
+        let at = |t: f64| {
+            let mut a = actor(-0.8 + 0.4 * t, 0.2 - 0.3 * t, 20.0, 1.8);
+            a.velocity_mps = [0.4, -0.3, 0.0];
+            let mut b = actor(1.2 + vb[0] * t, 0.5 + vb[1] * t, 200.0, hb);
+            b.velocity_mps = vb;
+            [a, b]
+        };
+        let c = comp(
+            CameraAngle::EyeLevel,
+            vec![(
+                size,
+                vec![subject("A", None, xa, None), subject("B", None, xb, None)],
+            )],
+        );
+        let theta = |t: f64| match solve(&c, &NAMES[..2], &at(t), &l, &Gimbal::None) {
+            Ok(Visual::Two(v)) => v.toric.theta_rad,
+            other => panic!("{other:?}"),
+        };
+        let v = solve(&c, &NAMES[..2], &at(0.0), &l, &Gimbal::None).unwrap();
+        let rate = framing::two_shot_theta_rate(&v, &at(0.0), &l, &Gimbal::None)
+            .unwrap_or_else(|| panic!("{size:?} {v:?}"));
+        let dt = 1e-5;
+        let numeric = (theta(dt) - theta(-dt)) / (2.0 * dt);
+        assert!(
+            (rate - numeric).abs() < 1e-6,
+            "{size:?}: {rate} vs {numeric}"
+        );
+        if vb == [0.0; 3] {
+            assert!(rate.abs() > 1e-3, "A walks: θ turns");
+        }
+        // Not for a gimbal (θ is refined against the elevation).
+        let vg = solve(&c, &NAMES[..2], &at(0.0), &l, &gimbal()).unwrap();
+        assert_eq!(
+            framing::two_shot_theta_rate(&vg, &at(0.0), &l, &gimbal()),
+            None
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 4);
+    // Not for a profile's vantage: its θ is not a root of the distance constraint.
+    let c = comp(
+        CameraAngle::EyeLevel,
+        vec![(
+            Size::MS,
+            vec![
+                subject("A", Some(Profile::ThreeQuarterLeft), None, None),
+                subject("B", None, None, None),
+            ],
+        )],
+    );
+    let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(2.0, 0.5, 180.0, 1.7)];
+    let v = solve(&c, &NAMES[..2], &actors, &l, &Gimbal::None).unwrap();
+    assert_eq!(
+        framing::two_shot_theta_rate(&v, &actors, &l, &Gimbal::None),
+        None
+    );
+}
+
 fn two_shot_scene() -> [ActorPose; 3] {
     [
         actor(0.0, 0.0, 0.0, 1.8),
