@@ -370,6 +370,10 @@ fn check_screen(s: &Subject) -> Result<(), FramingError> {
 
 /// Solve a composition against the actors' poses. `names[i]` names `actors[i]`.
 ///
+/// Accepted shapes: one framing of one actor; one framing of two actors; two framings of one
+/// actor each (over the shoulder, foreground first). See the module documentation for the
+/// defaults and for what is exact.
+///
 /// The same as [`Prepared::new`] then [`Prepared::solve`]; a caller that solves one
 /// composition every tick prepares it once.
 pub fn solve<S: AsRef<str>>(
@@ -417,7 +421,8 @@ impl Prepared {
         }
     }
 
-    /// Solve `comp` (the composition this was prepared for) against the actors' poses.
+    /// Solve `comp` against the actors' poses: `comp` and `lens` must be those this was
+    /// prepared with (the director keeps one per composition end of its plans).
     pub fn solve(
         &self,
         comp: &Composition,
