@@ -48,8 +48,8 @@
 //! readable after a crash. Chunks are built in memory and written whole; a chunk is closed and
 //! the file flushed (to the OS, without `fsync`) every `flush_period_s` of flight time
 //! ([`LogOptions`]). `shoot` writes through [`LogThread`], which hands the ticks to a writer
-//! thread every quarter second and closes chunks every 0.75 s, so a crash of the process loses
-//! at most the last second; [`FlightLog::open`] reads every complete chunk before the damage
+//! thread every quarter second (taken up within 20 ms) and closes chunks every 0.73 s, so a
+//! crash of the process loses at most the last second; [`FlightLog::open`] reads every complete chunk before the damage
 //! and sets [`FlightLog::truncated`]. A power cut may lose what the OS had not yet written.
 
 pub mod cdr;
@@ -67,7 +67,7 @@ use dronecine_compiler::camera::Lens;
 use dronecine_grammar::script::Stage;
 
 pub use self::reader::{FlightLog, LoggedTick};
-pub use self::thread::{LogThread, BATCH_PERIOD_S};
+pub use self::thread::{LogThread, BATCH_PERIOD_S, POLL_MAX_S};
 pub use self::writer::{FlightLogWriter, LogCompression, LogOptions};
 
 /// The static scene the log draws in Foxglove: the stage, the lens and the actors (their
