@@ -252,6 +252,10 @@ pub struct Estimator {
     p: Matrix9,
     c: f64,
     pc: f64,
+    /// The last Δ and its [`ModelParams::body_lag`] (three `exp` a tick otherwise; Δ rarely
+    /// changes).
+    lag_dt_s: f64,
+    lag_body: Vector3<f64>,
 }
 
 impl Estimator {
@@ -285,6 +289,9 @@ impl Estimator {
             p,
             c: 0.0,
             pc: 1.0,
+            // body_lag(0) = 0: a consistent entry (a tick never has Δ = 0).
+            lag_dt_s: 0.0,
+            lag_body: Vector3::zeros(),
         }
     }
 
@@ -322,7 +329,11 @@ impl Estimator {
         // A = [[I − L, 0, L], [Δ I, I, 0], [0, 0, I]] (the L block only with the wind
         // estimate), B = [G; 0; 0]: the products are taken block by block, a quarter of the
         // multiplications of the dense 9×9 A P Aᵀ (`predict_dense` in the tests is that).
-        let (lag, g) = self.model.lag_and_input(dt_s, self.c);
+        if dt_s != self.lag_dt_s {
+            self.lag_dt_s = dt_s;
+            self.lag_body = self.model.body_lag(dt_s);
+        }
+        let (lag, g) = self.model.lag_and_input_with(&self.lag_body, self.c);
         let m = Matrix3::identity() - lag;
         let wind = self.disturbance_diffusion > 0.0;
         let v = self.x.fixed_rows::<3>(0).into_owned();
@@ -412,6 +423,16 @@ impl Estimator {
         let innovation = frames::wrap_angle_rad(m.heading_rad - self.c);
         self.c = frames::wrap_angle_rad(self.c + kc * innovation);
         self.pc *= 1.0 - kc;
+    }
+
+    /// [`ModelParams::body_lag`] of the step `dt_s` (the last prediction's, when it was
+    /// this step).
+    pub fn body_lag(&self, dt_s: f64) -> Vector3<f64> {
+        if dt_s == self.lag_dt_s {
+            self.lag_body
+        } else {
+            self.model.body_lag(dt_s)
+        }
     }
 
     /// `x̂1 = [v; p]`.
@@ -753,13 +774,17 @@ impl LqgServo {
         }
         let mut u = -k1 * (x - xr);
         // G⁻¹ (M_D T_D M_Dᵀ v_ref + Δ a_ref): holds v_ref and follows a_ref.
-        let (lag, g) = self.model.lag_and_input(dt_s, c);
         // With the wind estimate d: the lag pulls toward G u + d, so hold v_ref − d.
-        let mut target = lag * (v_ref - self.estimator.disturbance_mps());
-        if !self.options.paper_prefilter {
-            target += Vector3::from(r.acceleration_mps2) * dt_s;
-        }
-        if let Some(ff) = dare::solve_linear(&g, &target) {
+        let hold = v_ref - self.estimator.disturbance_mps();
+        let step = if self.options.paper_prefilter {
+            Vector3::zeros()
+        } else {
+            Vector3::from(r.acceleration_mps2) * dt_s
+        };
+        if let Some(ff) = self
+            .model
+            .input_for(&self.estimator.body_lag(dt_s), c, &hold, &step)
+        {
             u += ff;
         }
         u

@@ -85,9 +85,41 @@ impl ModelParams {
     /// [`ModelParams::world_lag`] and [`ModelParams::input_matrix`] together (one rotation,
     /// one body lag): what the Kalman filter's prediction needs each tick.
     pub fn lag_and_input(&self, dt_s: f64, heading_rad: f64) -> (Matrix3<f64>, Matrix3<f64>) {
+        self.lag_and_input_with(&self.body_lag(dt_s), heading_rad)
+    }
+
+    /// [`ModelParams::lag_and_input`] from the step's [`ModelParams::body_lag`], computed
+    /// once by the caller (it depends on Δ only).
+    pub fn lag_and_input_with(
+        &self,
+        body_lag: &Vector3<f64>,
+        heading_rad: f64,
+    ) -> (Matrix3<f64>, Matrix3<f64>) {
         let m = frames::body_to_world(heading_rad);
-        let mt = m * Matrix3::from_diagonal(&self.body_lag(dt_s));
+        let mt = m * Matrix3::from_diagonal(body_lag);
         (mt * m.transpose(), mt * self.input_to_body_velocity())
+    }
+
+    /// The input that meets `M_D T_D M_Dᵀ·hold + step` (hold the velocity `hold`, change it by
+    /// `step` over the step): `G⁻¹(M_D T_D M_Dᵀ·hold + step)` with `G` =
+    /// [`ModelParams::input_matrix`], in closed form. `G = Rz(c)·T_D·P·K` is a rotation, a
+    /// diagonal, a signed permutation and a diagonal, so this is
+    /// `K⁻¹·Pᵀ·(Rz(c)ᵀ·hold + T_D⁻¹·Rz(c)ᵀ·step)`: one rotation and four divisions, no
+    /// elimination. `None` when G is singular (a zero gain or lag) or the result is not
+    /// finite.
+    /// `body_lag` is the step's [`ModelParams::body_lag`].
+    pub fn input_for(
+        &self,
+        body_lag: &Vector3<f64>,
+        heading_rad: f64,
+        hold: &Vector3<f64>,
+        step: &Vector3<f64>,
+    ) -> Option<Vector3<f64>> {
+        let mt = frames::body_to_world(heading_rad).transpose();
+        let body = mt * hold + (mt * step).component_div(body_lag);
+        let u =
+            (frames::INPUT_TO_BODY.transpose() * body).component_div(&Vector3::from(self.gains));
+        u.iter().all(|x| x.is_finite()).then_some(u)
     }
 
     /// A1(Δ, c).
@@ -174,6 +206,33 @@ mod tests {
             taus_s: [1.7, 0.9, 1.25],
             gain_yaw: 1.0,
         }
+    }
+
+    /// The closed-form `G⁻¹` agrees with a general linear solve of `G u = target`, at any
+    /// heading and step, and declines a singular G.
+    #[test]
+    fn closed_form_input_inverts_the_input_matrix() {
+        let m = params();
+        for (dt, c) in [(0.01, 0.0), (0.0123, 0.7), (0.05, -2.0), (0.002, 3.1)] {
+            let hold = Vector3::new(0.4, -1.3, 0.2);
+            let step = Vector3::new(-0.02, 0.005, 0.01);
+            let u = m.input_for(&m.body_lag(dt), c, &hold, &step);
+            let lag = m.world_lag(dt, c);
+            let g = m.input_matrix(dt, c);
+            let want = g.lu().solve(&(lag * hold + step)).unwrap();
+            let u = u.unwrap();
+            assert!(
+                (u - want).norm() < 1e-12 * want.norm(),
+                "{dt} {c}: {u:?} {want:?}"
+            );
+            // And it is an inverse: G u gives the target back.
+            assert!((g * u - (lag * hold + step)).norm() < 1e-14);
+        }
+        let mut dead = params();
+        dead.gains[1] = 0.0;
+        assert!(dead
+            .input_for(&dead.body_lag(0.01), 0.3, &Vector3::x(), &Vector3::y())
+            .is_none());
     }
 
     /// The body-frame lag: with τ_φ ≠ τ_θ, a pitch command at heading c accelerates along the
