@@ -3,13 +3,23 @@
 //! `each` also every effect switched off in turn; prints position, heading and framing
 //! errors. Optional servo weights override the profile's, to try a tuning.
 //!
+//! For the holds it also prints what the framing asks of the camera: each tick the hold's
+//! composition is solved again against the actors as the director saw them, and
+//! - `demand`: the RMS horizontal acceleration of that exact camera position (a central
+//!   second difference over ±0.1 s, so mocap noise does not swamp it) and the share of ticks
+//!   where it exceeds the profile's `accel_max_mps2`, which the director's steering may not;
+//! - `ref→exact`: the RMS distance from the director's reference to it.
+//!
 //! ```sh
 //! cargo run --release -p dronecine-runtime --example tune -- shots/two-actors.psl [each] [Q1,..,Q6 R1,R2,R3]
 //! ```
 
-use dronecine_compiler::profile::Profile;
-use dronecine_runtime::flight::{NoObserver, NullSink};
-use dronecine_runtime::record::ControllerSetup;
+use dronecine_compiler::camera::{Lens, Vec3};
+use dronecine_compiler::framing;
+use dronecine_compiler::profile::{Gimbal, Profile};
+use dronecine_grammar::script::{Composition, Script, ShotContent};
+use dronecine_runtime::flight::{FlightSink, NoObserver};
+use dronecine_runtime::record::{ControllerSetup, Event, Phase, TickRecord};
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::{Effects, SimConfig};
 
@@ -40,6 +50,110 @@ fn without(name: &str) -> Effects {
         _ => e.battery = false,
     }
     e
+}
+
+/// Ticks of ±0.1 s for the second difference, at 100 Hz.
+const SPAN: usize = 10;
+
+/// What the holds ask of the camera (module docs).
+struct Demand {
+    /// The composition of each shot (a tick with framing records is in a hold of it).
+    holds: Vec<Option<Composition>>,
+    names: Vec<String>,
+    lens: Lens,
+    gimbal: Gimbal,
+    accel_max_mps2: f64,
+    /// The exact camera positions of the last 2·SPAN + 1 ticks of the current hold.
+    exact: Vec<Vec3>,
+    shot: Option<usize>,
+    sq_accel: f64,
+    over: u64,
+    accel_n: u64,
+    sq_ref: f64,
+    ref_n: u64,
+}
+
+impl Demand {
+    fn new(script: &Script, names: Vec<String>, profile: &Profile, lens: Lens) -> Demand {
+        Demand {
+            holds: script
+                .timeline
+                .iter()
+                .map(|shot| match &shot.content {
+                    ShotContent::Composition(c) => Some(c.clone()),
+                    _ => None,
+                })
+                .collect(),
+            names,
+            lens,
+            gimbal: profile.camera.gimbal,
+            accel_max_mps2: profile.limits.accel_max_mps2,
+            exact: Vec::with_capacity(2 * SPAN + 1),
+            shot: None,
+            sq_accel: 0.0,
+            over: 0,
+            accel_n: 0,
+            sq_ref: 0.0,
+            ref_n: 0,
+        }
+    }
+
+    fn report(&self) -> String {
+        if self.ref_n == 0 {
+            return String::new();
+        }
+        let rms = |s: f64, n: u64| (s / n.max(1) as f64).sqrt();
+        format!(
+            "  demand {:.2} m/s² ({:.0}% > {:.2})  ref→exact {:.1} cm",
+            rms(self.sq_accel, self.accel_n),
+            100.0 * self.over as f64 / self.accel_n.max(1) as f64,
+            self.accel_max_mps2,
+            100.0 * rms(self.sq_ref, self.ref_n)
+        )
+    }
+}
+
+impl FlightSink for Demand {
+    fn tick(&mut self, r: &TickRecord) -> std::io::Result<()> {
+        let comp = match r.shot {
+            Some(i) if r.phase == Phase::Shots && !r.framing.is_empty() => {
+                self.holds.get(i).and_then(|c| c.as_ref())
+            }
+            _ => None,
+        };
+        let exact = comp.and_then(|c| {
+            let v = framing::solve(c, &self.names, r.actors, &self.lens, &self.gimbal).ok()?;
+            Some(framing::position_m(&v, r.actors, &self.lens, &self.gimbal))
+        });
+        let Some(exact) = exact else {
+            self.exact.clear();
+            return Ok(());
+        };
+        if self.shot != r.shot {
+            self.exact.clear();
+            self.shot = r.shot;
+        }
+        let reference = Vec3::from(r.sample.position_m);
+        self.sq_ref += (reference - exact).norm_squared();
+        self.ref_n += 1;
+        if self.exact.len() == 2 * SPAN + 1 {
+            self.exact.remove(0);
+        }
+        self.exact.push(exact);
+        if self.exact.len() == 2 * SPAN + 1 {
+            let h = SPAN as f64 / 100.0;
+            let a = (self.exact[0] - 2.0 * self.exact[SPAN] + self.exact[2 * SPAN]) / (h * h);
+            let a = a.xy().norm();
+            self.sq_accel += a * a;
+            self.over += u64::from(a > self.accel_max_mps2);
+            self.accel_n += 1;
+        }
+        Ok(())
+    }
+
+    fn event(&mut self, _: &Event) -> std::io::Result<()> {
+        Ok(())
+    }
 }
 
 fn run() -> Result<(), String> {
@@ -109,18 +223,23 @@ fn run() -> Result<(), String> {
                 realtime: false,
                 interrupts: None,
             };
-            let r = fly_simulated(&flight, &mut NullSink, &mut NoObserver)
-                .map_err(|e| e.to_string())?;
+            let lens =
+                *dronecine_compiler::director::Director::new(&script, scene, &profile).lens();
+            let names = scene.actors.iter().map(|a| a.name.clone()).collect();
+            let mut demand = Demand::new(&script, names, &profile, lens);
+            let r =
+                fly_simulated(&flight, &mut demand, &mut NoObserver).map_err(|e| e.to_string())?;
             let f = &r.figures;
             println!(
                 "{controller} {name:24} RMS {:5.2} cm  max {:5.2} cm  heading {:4.2}°  framing {}  \
-                 saturated {:4.1}%{}",
+                 saturated {:4.1}%{}{}",
                 f.rms_position_error_m * 100.0,
                 f.max_position_error_m * 100.0,
                 f.rms_heading_error_rad.to_degrees(),
                 f.rms_framing_error.map_or("  —  ".into(), |x| format!("{x:.3}")),
                 f.saturated_fraction * 100.0,
-                if r.completed { "" } else { "  (not completed)" }
+                if r.completed { "" } else { "  (not completed)" },
+                demand.report()
             );
         }
     }
