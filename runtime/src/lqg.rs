@@ -333,7 +333,7 @@ impl Estimator {
             self.lag_dt_s = dt_s;
             self.lag_body = self.model.body_lag(dt_s);
         }
-        let (lag, g) = self.model.lag_and_input_with(&self.lag_body, self.c);
+        let (lag, g) = self.model.lag_and_input(&self.lag_body, self.c);
         let m = Matrix3::identity() - lag;
         let wind = self.disturbance_diffusion > 0.0;
         let v = self.x.fixed_rows::<3>(0).into_owned();

@@ -82,15 +82,10 @@ impl ModelParams {
             * self.input_to_body_velocity()
     }
 
-    /// [`ModelParams::world_lag`] and [`ModelParams::input_matrix`] together (one rotation,
-    /// one body lag): what the Kalman filter's prediction needs each tick.
-    pub fn lag_and_input(&self, dt_s: f64, heading_rad: f64) -> (Matrix3<f64>, Matrix3<f64>) {
-        self.lag_and_input_with(&self.body_lag(dt_s), heading_rad)
-    }
-
-    /// [`ModelParams::lag_and_input`] from the step's [`ModelParams::body_lag`], computed
-    /// once by the caller (it depends on Δ only).
-    pub fn lag_and_input_with(
+    /// [`ModelParams::world_lag`] and [`ModelParams::input_matrix`] together (one rotation),
+    /// from the step's [`ModelParams::body_lag`], which depends on Δ only and which the
+    /// caller keeps: what the Kalman filter's prediction needs each tick.
+    pub fn lag_and_input(
         &self,
         body_lag: &Vector3<f64>,
         heading_rad: f64,
@@ -104,10 +99,9 @@ impl ModelParams {
     /// `step` over the step): `G⁻¹(M_D T_D M_Dᵀ·hold + step)` with `G` =
     /// [`ModelParams::input_matrix`], in closed form. `G = Rz(c)·T_D·P·K` is a rotation, a
     /// diagonal, a signed permutation and a diagonal, so this is
-    /// `K⁻¹·Pᵀ·(Rz(c)ᵀ·hold + T_D⁻¹·Rz(c)ᵀ·step)`: one rotation and four divisions, no
-    /// elimination. `None` when G is singular (a zero gain or lag) or the result is not
-    /// finite.
-    /// `body_lag` is the step's [`ModelParams::body_lag`].
+    /// `K⁻¹·Pᵀ·(Rz(c)ᵀ·hold + T_D⁻¹·Rz(c)ᵀ·step)`: one rotation and six divisions, no
+    /// elimination. `body_lag` is the step's [`ModelParams::body_lag`] (T_D). `None` when G
+    /// is singular (a zero gain or lag) or the result is not finite.
     pub fn input_for(
         &self,
         body_lag: &Vector3<f64>,
@@ -219,6 +213,9 @@ mod tests {
             let u = m.input_for(&m.body_lag(dt), c, &hold, &step);
             let lag = m.world_lag(dt, c);
             let g = m.input_matrix(dt, c);
+            // The filter's pair, from the kept body lag, is the same two matrices.
+            let (lag2, g2) = m.lag_and_input(&m.body_lag(dt), c);
+            assert!((lag2 - lag).norm() < 1e-15 && (g2 - g).norm() < 1e-15);
             let want = g.lu().solve(&(lag * hold + step)).unwrap();
             let u = u.unwrap();
             assert!(
