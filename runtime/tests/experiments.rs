@@ -119,11 +119,9 @@ fn transition_front_to_34backright() {
     assert!(framing <= 0.05, "framing error {framing}");
 }
 
-/// Two walking actors held in a two-shot. The target, RMS framing error ≤ 0.05, is
-/// not met (0.090, README): a level, fixed camera cannot put two actors of different heights
-/// at different distances on the same screen line (0.067 on a perfect flight of this
-/// script). What is met is held here: the LQG flight within 5 cm and framing under 0.1, at
-/// most half the PID baseline's framing error on the same seeded flight.
+/// Two walking actors held in a two-shot, with their actors deviating from the blocking: the
+/// issue's target, RMS framing error ≤ 0.05, on the seeded flight of the README table and on
+/// four more seeds; LQG within 5 cm and at most half the PID baseline's errors.
 #[test]
 fn two_moving_actors_held_in_a_two_shot() {
     let (lqg, pid) = lqg_against_pid("shots/two-actors.psl");
@@ -132,9 +130,60 @@ fn two_moving_actors_held_in_a_two_shot() {
     let framing = lqg.figures.rms_framing_error.expect("the script has holds");
     let pid_framing = pid.figures.rms_framing_error.expect("the script has holds");
     eprintln!("shots/two-actors.psl: framing LQG {framing:.3}, PID {pid_framing:.3}");
-    assert!(framing <= 0.1, "framing error {framing}");
+    assert!(framing <= 0.05, "framing error {framing}");
     assert!(
         framing <= 0.5 * pid_framing,
         "{framing} against PID {pid_framing}"
+    );
+    for seed in 1..=4 {
+        let r = fly("shots/two-actors.psl", "lqg", seed);
+        let framing = r.figures.rms_framing_error.expect("the script has holds");
+        assert!(framing <= 0.05, "seed {seed}: framing error {framing}");
+    }
+}
+
+/// The same two-shot with actors of 1.80 m and 1.65 m: no level, roll-free camera puts both
+/// band centres on their screen line (camera-math §4), so even a flight with every effect off
+/// (exact plant, mocap and blocking) keeps a framing error above the target — the floor
+/// comes from the geometry, not the servo. The seeded flight adds little to it.
+#[test]
+fn actors_of_different_heights_leave_a_geometric_floor() {
+    let (text, script) = load("shots/two-heights.psl");
+    let scene = script.scene.as_ref().unwrap();
+    let profile = profile_of(&script);
+    let mut sim = SimConfig::new(7);
+    sim.effects = dronecine_runtime::sim::Effects::none();
+    let flight = SimFlight {
+        script: &script,
+        source: &text,
+        scene,
+        profile: &profile,
+        rate_hz: 100.0,
+        controller: ControllerSetup {
+            kind: "lqg".into(),
+            paper_prefilter: false,
+            per_tick_solve: false,
+        },
+        plant: None,
+        sim,
+        realtime: false,
+        interrupts: None,
+    };
+    let exact = fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap();
+    let floor = exact
+        .figures
+        .rms_framing_error
+        .expect("the script has holds");
+    let flown = fly("shots/two-heights.psl", "lqg", 7);
+    let framing = flown
+        .figures
+        .rms_framing_error
+        .expect("the script has holds");
+    eprintln!("shots/two-heights.psl: framing {framing:.3}, floor {floor:.3}");
+    assert!(exact.figures.rms_position_error_m < 0.01);
+    assert!(floor > 0.05, "floor {floor}");
+    assert!(
+        framing >= floor - 0.005 && framing <= floor + 0.02,
+        "{framing} against {floor}"
     );
 }

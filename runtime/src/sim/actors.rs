@@ -73,6 +73,7 @@ impl Actors {
                         cfg.actor_offset_sigma_m,
                         cfg.actor_offset_tau_s,
                         cfg.actor_offset_max_m,
+                        cfg.actor_knots_per_tau,
                         z,
                     )
                 };
@@ -83,6 +84,7 @@ impl Actors {
                         cfg.actor_facing_sigma_rad,
                         cfg.actor_facing_tau_s,
                         cfg.actor_facing_max_rad,
+                        cfg.actor_knots_per_tau,
                         z,
                     ),
                     timing: SmoothOu::new(
@@ -90,6 +92,7 @@ impl Actors {
                         cfg.actor_timing_sigma_s,
                         cfg.actor_timing_tau_s,
                         cfg.actor_timing_max_s,
+                        cfg.actor_knots_per_tau,
                         z,
                     ),
                 }

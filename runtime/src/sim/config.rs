@@ -147,6 +147,12 @@ pub struct SimConfig {
     pub actor_timing_sigma_s: f64,
     pub actor_timing_tau_s: f64,
     pub actor_timing_max_s: f64,
+    /// Knots per correlation time of the actors' deviation splines (`smooth.rs`). Default 2:
+    /// an actor drifts off the mark on the scale of the correlation time, and the offset's
+    /// acceleration stays that of a person shifting their weight (≈ 0.1 m/s² RMS per axis
+    /// at the defaults). 8, the wind's setting, keeps the OU's rough tail up to 8/τ and
+    /// makes a 6 cm drift accelerate at ≈ 0.7 m/s² RMS — a fidget no camera should chase.
+    pub actor_knots_per_tau: f64,
     /// Battery at start. Default 100 %.
     pub battery_start_percent: f64,
     /// Drain while airborne. Default 7 %/min (≈ 13 min of flight on the 1000 mAh pack,
@@ -195,6 +201,7 @@ impl SimConfig {
             actor_timing_sigma_s: 0.1,
             actor_timing_tau_s: 4.0,
             actor_timing_max_s: 0.2,
+            actor_knots_per_tau: 2.0,
             battery_start_percent: 100.0,
             battery_drain_percent_per_min: 7.0,
             battery_min_takeoff_percent: 20.0,
@@ -205,7 +212,7 @@ impl SimConfig {
     /// Every value checked; the first bad one is reported.
     pub fn validate(&self) -> Result<(), SimError> {
         use Expect::*;
-        let checks: [(&'static str, f64, Expect); 32] = [
+        let checks: [(&'static str, f64, Expect); 33] = [
             ("mocap_rate_hz", self.mocap_rate_hz, Range(1e-3, 1e4)),
             ("step_s", self.step_s, Range(1e-5, 0.05)),
             ("start_position_m[0]", self.start_position_m[0], Finite),
@@ -279,6 +286,11 @@ impl SimConfig {
                 "actor_timing_max_s",
                 self.actor_timing_max_s,
                 Range(0.0, 5.0),
+            ),
+            (
+                "actor_knots_per_tau",
+                self.actor_knots_per_tau,
+                Range(0.5, 64.0),
             ),
             (
                 "battery_start_percent",

@@ -300,6 +300,8 @@ impl Simulator {
                 config.wind_sigma_mps,
                 config.wind_tau_s,
                 f64::INFINITY,
+                // Turbulence keeps its OU spectrum (Dryden's first-order roll-off) to 8/τ.
+                8.0,
                 zig,
             )
         });

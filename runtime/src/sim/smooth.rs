@@ -3,7 +3,10 @@
 //! continuous derivative (wind gusts and actors' deviations have no steps), and can be read
 //! at any time without drawing a number per read.
 //!
-//! Knot `j` sits at `j·spacing`, `spacing = τ/8`; knot values follow the OU recursion
+//! Knot `j` sits at `j·spacing`, `spacing = τ/k` (k knots per correlation time, the caller's
+//! choice: it sets how much of the OU's rough high-frequency tail the path keeps — the path's
+//! RMS rate grows about as √k and its RMS acceleration about as k^1.5, while σ and τ stay);
+//! knot values follow the OU recursion
 //! `x[j+1] = a·x[j] + σ·√(1 − a²)·N(0, 1)` with `a = exp(−spacing/τ)`, started from the
 //! stationary law N(0, σ²). An optional bound `b` clamps the knots the spline goes through
 //! to ±b/1.25 (the OU recursion itself runs unclamped): a uniform Catmull–Rom segment is a
@@ -36,10 +39,19 @@ pub struct SmoothOu {
 }
 
 impl SmoothOu {
-    /// σ (stationary standard deviation), τ (correlation time, > 0) and the bound on the path
-    /// (`f64::INFINITY` for none). σ = 0 gives the zero process and draws nothing.
-    pub fn new(rng: Rng, sigma: f64, tau_s: f64, bound: f64, z: &Ziggurat) -> SmoothOu {
-        let spacing_s = tau_s / 8.0;
+    /// σ (stationary standard deviation), τ (correlation time, > 0), the bound on the path
+    /// (`f64::INFINITY` for none) and the knots per correlation time (> 0; 8 keeps the OU's
+    /// spectrum up to about 8/τ, as wind turbulence has it; 2 gives a drift that changes on
+    /// the scale of τ). σ = 0 gives the zero process and draws nothing.
+    pub fn new(
+        rng: Rng,
+        sigma: f64,
+        tau_s: f64,
+        bound: f64,
+        knots_per_tau: f64,
+        z: &Ziggurat,
+    ) -> SmoothOu {
+        let spacing_s = tau_s / knots_per_tau;
         let a = (-spacing_s / tau_s).exp();
         let s = sigma * (1.0 - a * a).sqrt();
         let mut p = SmoothOu {
@@ -135,13 +147,13 @@ mod tests {
         let z = Ziggurat::get();
         let (sigma, tau) = (0.3, 2.0);
         // Spread: 4000 s = 2000 τ, read every 10 ms.
-        let mut p = SmoothOu::new(Rng::stream(5, 9), sigma, tau, f64::INFINITY, z);
+        let mut p = SmoothOu::new(Rng::stream(5, 9), sigma, tau, f64::INFINITY, 8.0, z);
         let n = 400_000;
         let sum2: f64 = (0..n).map(|k| p.value(k as f64 * 0.01, z).powi(2)).sum();
         let sd = (sum2 / n as f64).sqrt();
         assert!((sd - sigma).abs() < 0.1 * sigma, "sd {sd}");
         // Continuity and the derivative: read every 0.1 ms for 40 s (160 knots).
-        let mut p = SmoothOu::new(Rng::stream(5, 10), sigma, tau, f64::INFINITY, z);
+        let mut p = SmoothOu::new(Rng::stream(5, 10), sigma, tau, f64::INFINITY, 8.0, z);
         let dt = 1e-4;
         let (mut prev, mut prev_rate) = p.value_rate(0.0, z);
         let mut max_step: f64 = 0.0;
@@ -167,8 +179,8 @@ mod tests {
     #[test]
     fn the_path_depends_on_the_seed_only() {
         let z = Ziggurat::get();
-        let mut a = SmoothOu::new(Rng::stream(1, 2), 1.0, 1.0, f64::INFINITY, z);
-        let mut b = SmoothOu::new(Rng::stream(1, 2), 1.0, 1.0, f64::INFINITY, z);
+        let mut a = SmoothOu::new(Rng::stream(1, 2), 1.0, 1.0, f64::INFINITY, 8.0, z);
+        let mut b = SmoothOu::new(Rng::stream(1, 2), 1.0, 1.0, f64::INFINITY, 8.0, z);
         // a is read often, b rarely: same values at the common times.
         for k in 0..1000 {
             let va = a.value(k as f64 * 0.01, z);
@@ -182,11 +194,52 @@ mod tests {
     fn a_bounded_path_stays_within_its_bound() {
         let z = Ziggurat::get();
         // σ twice the bound: the knots clamp often.
-        let mut p = SmoothOu::new(Rng::stream(3, 3), 0.2, 1.0, 0.1, z);
+        let mut p = SmoothOu::new(Rng::stream(3, 3), 0.2, 1.0, 0.1, 8.0, z);
         let mut largest: f64 = 0.0;
         for k in 0..200_000 {
             largest = largest.max(p.value(k as f64 * 1e-3, z).abs());
         }
         assert!(largest <= 0.1 && largest > 0.07, "{largest}");
+    }
+
+    /// RMS value, rate and acceleration (rate differenced every 10 ms) over 4000 s.
+    fn spread(knots_per_tau: f64) -> (f64, f64, f64) {
+        let z = Ziggurat::get();
+        let mut p = SmoothOu::new(
+            Rng::stream(5, 11),
+            0.06,
+            2.5,
+            f64::INFINITY,
+            knots_per_tau,
+            z,
+        );
+        let (dt, n) = (0.01, 400_000);
+        let (mut x2, mut r2, mut a2) = (0.0, 0.0, 0.0);
+        let mut prev = p.value_rate(0.0, z).1;
+        for k in 1..=n {
+            let (x, r) = p.value_rate(k as f64 * dt, z);
+            x2 += x * x;
+            r2 += r * r;
+            a2 += ((r - prev) / dt).powi(2);
+            prev = r;
+        }
+        let n = n as f64;
+        ((x2 / n).sqrt(), (r2 / n).sqrt(), (a2 / n).sqrt())
+    }
+
+    #[test]
+    fn knots_per_tau_set_the_roughness_not_the_spread() {
+        // The actors' defaults (σ 6 cm, τ 2.5 s) at 2 and 8 knots per τ.
+        let (sd2, rate2, acc2) = spread(2.0);
+        let (sd8, rate8, acc8) = spread(8.0);
+        // The spread stays σ (the spline through sparser knots averages a little more).
+        for sd in [sd2, sd8] {
+            assert!((sd - 0.06).abs() < 0.1 * 0.06, "sd {sd}");
+        }
+        // Rate ∝ √k and acceleration ∝ k^1.5 (4× the knots: 2× and 8×).
+        assert!((rate8 / rate2 - 2.0).abs() < 0.3, "{rate8} / {rate2}");
+        assert!((acc8 / acc2 - 8.0).abs() < 1.5, "{acc8} / {acc2}");
+        // The actors' setting: a drift of a person shifting weight, not a fidget.
+        assert!(acc2 < 0.12 && acc8 > 0.5, "{acc2}, {acc8}");
     }
 }
