@@ -35,6 +35,10 @@ fn profile_of(script: &Script) -> Profile {
 }
 
 fn fly_text(text: &str, script: &Script, controller: &str, seed: u64) -> FlightReport {
+    fly_sim(text, script, controller, SimConfig::new(seed))
+}
+
+fn fly_sim(text: &str, script: &Script, controller: &str, sim: SimConfig) -> FlightReport {
     let scene = script.scene.as_ref().unwrap();
     let profile = profile_of(script);
     let flight = SimFlight {
@@ -49,7 +53,7 @@ fn fly_text(text: &str, script: &Script, controller: &str, seed: u64) -> FlightR
             per_tick_solve: false,
         },
         plant: None,
-        sim: SimConfig::new(seed),
+        sim,
         realtime: false,
         interrupts: None,
     };
@@ -149,27 +153,9 @@ fn two_moving_actors_held_in_a_two_shot() {
 #[test]
 fn actors_of_different_heights_leave_a_geometric_floor() {
     let (text, script) = load("shots/two-heights.psl");
-    let scene = script.scene.as_ref().unwrap();
-    let profile = profile_of(&script);
     let mut sim = SimConfig::new(7);
     sim.effects = dronecine_runtime::sim::Effects::none();
-    let flight = SimFlight {
-        script: &script,
-        source: &text,
-        scene,
-        profile: &profile,
-        rate_hz: 100.0,
-        controller: ControllerSetup {
-            kind: "lqg".into(),
-            paper_prefilter: false,
-            per_tick_solve: false,
-        },
-        plant: None,
-        sim,
-        realtime: false,
-        interrupts: None,
-    };
-    let exact = fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap();
+    let exact = fly_sim(&text, &script, "lqg", sim);
     let floor = exact
         .figures
         .rms_framing_error
