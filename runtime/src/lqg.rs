@@ -346,43 +346,46 @@ impl Estimator {
         self.x.fixed_rows_mut::<3>(0).copy_from(&v1);
         self.x.fixed_rows_mut::<3>(3).copy_from(&p1);
 
-        // Q = A P, by block rows.
+        // P' = A P Aᵀ + Q by its six distinct 3×3 blocks (P is symmetric: `P_pv = P_vpᵀ`…).
+        // With X = [M, 0, L] P, the v rows of A P:
+        //   P'_vv = X_v Mᵀ + X_d Lᵀ,  P'_vp = Δ X_v + X_p,  P'_vd = X_d,
+        //   P'_pp = Δ² P_vv + Δ (P_vp + P_vpᵀ) + P_pp,  P'_pd = Δ P_vd + P_pd,  P'_dd = P_dd.
+        // Without the wind estimate the d blocks are zero and stay zero.
+        let block =
+            |p: &Matrix9, i: usize, j: usize| p.fixed_view::<3, 3>(3 * i, 3 * j).into_owned();
         let p = &self.p;
-        let (pv, pp, pd) = (
-            p.fixed_rows::<3>(0),
-            p.fixed_rows::<3>(3),
-            p.fixed_rows::<3>(6),
-        );
-        let mut q = Matrix9::zeros();
-        let mut qv = m * pv;
+        let (vv, vp, pp) = (block(p, 0, 0), block(p, 0, 1), block(p, 1, 1));
+        let mut xv = m * vv;
+        let mut xp = m * vp;
+        let mut nvv = xv * m.transpose();
         if wind {
-            qv += lag * pd;
-        }
-        q.fixed_rows_mut::<3>(0).copy_from(&qv);
-        q.fixed_rows_mut::<3>(3).copy_from(&(pv * dt_s + pp));
-        q.fixed_rows_mut::<3>(6).copy_from(&pd);
-        // P' = Q Aᵀ, by block columns.
-        let (qcv, qcp, qcd) = (
-            q.fixed_columns::<3>(0),
-            q.fixed_columns::<3>(3),
-            q.fixed_columns::<3>(6),
-        );
-        let mut pn = Matrix9::zeros();
-        let mut cv = qcv * m.transpose();
-        if wind {
-            cv += qcd * lag.transpose();
-        }
-        pn.fixed_columns_mut::<3>(0).copy_from(&cv);
-        pn.fixed_columns_mut::<3>(3).copy_from(&(qcv * dt_s + qcp));
-        pn.fixed_columns_mut::<3>(6).copy_from(&qcd);
-        let mut pvp = pn.fixed_view_mut::<6, 6>(0, 0);
-        pvp += self.process;
-        if wind {
-            for i in 6..9 {
-                pn[(i, i)] += self.disturbance_diffusion * dt_s;
+            let (vd, pd, dd) = (block(p, 0, 2), block(p, 1, 2), block(p, 2, 2));
+            xv += lag * vd.transpose();
+            xp += lag * pd.transpose();
+            let xd = m * vd + lag * dd;
+            nvv = xv * m.transpose() + xd * lag.transpose();
+            let npd = vd * dt_s + pd;
+            let mut ndd = dd;
+            for i in 0..3 {
+                ndd[(i, i)] += self.disturbance_diffusion * dt_s;
             }
+            let pn = &mut self.p;
+            pn.fixed_view_mut::<3, 3>(0, 6).copy_from(&xd);
+            pn.fixed_view_mut::<3, 3>(6, 0).copy_from(&xd.transpose());
+            pn.fixed_view_mut::<3, 3>(3, 6).copy_from(&npd);
+            pn.fixed_view_mut::<3, 3>(6, 3).copy_from(&npd.transpose());
+            pn.fixed_view_mut::<3, 3>(6, 6).copy_from(&ndd);
         }
-        self.p = (pn + pn.transpose()) * 0.5;
+        let q = &self.process;
+        let nvv = (nvv + nvv.transpose()) * 0.5 + q.fixed_view::<3, 3>(0, 0);
+        let nvp = xv * dt_s + xp + q.fixed_view::<3, 3>(0, 3);
+        let npp = vv * (dt_s * dt_s) + (vp + vp.transpose()) * dt_s + pp;
+        let npp = (npp + npp.transpose()) * 0.5 + q.fixed_view::<3, 3>(3, 3);
+        let pn = &mut self.p;
+        pn.fixed_view_mut::<3, 3>(0, 0).copy_from(&nvv);
+        pn.fixed_view_mut::<3, 3>(0, 3).copy_from(&nvp);
+        pn.fixed_view_mut::<3, 3>(3, 0).copy_from(&nvp.transpose());
+        pn.fixed_view_mut::<3, 3>(3, 3).copy_from(&npp);
         self.c = self
             .model
             .heading_step(self.c, dt_s, yaw_rate_command_radps);
@@ -416,8 +419,21 @@ impl Estimator {
             let k: Matrix9x3 = kt.transpose();
             let y = Vector3::from(m.position_m) - self.x.fixed_rows::<3>(3);
             self.x += k * y;
-            let p = self.p - k * pht.transpose();
-            self.p = (p + p.transpose()) * 0.5;
+            // P −= K (H P) = P Hᵀ S⁻¹ H P, symmetric: one triangle computed, mirrored.
+            let rows = if self.disturbance_diffusion > 0.0 {
+                9
+            } else {
+                6
+            };
+            for j in 0..rows {
+                for i in j..rows {
+                    let dp =
+                        k[(i, 0)] * pht[(j, 0)] + k[(i, 1)] * pht[(j, 1)] + k[(i, 2)] * pht[(j, 2)];
+                    let v = self.p[(i, j)] - dp;
+                    self.p[(i, j)] = v;
+                    self.p[(j, i)] = v;
+                }
+            }
         }
         let kc = self.pc / (self.pc + self.heading_measurement);
         let innovation = frames::wrap_angle_rad(m.heading_rad - self.c);
