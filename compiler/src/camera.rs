@@ -179,22 +179,27 @@ pub fn orient_fixed_pitch(
     // (d·r, d·f); with pitch τ, forward f = cos τ·h + sin τ·dz where h is the horizontal
     // component along the heading. Solve r·Sx = x·f for the heading.
     let d = target_m - position_m;
-    let b = d.y.atan2(d.x);
     let rho = crate::norm_xy(d.x, d.y);
     let xp = screen_x / lens.sx();
+    let (sin_t, cos_t) = pitch_rad.sin_cos();
     // Let δ = heading − bearing; r = ρ·sin δ, f = cos τ·ρ·cos δ + sin τ·dz.
-    // ρ sin δ = x' (cos τ ρ cos δ + sin τ dz)  →  ρ sin δ − x' cos τ ρ cos δ = x' sin τ dz.
+    // ρ sin δ = x' (cos τ ρ cos δ + sin τ dz)  →  ρ sin δ − x' cos τ ρ cos δ = x' sin τ dz,
+    // that is amp·sin(δ + φ) = rhs with (amp cos φ, amp sin φ) = (a, c).
     let a = rho;
-    let c = -xp * pitch_rad.cos() * rho;
-    let rhs = xp * pitch_rad.sin() * d.z;
+    let c = -xp * cos_t * rho;
+    let rhs = xp * sin_t * d.z;
     let amp = crate::norm_xy(a, c);
     if amp < 1e-12 {
-        return dronecine_grammar::vocab::wrap_angle_rad(b);
+        return dronecine_grammar::vocab::wrap_angle_rad(d.y.atan2(d.x));
     }
-    let phase = c.atan2(a);
+    // heading = bearing + asin(s) − φ, composed as unit vectors (one atan2, no asin):
+    // bearing (d.x, d.y)/ρ, asin(s) (√(1 − s²), s), −φ (a, −c)/amp; the scales do not
+    // change the angle.
     let s = (rhs / amp).clamp(-1.0, 1.0);
-    let delta = s.asin() - phase;
-    dronecine_grammar::vocab::wrap_angle_rad(b + delta)
+    let cs = (1.0 - s * s).sqrt();
+    let (u, v) = (cs * a + s * c, s * a - cs * c);
+    let (x, y) = (d.x * u - d.y * v, d.x * v + d.y * u);
+    dronecine_grammar::vocab::wrap_angle_rad(y.atan2(x))
 }
 
 #[cfg(test)]

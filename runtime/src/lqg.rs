@@ -415,24 +415,17 @@ impl Estimator {
         // Kᵀ = S⁻¹ (H P), S symmetric positive definite (a covariance plus the measurement
         // noise, so well conditioned): S⁻¹ in closed form; a non-finite or non-positive
         // determinant skips the correction.
-        if let Some(kt) = inverse_spd3(&s).map(|si| si * pht.transpose()) {
-            let k: Matrix9x3 = kt.transpose();
+        if let Some(si) = inverse_spd3(&s) {
+            // K = P Hᵀ S⁻¹ (S⁻¹ is built exactly symmetric).
+            let k: Matrix9x3 = pht * si;
             let y = Vector3::from(m.position_m) - self.x.fixed_rows::<3>(3);
             self.x += k * y;
-            // P −= K (H P) = P Hᵀ S⁻¹ H P, symmetric: one triangle computed, mirrored.
-            let rows = if self.disturbance_diffusion > 0.0 {
-                9
+            // P −= K (H P) = P Hᵀ S⁻¹ H P, symmetric: one triangle computed, mirrored
+            // (without the wind estimate the d rows and columns are zero and stay zero).
+            if self.disturbance_diffusion > 0.0 {
+                subtract_symmetric::<9>(&mut self.p, &k, &pht);
             } else {
-                6
-            };
-            for j in 0..rows {
-                for i in j..rows {
-                    let dp =
-                        k[(i, 0)] * pht[(j, 0)] + k[(i, 1)] * pht[(j, 1)] + k[(i, 2)] * pht[(j, 2)];
-                    let v = self.p[(i, j)] - dp;
-                    self.p[(i, j)] = v;
-                    self.p[(j, i)] = v;
-                }
+                subtract_symmetric::<6>(&mut self.p, &k, &pht);
             }
         }
         let kc = self.pc / (self.pc + self.heading_measurement);
@@ -497,6 +490,20 @@ fn inverse_spd3(s: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     let c22 = a * d - b * b;
     let k = 1.0 / det;
     Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, c22) * k)
+}
+
+/// `P −= K Yᵀ` on the leading `N × N` block, for a product known to be symmetric: the lower
+/// triangle computed, the upper one mirrored from it.
+#[inline]
+fn subtract_symmetric<const N: usize>(p: &mut Matrix9, k: &Matrix9x3, y: &Matrix9x3) {
+    for j in 0..N {
+        let yj = [y[(j, 0)], y[(j, 1)], y[(j, 2)]];
+        for i in j..N {
+            let v = p[(i, j)] - (k[(i, 0)] * yj[0] + k[(i, 1)] * yj[1] + k[(i, 2)] * yj[2]);
+            p[(i, j)] = v;
+            p[(j, i)] = v;
+        }
+    }
 }
 
 /// Whether a tick input can be used: every number finite and Δ > 0.
