@@ -10,7 +10,6 @@
 
 use crate::camera::{Lens, Vec3};
 use dronecine_grammar::vocab::wrap_angle_rad;
-use nalgebra::{Rotation3, Unit};
 use std::f64::consts::PI;
 
 /// Why a toric computation has no answer.
@@ -71,7 +70,7 @@ pub fn frame(a_m: &Vec3, b_m: &Vec3) -> Result<Frame, ToricError> {
     if len < 1e-9 {
         return Err(ToricError::Coincident);
     }
-    let horizontal = ab.x.hypot(ab.y);
+    let horizontal = crate::norm_xy(ab.x, ab.y);
     if horizontal < 1e-9 * len.max(1.0) {
         return Err(ToricError::Vertical);
     }
@@ -107,10 +106,14 @@ pub fn position(a_m: &Vec3, b_m: &Vec3, v: &Toric) -> Result<Vec3, ToricError> {
     }
     let f = frame(a_m, b_m)?;
     let beta = v.theta_rad / 2.0;
-    let ac_over_ab = (v.alpha_rad + beta).sin() / v.alpha_rad.sin();
-    let rot = Rotation3::from_axis_angle(&Unit::new_unchecked(f.n), v.phi_rad)
-        * Rotation3::from_axis_angle(&Unit::new_unchecked(f.t), beta);
-    Ok(a_m + rot * (b_m - a_m) * ac_over_ab)
+    let ac_m = (b_m - a_m).norm() * (v.alpha_rad + beta).sin() / v.alpha_rad.sin();
+    // The two rotations in closed form (Rodrigues, on the frame's axes: B − A = −|AB|·n,
+    // t × n = −z, n × z = −t): Rot(t, β)·(−n) = z sin β − n cos β, then Rot(n, φ) turns z
+    // into z cos φ − t sin φ and leaves n. Pinned to the rotation matrices by a test.
+    let (sin_b, cos_b) = beta.sin_cos();
+    let (sin_p, cos_p) = v.phi_rad.sin_cos();
+    let dir = (f.z * cos_p - f.t * sin_p) * sin_b - f.n * cos_b;
+    Ok(a_m + dir * ac_m)
 }
 
 /// The inverse of [`position`]: β = ∠(AB, AC), θ = 2β, α = ∠ACB, φ the signed angle from z
@@ -316,6 +319,42 @@ pub fn interpolate(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `position`'s closed form is `A + |AC|/|AB|·Rot(n, φ)·Rot(t, β)·(B − A)` with the
+    /// rotations as matrices (camera-math §3), over the whole (θ, φ) range and tilted pairs.
+    #[test]
+    fn the_closed_form_position_is_the_two_rotations() {
+        use nalgebra::{Rotation3, Unit};
+        let pairs = [
+            (Vec3::new(0.0, 0.0, 1.5), Vec3::new(2.0, 0.0, 1.5)),
+            (Vec3::new(-1.0, 0.5, 1.7), Vec3::new(1.2, -0.3, 1.4)),
+            (Vec3::new(3.0, 2.0, 0.2), Vec3::new(-0.5, 4.0, 2.9)),
+        ];
+        for (a, b) in pairs {
+            let f = frame(&a, &b).unwrap();
+            for alpha in [0.1, 0.6, 1.5, 2.8] {
+                for k in 0..=8 {
+                    let theta = 2.0 * (PI - alpha) * k as f64 / 8.0;
+                    for phi in [-3.0, -1.2, 0.0, 0.4, 2.0, PI] {
+                        let v = Toric {
+                            alpha_rad: alpha,
+                            theta_rad: theta,
+                            phi_rad: phi,
+                        };
+                        let beta = theta / 2.0;
+                        let rot = Rotation3::from_axis_angle(&Unit::new_unchecked(f.n), phi)
+                            * Rotation3::from_axis_angle(&Unit::new_unchecked(f.t), beta);
+                        let expected = a + rot * (b - a) * ((alpha + beta).sin() / alpha.sin());
+                        let got = position(&a, &b, &v).unwrap();
+                        assert!(
+                            (got - expected).norm() < 1e-12 * (1.0 + expected.norm()),
+                            "{v:?}: {got:?} against {expected:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn phi_zero_is_right_of_a_to_b_and_positive_phi_is_up() {
