@@ -724,9 +724,11 @@ fn solve_together(
     // At most two roots each: on the stack (this runs every tick).
     let mut candidates = [(0.0, Primary::A); 4];
     let mut count = 0;
+    // A root for A's distance is at that distance (to rounding, far below the 1e-9 margin):
+    // only the other actor's distance is computed.
     if let Some(d) = pair.distance_a(lens) {
         for th in toric::theta_for_distance_to_a_on(alpha, r, d) {
-            if dist_a(th) <= dist_b(th) + 1e-9 {
+            if d <= dist_b(th) + 1e-9 {
                 candidates[count] = (th, Primary::A);
                 count += 1;
             }
@@ -734,7 +736,7 @@ fn solve_together(
     }
     if let Some(d) = pair.distance_b(lens) {
         for th in toric::theta_for_distance_to_b_on(alpha, r, d) {
-            if dist_b(th) <= dist_a(th) + 1e-9 {
+            if d <= dist_a(th) + 1e-9 {
                 candidates[count] = (th, Primary::B);
                 count += 1;
             }

@@ -357,7 +357,7 @@ impl Estimator {
         let (vv, vp, pp) = (block(p, 0, 0), block(p, 0, 1), block(p, 1, 1));
         let mut xv = m * vv;
         let mut xp = m * vp;
-        let mut nvv = xv * m.transpose();
+        let nvv;
         if wind {
             let (vd, pd, dd) = (block(p, 0, 2), block(p, 1, 2), block(p, 2, 2));
             xv += lag * vd.transpose();
@@ -375,6 +375,8 @@ impl Estimator {
             pn.fixed_view_mut::<3, 3>(3, 6).copy_from(&npd);
             pn.fixed_view_mut::<3, 3>(6, 3).copy_from(&npd.transpose());
             pn.fixed_view_mut::<3, 3>(6, 6).copy_from(&ndd);
+        } else {
+            nvv = xv * m.transpose();
         }
         let q = &self.process;
         let nvv = (nvv + nvv.transpose()) * 0.5 + q.fixed_view::<3, 3>(0, 0);
@@ -596,6 +598,9 @@ pub struct LqgServo {
     yaw_rate_max_radps: f64,
     heading_gamma: f64,
     heading_tau_s: f64,
+    /// The last Δ and its [`heading_pole`] (a `powf` a tick otherwise; Δ rarely changes).
+    k2_dt_s: f64,
+    k2: f64,
     /// Whether `K1(c) = K1_body S(c)ᵀ` holds (x and y weighted alike).
     symmetric: bool,
     k_body: Gain,
@@ -634,6 +639,8 @@ impl LqgServo {
             yaw_rate_max_radps: profile.limits.yaw_rate_max_radps,
             heading_gamma: s.heading_gamma,
             heading_tau_s: s.heading_tau_s,
+            k2_dt_s: f64::NAN,
+            k2: f64::NAN,
             symmetric,
             k_body: Gain::zeros(),
             k_body_dt_s: options.nominal_dt_s,
@@ -844,12 +851,16 @@ impl Controller for LqgServo {
         let k1 = self.feedback_gain(dt, c);
         let u = self.translation_law(&k1, dt, c, r);
 
-        let k2 = heading_pole(
-            self.heading_gamma,
-            self.heading_tau_s,
-            self.options.nominal_dt_s,
-            dt,
-        );
+        if dt != self.k2_dt_s {
+            self.k2_dt_s = dt;
+            self.k2 = heading_pole(
+                self.heading_gamma,
+                self.heading_tau_s,
+                self.options.nominal_dt_s,
+                dt,
+            );
+        }
+        let k2 = self.k2;
         let e = frames::wrap_angle_rad(r.heading_rad - c);
         let c_dot = ((1.0 - k2) / dt * e + r.heading_rate_radps) / self.model.gain_yaw;
         let yaw = frames::yaw_rate_command_radps(c_dot);
