@@ -131,7 +131,7 @@ fn render(fit: &ModelFit, errors: &[FitError], prev: &Profile, axes: &[Axis]) ->
     for &axis in axes {
         let f = fit
             .get(axis)
-            .or_else(|| errors.iter().find(|e| e.axis == axis)?.fit.as_ref());
+            .or_else(|| errors.iter().find(|e| e.axis == axis)?.fit.as_deref());
         let (kname, kprev, tname, tprev) = match axis {
             Axis::Roll => ("K_phi", m.gain_roll_mps_per_rad, "tau_phi", m.tau_roll_s),
             Axis::Pitch => (
@@ -201,7 +201,7 @@ fn write_report(
     for (axis, segs) in tests {
         let Some(f) = fit
             .get(*axis)
-            .or_else(|| errors.iter().find(|e| e.axis == *axis)?.fit.as_ref())
+            .or_else(|| errors.iter().find(|e| e.axis == *axis)?.fit.as_deref())
         else {
             continue;
         };

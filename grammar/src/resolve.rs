@@ -235,17 +235,14 @@ impl<'o, 'a> Resolver<'o, 'a> {
         Some(q.value)
     }
 
-    /// Check `lo <= v <= hi` (or `lo < v` when `open_lo`) and report with the range.
-    fn range(
-        &mut self,
-        v: f64,
-        span: Span,
-        what: &str,
-        lo: f64,
-        open_lo: bool,
-        hi: f64,
-        unit: &str,
-    ) -> Option<f64> {
+    /// Check `v` against `bounds` and report with the range.
+    fn range(&mut self, v: f64, span: Span, what: &str, bounds: Bounds) -> Option<f64> {
+        let Bounds {
+            lo,
+            open_lo,
+            hi,
+            unit,
+        } = bounds;
         let below = if open_lo { v <= lo } else { v < lo };
         if below || v > hi {
             let lo_txt = if open_lo {
@@ -276,7 +273,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
 
     fn time(&mut self, q: &Quantity<'_>, what: &str) -> Option<f64> {
         let v = self.quantity(q, Dim::Time, what, false)?;
-        self.range(v, q.span, what, 0.0, false, MAX_TIME_S, "s")
+        self.range(v, q.span, what, Bounds::closed(0.0, MAX_TIME_S, "s"))
     }
 
     fn duration(&mut self, d: &ast::Duration<'_>) -> Option<f64> {
@@ -296,7 +293,12 @@ impl<'o, 'a> Resolver<'o, 'a> {
             );
             return None;
         }
-        self.range(v, d.value.span, "the duration", 0.0, true, MAX_TIME_S, "s")
+        self.range(
+            v,
+            d.value.span,
+            "the duration",
+            Bounds::above(0.0, MAX_TIME_S, "s"),
+        )
     }
 
     fn point(&mut self, p: &ast::Point<'_>, what: &str) -> Option<[f64; 2]> {
@@ -570,7 +572,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             let what = format!("the stage's {axis} size");
             match self
                 .quantity(q, Dim::Length, &what, false)
-                .and_then(|v| self.range(v, q.span, &what, 0.0, true, 1000.0, "m"))
+                .and_then(|v| self.range(v, q.span, &what, Bounds::above(0.0, 1000.0, "m")))
             {
                 Some(v) => size[i] = v,
                 None => ok = false,
@@ -596,10 +598,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     v.to_degrees(),
                     l.fov.span,
                     "the lens's field of view",
-                    1.0,
-                    false,
-                    170.0,
-                    "deg",
+                    Bounds::closed(1.0, 170.0, "deg"),
                 )
             })
             .map(f64::to_radians);
@@ -724,7 +723,12 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     height = self
                         .quantity(q, Dim::Length, "the actor's height", false)
                         .and_then(|v| {
-                            self.range(v, q.span, "the actor's height", 0.2, false, 3.0, "m")
+                            self.range(
+                                v,
+                                q.span,
+                                "the actor's height",
+                                Bounds::closed(0.2, 3.0, "m"),
+                            )
                         });
                     ok &= height.is_some();
                 }
@@ -1303,7 +1307,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                             for (q, slot, axis) in [(x, &mut sx, "x"), (y, &mut sy, "y")] {
                                 let what = format!("screen {axis}");
                                 match self.plain(q, &what).and_then(|v| {
-                                    self.range(v, q.span, &what, -1.0, false, 1.0, "")
+                                    self.range(v, q.span, &what, Bounds::closed(-1.0, 1.0, ""))
                                 }) {
                                     Some(v) => *slot = Some(v),
                                     None => ok = false,
@@ -1437,7 +1441,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             };
             let v = this.quantity(q, Dim::Length, what, false)?;
             if positive {
-                this.range(v, q.span, what, 0.0, true, 1000.0, "m")
+                this.range(v, q.span, what, Bounds::above(0.0, 1000.0, "m"))
             } else {
                 Some(v)
             }
@@ -1452,7 +1456,12 @@ impl<'o, 'a> Resolver<'o, 'a> {
             match given.get("turns").copied() {
                 Some((_, PathValue::Turns(q))) => {
                     this.plain(q, "the number of turns").and_then(|v| {
-                        this.range(v, q.span, "the number of turns", 0.0, true, 100.0, "")
+                        this.range(
+                            v,
+                            q.span,
+                            "the number of turns",
+                            Bounds::above(0.0, 100.0, ""),
+                        )
                     })
                 }
                 _ => Some(1.0),
@@ -1757,4 +1766,36 @@ fn event_text(e: &ast::Event<'_>) -> String {
 
 fn quantity_text(q: &Quantity<'_>) -> String {
     format!("{}{}", q.number, q.unit.map(|u| u.text).unwrap_or("s"))
+}
+
+/// The accepted range of a number, for [`Resolver::range`]'s check and its message.
+#[derive(Clone, Copy)]
+struct Bounds {
+    lo: f64,
+    /// `lo < v` instead of `lo <= v`.
+    open_lo: bool,
+    hi: f64,
+    unit: &'static str,
+}
+
+impl Bounds {
+    /// `lo <= v <= hi`.
+    fn closed(lo: f64, hi: f64, unit: &'static str) -> Bounds {
+        Bounds {
+            lo,
+            open_lo: false,
+            hi,
+            unit,
+        }
+    }
+
+    /// `lo < v <= hi`.
+    fn above(lo: f64, hi: f64, unit: &'static str) -> Bounds {
+        Bounds {
+            lo,
+            open_lo: true,
+            hi,
+            unit,
+        }
+    }
 }

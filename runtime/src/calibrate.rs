@@ -391,7 +391,7 @@ pub fn fly_tests(
     plan: &Plan,
     interrupts: Option<&AtomicU32>,
 ) -> Result<Vec<(Axis, Segment)>, CalibrateError> {
-    if !(plan.rate_hz > 0.0 && plan.rate_hz <= 1000.0) || !(plan.half_s > 0.0) {
+    if !(plan.rate_hz > 0.0 && plan.rate_hz <= 1000.0 && plan.half_s > 0.0) {
         return Err(CalibrateError::BadPlan(
             "rate and durations must be positive".into(),
         ));

@@ -244,8 +244,9 @@ pub enum FitProblem {
 pub struct FitError {
     pub axis: Axis,
     pub problem: FitProblem,
-    /// The fit as far as it went (for the report), if it got to numbers.
-    pub fit: Option<AxisFit>,
+    /// The fit as far as it went (for the report), if it got to numbers (boxed: an error
+    /// stays small on the `Ok` path).
+    pub fit: Option<Box<AxisFit>>,
 }
 
 impl fmt::Display for FitError {
@@ -323,7 +324,7 @@ fn check(fit: AxisFit) -> Result<AxisFit, FitError> {
         Err(FitError {
             axis: fit.axis,
             problem,
-            fit: Some(fit),
+            fit: Some(Box::new(fit)),
         })
     };
     if !(fit.gain.value > 0.0) {
