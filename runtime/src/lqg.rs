@@ -327,8 +327,8 @@ impl Estimator {
     /// were sent, at the estimated heading.
     pub fn predict(&mut self, dt_s: f64, u: &Vector3<f64>, yaw_rate_command_radps: f64) {
         // A = [[I − L, 0, L], [Δ I, I, 0], [0, 0, I]] (the L block only with the wind
-        // estimate), B = [G; 0; 0]: the products are taken block by block, a quarter of the
-        // multiplications of the dense 9×9 A P Aᵀ (`predict_dense` in the tests is that).
+        // estimate), B = [G; 0; 0]: the state by block rows, the covariance by its distinct
+        // 3×3 blocks below (`predict_dense` in the tests is the dense 9×9 A P Aᵀ).
         if dt_s != self.lag_dt_s {
             self.lag_dt_s = dt_s;
             self.lag_body = self.model.body_lag(dt_s);
@@ -414,7 +414,7 @@ impl Estimator {
     pub fn update(&mut self, m: &Measurement) {
         let s = self.p.fixed_view::<3, 3>(3, 3).into_owned() + self.measurement;
         let pht: Matrix9x3 = self.p.fixed_view::<9, 3>(0, 3).into_owned();
-        // Kᵀ = S⁻¹ (H P), S symmetric positive definite (a covariance plus the measurement
+        // K = P Hᵀ S⁻¹, S symmetric positive definite (a covariance plus the measurement
         // noise, so well conditioned): S⁻¹ in closed form; a non-finite or non-positive
         // determinant skips the correction.
         if let Some(si) = inverse_spd3(&s) {
