@@ -3,6 +3,10 @@
 //! simulator with every effect on, the LQG servo, and the MCAP flight log written to a
 //! temporary file. Also the same flight without the log, to split the cost.
 //!
+//! Each group also prints the CPU time a flight took, all threads together (the loop, the log's
+//! writer and syncer): on a machine with two cores, the flight with its log cannot take less
+//! wall time than half of it.
+//!
 //! Run: `cargo bench -p dronecine-runtime --bench flight`.
 
 use std::fmt::Write as _;
@@ -114,6 +118,46 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>) {
     assert!(report.completed);
 }
 
+/// CPU time of the whole process so far, every thread's (ended ones included), from
+/// `/proc/self/stat` (Linux; in its fixed 1/100 s unit). `None` elsewhere.
+fn process_cpu() -> Option<Duration> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The fields after the command name (which may hold spaces), from the third on.
+    let rest = stat.get(stat.rfind(')')? + 2..)?;
+    let mut fields = rest.split_whitespace().skip(11);
+    let utime: u64 = fields.next()?.parse().ok()?;
+    let stime: u64 = fields.next()?.parse().ok()?;
+    Some(Duration::from_millis((utime + stime) * 10))
+}
+
+/// Sums the CPU time and the count of flights measured, and prints the mean at the end.
+#[derive(Default)]
+struct CpuTally {
+    cpu: Duration,
+    flights: u32,
+}
+
+impl CpuTally {
+    fn measure(&mut self, f: impl FnOnce()) {
+        let start = process_cpu();
+        f();
+        if let (Some(a), Some(b)) = (start, process_cpu()) {
+            self.cpu += b.saturating_sub(a);
+            self.flights += 1;
+        }
+    }
+
+    fn report(&self, what: &str) {
+        if self.flights > 0 {
+            eprintln!(
+                "{what}: {:.2} s of CPU per flight, all threads ({} flights)",
+                self.cpu.as_secs_f64() / f64::from(self.flights),
+                self.flights
+            );
+        }
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("flight.mcap");
@@ -122,25 +166,29 @@ fn bench(c: &mut Criterion) {
     for minutes in [10usize, 60] {
         let text = generated_script(minutes);
         let script = parse(&text);
+        let mut tally = CpuTally::default();
         g.bench_function(format!("{minutes} min flight, no log"), |b| {
-            b.iter(|| fly(&text, &script, None))
+            b.iter(|| tally.measure(|| fly(&text, &script, None)))
         });
+        tally.report(&format!("{minutes} min flight, no log"));
         // Each flight writes a new file, as `shoot` does (its default log name carries the
         // time): the previous flight's file is removed before the clock starts. Truncating it
         // inside the timed run instead (an hour's 400 MB of page cache to drop, some of it
         // still being written back) added about 0.1 s that no flight pays.
+        let mut tally = CpuTally::default();
         g.bench_function(format!("{minutes} min flight with its log"), |b| {
             b.iter_custom(|iters| {
                 let mut total = Duration::ZERO;
                 for _ in 0..iters {
                     let _ = std::fs::remove_file(&path);
                     let start = Instant::now();
-                    fly(&text, &script, Some(&path));
+                    tally.measure(|| fly(&text, &script, Some(&path)));
                     total += start.elapsed();
                 }
                 total
             })
         });
+        tally.report(&format!("{minutes} min flight with its log"));
     }
     g.finish();
 }

@@ -1,5 +1,7 @@
 //! The flight log's cost: writing ticks (per tick, and one hour = 360,000 ticks at 100 Hz with
-//! two actors), with and without LZ4 chunks, and reading the hour back.
+//! two actors), with and without LZ4 chunks, and reading the hour back; and what each group of
+//! JSON topics adds to the hour (`log_hour_without`: the hour with that group's rate set to
+//! nothing, so the difference with `log_hour/write_none` is the group's cost).
 //!
 //! Run: `cargo bench -p dronecine-runtime --bench log`.
 
@@ -167,6 +169,15 @@ fn cpu_of<T>(f: impl FnOnce() -> T) -> Duration {
 /// Writes `n` ticks (cycling through `ticks`, the clock running on) and finishes the log;
 /// returns the CPU time (wall time if unavailable) spent in `write_tick` alone.
 fn write(path: &Path, ticks: &[Tick], n: usize, compression: LogCompression) -> Duration {
+    let options = LogOptions {
+        compression,
+        ..LogOptions::default()
+    };
+    write_with(path, ticks, n, options)
+}
+
+/// [`write`] with any options.
+fn write_with(path: &Path, ticks: &[Tick], n: usize, options: LogOptions) -> Duration {
     let names = vec!["Ann".to_string(), "Bo".to_string()];
     let scene = LogScene {
         stage: Stage {
@@ -175,10 +186,6 @@ fn write(path: &Path, ticks: &[Tick], n: usize, compression: LogCompression) -> 
         lens: Lens::new(84f64.to_radians(), 16.0 / 9.0),
         actor_names: &names,
         actor_heights_m: &[1.7, 1.8],
-    };
-    let options = LogOptions {
-        compression,
-        ..LogOptions::default()
     };
     let mut log = FlightLogWriter::create_with(path, &header(&names), &scene, options).unwrap();
     let (start, start_cpu) = (Instant::now(), cpu_time());
@@ -266,6 +273,60 @@ fn bench(c: &mut Criterion) {
                 .sum()
         })
     });
+    group.finish();
+
+    // What each group of JSON topics costs: the hour with that group off (a rate of one
+    // message in a thousand hours: the first tick's only).
+    let mut group = c.benchmark_group("log_hour_without");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(HOUR_TICKS as u64));
+    const NEVER_HZ: f64 = 1.0 / 3.6e6;
+    let defaults = LogOptions::default();
+    let variants = [
+        (
+            "tf",
+            LogOptions {
+                tf_hz: NEVER_HZ,
+                ..defaults
+            },
+        ),
+        (
+            "measurement",
+            LogOptions {
+                measurement_hz: NEVER_HZ,
+                ..defaults
+            },
+        ),
+        (
+            "plots",
+            LogOptions {
+                plot_hz: NEVER_HZ,
+                ..defaults
+            },
+        ),
+        (
+            "all_json",
+            LogOptions {
+                tf_hz: NEVER_HZ,
+                measurement_hz: NEVER_HZ,
+                plot_hz: NEVER_HZ,
+                ..defaults
+            },
+        ),
+    ];
+    for (name, options) in variants {
+        group.bench_function(BenchmarkId::from_parameter(name), |b| {
+            b.iter_custom(|iters| {
+                (0..iters)
+                    .map(|_| cpu_of(|| write_with(&path, &ticks, HOUR_TICKS, options)))
+                    .sum()
+            })
+        });
+        if let Ok(m) = std::fs::metadata(&path) {
+            eprintln!("hour without {name}: {:.1} MB", m.len() as f64 / 1e6);
+            let _ = std::fs::remove_file(&path);
+        }
+    }
     group.finish();
 }
 
