@@ -572,19 +572,9 @@ pub fn advance(next_s: f64, t_s: f64, hz: f64) -> f64 {
     }
 }
 
-/// The transform topics, one per frame (`/tf/drone`, `/tf/camera`, `/tf/actor/NAME` for each
-/// actor, then `/tf/CHILD` for each `extra` (parent, child)), in that order: each frame's
-/// publisher and its channel.
-pub fn frame_topics<W: std::io::Write + std::io::Seek>(
-    writer: &mut Writer<W>,
-    actor_names: &[String],
-    extra: &[(&str, &str)],
-) -> Result<(Vec<FrameTopic>, Vec<Channel>), McapError> {
-    let schema = writer.add_schema(
-        foxglove::FRAME_TRANSFORMS,
-        "jsonschema",
-        foxglove::frame_transforms_schema().as_bytes(),
-    )?;
+/// The transform frames as (parent, child): `drone` and `camera`, `actor/NAME` for each actor,
+/// then each of `extra`, in that order (their topics are `/tf/CHILD`).
+pub fn frame_pairs(actor_names: &[String], extra: &[(&str, &str)]) -> Vec<(String, String)> {
     let mut frames = vec![
         (foxglove::WORLD.to_string(), foxglove::DRONE.to_string()),
         (foxglove::DRONE.to_string(), foxglove::CAMERA.to_string()),
@@ -595,6 +585,22 @@ pub fn frame_topics<W: std::io::Write + std::io::Seek>(
             .map(|n| (foxglove::WORLD.to_string(), foxglove::actor_frame(n))),
     );
     frames.extend(extra.iter().map(|(p, c)| (p.to_string(), c.to_string())));
+    frames
+}
+
+/// The transform topics, one per frame of [`frame_pairs`]: each frame's publisher and its
+/// channel.
+pub fn frame_topics<W: std::io::Write + std::io::Seek>(
+    writer: &mut Writer<W>,
+    actor_names: &[String],
+    extra: &[(&str, &str)],
+) -> Result<(Vec<FrameTopic>, Vec<Channel>), McapError> {
+    let schema = writer.add_schema(
+        foxglove::FRAME_TRANSFORMS,
+        "jsonschema",
+        foxglove::frame_transforms_schema().as_bytes(),
+    )?;
+    let frames = frame_pairs(actor_names, extra);
     let mut topics = Vec::with_capacity(frames.len());
     let mut channels = Vec::with_capacity(frames.len());
     for (parent, child) in &frames {

@@ -53,6 +53,7 @@
 //! and sets [`FlightLog::truncated`]. A power cut may lose what the OS had not yet written.
 
 pub mod cdr;
+mod mcap_file;
 mod reader;
 mod schema;
 mod text;

@@ -4,25 +4,26 @@
 //! Per tick the writer encodes `/servo/tick` (CDR, `cdr.rs`) and, at the plot and `/tf`
 //! rates, formats JSON (`text.rs`, the compiler's hand-written JSON helpers behind a cache of
 //! float texts), each into one reused buffer handed to the MCAP writer,
-//! whose in-memory chunk buffer is reused from chunk to chunk; chunks carry no message
-//! indexes (readers scan the ≤ 1 s chunks). The only allocation on the per-tick path is the
+//! whose in-memory chunk buffer is reused from chunk to chunk ([`McapFile`], written for this
+//! path: each message copied once and each chunk hashed once); chunks carry no message indexes
+//! (readers scan the ≤ 1 s chunks). The only allocation on the per-tick path is the
 //! compiler's `foxglove::Frames::message` (a 40-byte time stamp, on `/tf` ticks, 30 Hz).
 
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
-use std::io::{self, BufWriter};
+use std::io;
 use std::path::{Path, PathBuf};
 
 use dronecine_compiler::camera::Lens;
 use dronecine_compiler::output::foxglove::{self, FrameTopic};
 use dronecine_compiler::output::mcap::{
-    actor_prefix, actors_schema, advance, camera_message, camera_schema, frame_topics,
+    actor_prefix, actors_schema, advance, camera_message, camera_schema, frame_pairs,
     reference_schema, write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA,
     REFERENCE_SCHEMA,
 };
 use dronecine_compiler::output::{json, ns_from_s};
-use mcap::records::Metadata;
-use mcap::{Attachment, McapError, WriteOptions, Writer};
+
+use super::mcap_file::{ChunkCompression, McapFile};
 
 use super::text::{same_command, Text};
 use super::{cdr, schema, topic, LogScene, HEADER_METADATA};
@@ -34,9 +35,10 @@ const REFERENCE_FRAME: &str = "reference";
 /// Chunk compression of the flight log.
 ///
 /// Measured (`benches/log.rs`, CPU time of one core on the 2-core development machine,
-/// 100 Hz, two actors): no compression 1.07 µs a tick and 1.07 kB (an hour: 0.49 s and 384
-/// MB); LZ4 2.7 µs a tick and 478 bytes: less than half the size for two and a half times
-/// the CPU time, which would make the log thread slower than the simulated flight it logs.
+/// 100 Hz, two actors), before [`McapFile`]: no compression 1.07 µs a tick and 1.07 kB (an
+/// hour: 0.49 s and 384 MB); LZ4 2.7 µs a tick and 478 bytes: less than half the size for
+/// two and a half times the CPU time, which would make the log thread slower than the
+/// simulated flight it logs.
 /// The default is no compression: a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
@@ -111,7 +113,7 @@ struct Channels {
 /// ```
 pub struct FlightLogWriter {
     /// `None` once finished.
-    writer: Option<Writer<BufWriter<File>>>,
+    writer: Option<McapFile>,
     path: PathBuf,
     channels: Channels,
     options: LogOptions,
@@ -148,13 +150,6 @@ pub struct FlightLogWriter {
     sync_file: Option<File>,
 }
 
-fn mcap_err(path: &Path, e: McapError) -> io::Error {
-    match e {
-        McapError::Io(e) => annotate(path, e),
-        other => io::Error::other(format!("cannot write {}: {other}", path.display())),
-    }
-}
-
 fn annotate(path: &Path, e: io::Error) -> io::Error {
     io::Error::new(e.kind(), format!("cannot write {}: {e}", path.display()))
 }
@@ -183,29 +178,23 @@ impl FlightLogWriter {
             .truncate(true)
             .open(path)
             .map_err(|e| annotate(path, e))?;
-        let err = |e| mcap_err(path, e);
+        let err = |e| annotate(path, e);
         let sync_file = file.try_clone().ok();
         let compression = match options.compression {
-            LogCompression::None => None,
-            LogCompression::Lz4 => Some(mcap::Compression::Lz4),
+            LogCompression::None => ChunkCompression::None,
+            LogCompression::Lz4 => ChunkCompression::Lz4,
         };
-        let mut writer = WriteOptions::new()
-            .compression(compression)
-            .profile("dronecine.flight")
-            .library(format!("dronecine-runtime {}", env!("CARGO_PKG_VERSION")))
-            // Chunks are built in memory and written whole: the file never holds a chunk
-            // whose header is a placeholder.
-            .disable_seeking(true)
-            // Closed by the flush schedule only.
-            .chunk_size(None)
-            .compression_threads(0)
-            // A crash-cut log has no data-end record to hold it; the chunks' CRCs suffice.
-            .calculate_data_section_crc(false)
-            .emit_message_indexes(false)
-            .create(BufWriter::with_capacity(1 << 16, file))
-            .map_err(err)?;
+        // Chunks are built in memory and written whole (the file never holds a chunk whose
+        // header is a placeholder), closed by the flush schedule only; a crash-cut log has no
+        // data-end record to hold a data section CRC, the chunks' CRCs suffice.
+        let mut writer = McapFile::new(
+            file,
+            "dronecine.flight",
+            &format!("dronecine-runtime {}", env!("CARGO_PKG_VERSION")),
+            compression,
+        )
+        .map_err(err)?;
 
-        let no_meta = BTreeMap::new();
         // `/servo/tick` in CDR with a ros2msg schema (see `cdr`); the others JSON.
         let servo_tick = {
             let schema_id = writer
@@ -216,19 +205,14 @@ impl FlightLogWriter {
                 )
                 .map_err(err)?;
             let id = writer
-                .add_channel(
-                    schema_id,
-                    topic::SERVO_TICK,
-                    cdr::MESSAGE_ENCODING,
-                    &no_meta,
-                )
+                .add_channel(schema_id, topic::SERVO_TICK, cdr::MESSAGE_ENCODING)
                 .map_err(err)?;
             Channel::new(id)
         };
         let mut channel = |schema_name: &str, schema: String, topic: &str| {
             let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes())?;
-            let id = writer.add_channel(schema_id, topic, "json", &no_meta)?;
-            Ok::<_, McapError>(Channel::new(id))
+            let id = writer.add_channel(schema_id, topic, "json")?;
+            Ok::<_, io::Error>(Channel::new(id))
         };
         let scene_schema = foxglove::scene_update_schema();
         let channels = Channels {
@@ -271,21 +255,21 @@ impl FlightLogWriter {
             .map_err(err)?,
         };
 
+        let metadata = header_metadata(header).map_err(|e| annotate(path, io::Error::other(e)))?;
         writer
-            .write_metadata(&Metadata {
-                name: HEADER_METADATA.to_string(),
-                metadata: header_metadata(header)
-                    .map_err(|e| annotate(path, io::Error::other(e)))?,
-            })
+            .write_metadata(
+                HEADER_METADATA,
+                metadata.iter().map(|(k, v)| (k.as_str(), v.as_str())),
+            )
             .map_err(err)?;
         writer
-            .attach(&Attachment {
-                log_time: 0,
-                create_time: 0,
-                name: header.script_name.clone(),
-                media_type: "text/plain".to_string(),
-                data: header.script_text.as_bytes().into(),
-            })
+            .attach(
+                0,
+                0,
+                &header.script_name,
+                "text/plain",
+                header.script_text.as_bytes(),
+            )
             .map_err(err)?;
 
         let actor_prefixes = scene.actor_names.iter().map(|n| actor_prefix(n)).collect();
@@ -305,13 +289,23 @@ impl FlightLogWriter {
             100.0
         };
         let mut channels = channels;
-        let (frames, tf) = frame_topics(
-            &mut writer,
-            scene.actor_names,
-            &[(foxglove::WORLD, REFERENCE_FRAME)],
-        )
-        .map_err(err)?;
-        channels.tf = tf;
+        // The transform topics, as compile's.
+        let tf_schema = writer
+            .add_schema(
+                foxglove::FRAME_TRANSFORMS,
+                "jsonschema",
+                foxglove::frame_transforms_schema().as_bytes(),
+            )
+            .map_err(err)?;
+        let mut frames = Vec::new();
+        for (parent, child) in frame_pairs(scene.actor_names, &[(foxglove::WORLD, REFERENCE_FRAME)])
+        {
+            let id = writer
+                .add_channel(tf_schema, &format!("{}{child}", topic::TF_PREFIX), "json")
+                .map_err(err)?;
+            channels.tf.push(Channel::new(id));
+            frames.push(FrameTopic::new(&parent, &child));
+        }
         let flush_every_ticks = (rate_hz * options.flush_period_s).floor().max(1.0) as u64;
         let mut log = FlightLogWriter {
             writer: Some(writer),
@@ -355,8 +349,8 @@ impl FlightLogWriter {
             io::Error::other(format!("cannot write {}: log finished", path.display()))
         })?;
         writer
-            .write_to_known_channel(&header, data)
-            .map_err(|e| mcap_err(path, e))
+            .write_message(&header, data)
+            .map_err(|e| annotate(path, e))
     }
 
     /// Puts the text buffer on a channel.
@@ -367,8 +361,8 @@ impl FlightLogWriter {
             io::Error::other(format!("cannot write {}: log finished", path.display()))
         })?;
         writer
-            .write_to_known_channel(&header, &self.text.buf)
-            .map_err(|e| mcap_err(path, e))
+            .write_message(&header, &self.text.buf)
+            .map_err(|e| annotate(path, e))
     }
 
     /// The topics published once, at time 0.
@@ -403,7 +397,7 @@ impl FlightLogWriter {
         let writer = self.writer.as_mut().ok_or_else(|| {
             io::Error::other(format!("cannot write {}: log finished", path.display()))
         })?;
-        writer.flush().map_err(|e| mcap_err(path, e))?;
+        writer.flush().map_err(|e| annotate(path, e))?;
         self.ticks_since_flush = 0;
         Ok(())
     }
@@ -527,8 +521,8 @@ impl FlightLogWriter {
                     io::Error::other(format!("cannot write {}: log finished", path.display()))
                 })?;
                 writer
-                    .write_to_known_channel(&header, &self.text.buf)
-                    .map_err(|e| mcap_err(path, e))?;
+                    .write_message(&header, &self.text.buf)
+                    .map_err(|e| annotate(path, e))?;
             }
         }
         Ok(())
@@ -556,11 +550,10 @@ impl FlightLogWriter {
         let mut writer = self.writer.take().ok_or_else(|| {
             io::Error::other(format!("cannot write {}: log finished", path.display()))
         })?;
-        writer.finish().map_err(|e| mcap_err(&path, e))?;
+        writer.finish().map_err(|e| annotate(&path, e))?;
         writer
-            .into_inner()
-            .into_inner()
-            .map_err(|e| annotate(&path, e.into_error()))?
+            .into_file()
+            .map_err(|e| annotate(&path, e))?
             .sync_all()
             .map_err(|e| annotate(&path, e))
     }
@@ -585,7 +578,6 @@ impl Drop for FlightLogWriter {
         // so the file is whole; errors have nowhere to go.
         if let Some(mut writer) = self.writer.take() {
             let _ = writer.finish();
-            let _ = writer.into_inner().into_inner();
         }
     }
 }
