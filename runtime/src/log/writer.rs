@@ -35,16 +35,15 @@ const REFERENCE_FRAME: &str = "reference";
 /// Chunk compression of the flight log.
 ///
 /// Measured (`benches/log.rs`, CPU time of one core on the 2-core development machine,
-/// 100 Hz, two actors), before [`McapFile`]: no compression 1.07 µs a tick and 1.07 kB (an
-/// hour: 0.49 s and 384 MB); LZ4 2.7 µs a tick and 478 bytes: less than half the size for
-/// two and a half times the CPU time, which would make the log thread slower than the
-/// simulated flight it logs.
+/// 100 Hz, two actors): no compression 0.58 µs a tick and 1.07 kB (an hour: 0.34 s and 384
+/// MB); LZ4 1.96 µs a tick and 480 bytes: less than half the size for three times the CPU
+/// time, which would make the log thread slower than the simulated flight it logs.
 /// The default is no compression: a flight of minutes is a few hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
     /// The default (see above).
     None,
-    /// LZ4 frames: a quarter of the size for about twice the CPU time per tick.
+    /// LZ4 frames: less than half the size for three times the CPU time per tick.
     Lz4,
 }
 
