@@ -195,12 +195,30 @@ impl McapFile {
         Ok(f)
     }
 
-    /// Writes `scratch` to the file (outside any chunk).
+    /// Writes `scratch` to the file (outside any chunk) and empties it, written or not.
     fn put_scratch(&mut self) -> io::Result<()> {
-        self.out.write_all(&self.scratch)?;
-        self.pos += self.scratch.len() as u64;
+        let result = self.out.write_all(&self.scratch);
+        if result.is_ok() {
+            self.pos += self.scratch.len() as u64;
+        }
         self.scratch.clear();
-        Ok(())
+        result
+    }
+
+    /// Closes the open chunk and writes one record after it; returns the record's offset
+    /// and its whole length (opcode and length prefix included), as the indexes want them.
+    fn put_record(
+        &mut self,
+        opcode: u8,
+        content: impl FnOnce(&mut Vec<u8>),
+    ) -> io::Result<(u64, u64)> {
+        self.close_chunk()?;
+        let offset = self.pos;
+        self.scratch.clear();
+        record(&mut self.scratch, opcode, content);
+        let length = self.scratch.len() as u64;
+        self.put_scratch()?;
+        Ok((offset, length))
     }
 
     /// Registers a schema and returns its id; a schema registered before (same name,
@@ -315,10 +333,18 @@ impl McapFile {
         put_u32(&mut self.scratch, uncompressed_crc);
         put_str(&mut self.scratch, name);
         put_u64(&mut self.scratch, records.len() as u64);
-        self.out.write_all(&self.scratch)?;
-        self.out.write_all(records)?;
-        self.pos += self.scratch.len() as u64 + records.len() as u64;
+        let written = self
+            .out
+            .write_all(&self.scratch)
+            .and_then(|()| self.out.write_all(records));
+        let chunk_len = self.scratch.len() as u64 + records.len() as u64;
         self.scratch.clear();
+        if let Err(e) = written {
+            // The file is as far as it got; the next chunk starts afresh.
+            self.chunk.clear();
+            return Err(e);
+        }
+        self.pos += chunk_len;
         let compressed_size = records.len() as u64;
         record(&mut self.chunk_indexes, op::CHUNK_INDEX, |b| {
             put_u64(b, start_ns);
@@ -352,14 +378,10 @@ impl McapFile {
         name: &str,
         entries: impl IntoIterator<Item = (&'a str, &'a str)>,
     ) -> io::Result<()> {
-        self.close_chunk()?;
-        let offset = self.pos;
-        record(&mut self.scratch, op::METADATA, |b| {
+        let (offset, length) = self.put_record(op::METADATA, |b| {
             put_str(b, name);
             put_map(b, entries);
-        });
-        let length = self.scratch.len() as u64;
-        self.put_scratch()?;
+        })?;
         record(&mut self.metadata_indexes, op::METADATA_INDEX, |b| {
             put_u64(b, offset);
             put_u64(b, length);
@@ -378,9 +400,7 @@ impl McapFile {
         media_type: &str,
         data: &[u8],
     ) -> io::Result<()> {
-        self.close_chunk()?;
-        let offset = self.pos;
-        record(&mut self.scratch, op::ATTACHMENT, |b| {
+        let (offset, length) = self.put_record(op::ATTACHMENT, |b| {
             let fields_at = b.len();
             put_u64(b, log_time);
             put_u64(b, create_time);
@@ -391,9 +411,7 @@ impl McapFile {
             // The CRC of the preceding fields.
             let crc = crc32fast::hash(&b[fields_at..]);
             put_u32(b, crc);
-        });
-        let length = self.scratch.len() as u64;
-        self.put_scratch()?;
+        })?;
         record(&mut self.attachment_indexes, op::ATTACHMENT_INDEX, |b| {
             put_u64(b, offset);
             put_u64(b, length);
@@ -413,9 +431,7 @@ impl McapFile {
         if self.finished {
             return Ok(());
         }
-        self.close_chunk()?;
-        record(&mut self.scratch, op::DATA_END, |b| put_u32(b, 0));
-        self.put_scratch()?;
+        self.put_record(op::DATA_END, |b| put_u32(b, 0))?;
 
         let summary_start = self.pos;
         let mut summary = std::mem::take(&mut self.scratch);
@@ -733,6 +749,25 @@ mod tests {
             .unwrap()
             .find_map(Result::err);
         assert!(err.is_some(), "a flipped bit must fail the chunk CRC");
+    }
+
+    #[test]
+    fn a_file_that_refuses_writes_gives_errors_not_panics() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.mcap");
+        std::fs::write(&path, b"").unwrap();
+        // Opened for reading only: every write fails (EBADF).
+        let file = File::open(&path).unwrap();
+        let mut f = McapFile::new(file, "p", "l", ChunkCompression::None).unwrap();
+        // Larger than the write buffer: it goes to the file at once.
+        f.add_schema("S", "jsonschema", &[b'x'; 1 << 17])
+            .unwrap_err();
+        assert!(f.flush().is_err());
+        assert!(f.finish().is_err());
+        assert!(
+            f.finish().is_err(),
+            "an unfinished file is not reported finished"
+        );
     }
 
     #[test]
