@@ -50,7 +50,7 @@ use crate::record::{Event, FramingRecord, Phase, TickRecord};
 
 /// Flight time covered by one batch at most.
 pub const BATCH_PERIOD_S: f64 = 0.25;
-/// Batches in flight: the loop blocks only when the writer is this many batches behind
+/// Batches in flight: the loop waits only when the writer is this many batches behind
 /// (eight seconds of flight: a disk that stalls for less never stalls the loop). A
 /// simulated flight makes two seconds of flight in the writer's longest poll (20 ms): with
 /// 8 batches the loop sometimes waited for it. Measured on the hour's flight with its log
@@ -365,7 +365,7 @@ impl Drop for LogThread {
 
 /// The writer thread: writes each batch, returns it emptied; at the end finishes the file.
 /// After a write error it reports it, stops writing (the file keeps every whole chunk before
-/// it) and keeps returning batches so that the loop never blocks.
+/// it) and keeps returning batches so that the loop never waits for one.
 fn write_batches(
     mut writer: FlightLogWriter,
     full: Receiver<Batch>,
