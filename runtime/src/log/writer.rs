@@ -24,7 +24,6 @@ use dronecine_compiler::output::mcap::{
 use dronecine_compiler::output::{json, ns_from_s};
 
 use super::mcap_file::{ChunkCompression, McapFile};
-
 use super::text::{same_command, Text};
 use super::{cdr, schema, topic, LogScene, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, TickRecord};
