@@ -572,24 +572,9 @@ pub fn advance(next_s: f64, t_s: f64, hz: f64) -> f64 {
     }
 }
 
-/// The transform frames as (parent, child): `drone` and `camera`, `actor/NAME` for each actor,
-/// then each of `extra`, in that order (their topics are `/tf/CHILD`).
-pub fn frame_pairs(actor_names: &[String], extra: &[(&str, &str)]) -> Vec<(String, String)> {
-    let mut frames = vec![
-        (foxglove::WORLD.to_string(), foxglove::DRONE.to_string()),
-        (foxglove::DRONE.to_string(), foxglove::CAMERA.to_string()),
-    ];
-    frames.extend(
-        actor_names
-            .iter()
-            .map(|n| (foxglove::WORLD.to_string(), foxglove::actor_frame(n))),
-    );
-    frames.extend(extra.iter().map(|(p, c)| (p.to_string(), c.to_string())));
-    frames
-}
-
-/// The transform topics, one per frame of [`frame_pairs`]: each frame's publisher and its
-/// channel.
+/// The transform topics, one per frame (`/tf/drone`, `/tf/camera`, `/tf/actor/NAME` for each
+/// actor, then `/tf/CHILD` for each `extra` (parent, child)), in that order: each frame's
+/// publisher and its channel.
 pub fn frame_topics<W: std::io::Write + std::io::Seek>(
     writer: &mut Writer<W>,
     actor_names: &[String],
@@ -600,12 +585,33 @@ pub fn frame_topics<W: std::io::Write + std::io::Seek>(
         "jsonschema",
         foxglove::frame_transforms_schema().as_bytes(),
     )?;
-    let frames = frame_pairs(actor_names, extra);
+    frame_topics_with(actor_names, extra, |topic| {
+        writer.add_channel(schema, topic, "json", &BTreeMap::new())
+    })
+}
+
+/// [`frame_topics`] on any MCAP writer: `add_channel` registers a JSON channel with the
+/// `foxglove.FrameTransforms` schema on the topic it is given and returns its id (the
+/// runtime's flight log has a writer of its own).
+pub fn frame_topics_with<E>(
+    actor_names: &[String],
+    extra: &[(&str, &str)],
+    mut add_channel: impl FnMut(&str) -> Result<u16, E>,
+) -> Result<(Vec<FrameTopic>, Vec<Channel>), E> {
+    let mut frames = vec![
+        (foxglove::WORLD.to_string(), foxglove::DRONE.to_string()),
+        (foxglove::DRONE.to_string(), foxglove::CAMERA.to_string()),
+    ];
+    frames.extend(
+        actor_names
+            .iter()
+            .map(|n| (foxglove::WORLD.to_string(), foxglove::actor_frame(n))),
+    );
+    frames.extend(extra.iter().map(|(p, c)| (p.to_string(), c.to_string())));
     let mut topics = Vec::with_capacity(frames.len());
     let mut channels = Vec::with_capacity(frames.len());
     for (parent, child) in &frames {
-        let id = writer.add_channel(schema, &format!("/tf/{child}"), "json", &BTreeMap::new())?;
-        channels.push(Channel::new(id));
+        channels.push(Channel::new(add_channel(&format!("/tf/{child}"))?));
         topics.push(FrameTopic::new(parent, child));
     }
     Ok((topics, channels))

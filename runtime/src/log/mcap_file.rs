@@ -147,7 +147,6 @@ pub struct McapFile {
     chunk_indexes: Vec<u8>,
     attachment_indexes: Vec<u8>,
     metadata_indexes: Vec<u8>,
-    message_count: u64,
     message_times: Option<(u64, u64)>,
     chunk_count: u32,
     attachment_count: u32,
@@ -178,7 +177,6 @@ impl McapFile {
             chunk_indexes: Vec::new(),
             attachment_indexes: Vec::new(),
             metadata_indexes: Vec::new(),
-            message_count: 0,
             message_times: None,
             chunk_count: 0,
             attachment_count: 0,
@@ -295,7 +293,6 @@ impl McapFile {
             None => (t, t),
             Some((lo, hi)) => (lo.min(t), hi.max(t)),
         });
-        self.message_count += 1;
         Ok(())
     }
 
@@ -459,7 +456,7 @@ impl McapFile {
         let (start_ns, end_ns) = self.message_times.unwrap_or((0, 0));
         group(&mut summary, op::STATISTICS, &|b| {
             record(b, op::STATISTICS, |b| {
-                put_u64(b, self.message_count);
+                put_u64(b, self.channel_messages.iter().sum());
                 put_u16(b, self.schemas.len() as u16);
                 put_u32(b, self.channel_messages.len() as u32);
                 put_u32(b, self.attachment_count);

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use dronecine_compiler::camera::Lens;
 use dronecine_compiler::output::foxglove::{self, FrameTopic};
 use dronecine_compiler::output::mcap::{
-    actor_prefix, actors_schema, advance, camera_message, camera_schema, frame_pairs,
+    actor_prefix, actors_schema, advance, camera_message, camera_schema, frame_topics_with,
     reference_schema, write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA,
     REFERENCE_SCHEMA,
 };
@@ -295,15 +295,13 @@ impl FlightLogWriter {
                 foxglove::frame_transforms_schema().as_bytes(),
             )
             .map_err(err)?;
-        let mut frames = Vec::new();
-        for (parent, child) in frame_pairs(scene.actor_names, &[(foxglove::WORLD, REFERENCE_FRAME)])
-        {
-            let id = writer
-                .add_channel(tf_schema, &format!("{}{child}", topic::TF_PREFIX), "json")
-                .map_err(err)?;
-            channels.tf.push(Channel::new(id));
-            frames.push(FrameTopic::new(&parent, &child));
-        }
+        let (frames, tf) = frame_topics_with(
+            scene.actor_names,
+            &[(foxglove::WORLD, REFERENCE_FRAME)],
+            |topic| writer.add_channel(tf_schema, topic, "json"),
+        )
+        .map_err(err)?;
+        channels.tf = tf;
         let flush_every_ticks = (rate_hz * options.flush_period_s).floor().max(1.0) as u64;
         let mut log = FlightLogWriter {
             writer: Some(writer),
