@@ -181,7 +181,12 @@ pub fn orient_fixed_pitch(
     let d = target_m - position_m;
     let rho = crate::norm_xy(d.x, d.y);
     let xp = screen_x / lens.sx();
-    let (sin_t, cos_t) = pitch_rad.sin_cos();
+    // A level camera (+0, bit for bit: sin(−0) is −0) skips the library call.
+    let (sin_t, cos_t) = if pitch_rad.to_bits() == 0 {
+        (0.0, 1.0)
+    } else {
+        pitch_rad.sin_cos()
+    };
     // Let δ = heading − bearing; r = ρ·sin δ, f = cos τ·ρ·cos δ + sin τ·dz.
     // ρ sin δ = x' (cos τ ρ cos δ + sin τ dz)  →  ρ sin δ − x' cos τ ρ cos δ = x' sin τ dz,
     // that is amp·sin(δ + φ) = rhs with (amp cos φ, amp sin φ) = (a, c).

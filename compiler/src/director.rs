@@ -319,6 +319,13 @@ impl Director {
             return None;
         }
         let v = self.visual.as_ref()?;
+        if matches!(self.gimbal, Gimbal::None) {
+            // A level camera: a two-actor hold's heading is the balanced one, and aiming the
+            // primary (below) would only give the pitch, which is 0.
+            if let Some(h) = framing::balanced_heading(v, actors, &self.lens, camera_m, 0.0) {
+                return Some((h, 0.0));
+            }
+        }
         let (heading, pitch, _) =
             framing::orient_visual(v, actors, &self.lens, &self.gimbal, camera_m);
         // Two actors: balance their screen-x errors rather than aim the primary exactly.
