@@ -355,15 +355,15 @@ impl Estimator {
             |p: &Matrix9, i: usize, j: usize| p.fixed_view::<3, 3>(3 * i, 3 * j).into_owned();
         let p = &self.p;
         let (vv, vp, pp) = (block(p, 0, 0), block(p, 0, 1), block(p, 1, 1));
-        let mut xv = m * vv;
-        let mut xp = m * vp;
+        let mut xv = mul_xy_z(&m, &vv);
+        let mut xp = mul_xy_z(&m, &vp);
         let nvv;
         if wind {
             let (vd, pd, dd) = (block(p, 0, 2), block(p, 1, 2), block(p, 2, 2));
-            xv += lag * vd.transpose();
-            xp += lag * pd.transpose();
-            let xd = m * vd + lag * dd;
-            nvv = xv * m.transpose() + xd * lag.transpose();
+            xv += mul_xy_z(&lag, &vd.transpose());
+            xp += mul_xy_z(&lag, &pd.transpose());
+            let xd = mul_xy_z(&m, &vd) + mul_xy_z(&lag, &dd);
+            nvv = mul_xy_z(&xv, &m.transpose()) + mul_xy_z(&xd, &lag.transpose());
             let npd = vd * dt_s + pd;
             let mut ndd = dd;
             for i in 0..3 {
@@ -376,7 +376,7 @@ impl Estimator {
             pn.fixed_view_mut::<3, 3>(6, 3).copy_from(&npd.transpose());
             pn.fixed_view_mut::<3, 3>(6, 6).copy_from(&ndd);
         } else {
-            nvv = xv * m.transpose();
+            nvv = mul_xy_z(&xv, &m.transpose());
         }
         let q = &self.process;
         let nvv = (nvv + nvv.transpose()) * 0.5 + q.fixed_view::<3, 3>(0, 0);
@@ -418,8 +418,8 @@ impl Estimator {
         // noise, so well conditioned): S⁻¹ in closed form; a non-finite or non-positive
         // determinant skips the correction.
         if let Some(si) = inverse_spd3(&s) {
-            // K = P Hᵀ S⁻¹ (S⁻¹ is built exactly symmetric).
-            let k: Matrix9x3 = pht * si;
+            // K = P Hᵀ S⁻¹ (S⁻¹ is built exactly symmetric; z apart, as every block).
+            let k = gain_xy_z(&pht, &si);
             let y = Vector3::from(m.position_m) - self.x.fixed_rows::<3>(3);
             self.x += k * y;
             // P −= K (H P) = P Hᵀ S⁻¹ H P, symmetric: one triangle computed, mirrored
@@ -498,14 +498,61 @@ fn inverse_spd3(s: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 /// triangle computed, the upper one mirrored from it.
 #[inline]
 fn subtract_symmetric<const N: usize>(p: &mut Matrix9, k: &Matrix9x3, y: &Matrix9x3) {
-    for j in 0..N {
-        let yj = [y[(j, 0)], y[(j, 1)], y[(j, 2)]];
-        for i in j..N {
-            let v = p[(i, j)] - (k[(i, 0)] * yj[0] + k[(i, 1)] * yj[1] + k[(i, 2)] * yj[2]);
+    // Only entries within one group (see `mul_xy_z`): the others are zero and stay zero.
+    let (xy, z) = (&XY_STATES[..N / 3 * 2], &Z_STATES[..N / 3]);
+    for (a, &j) in xy.iter().enumerate() {
+        let (y0, y1) = (y[(j, 0)], y[(j, 1)]);
+        for &i in &xy[a..] {
+            let v = p[(i, j)] - (k[(i, 0)] * y0 + k[(i, 1)] * y1);
             p[(i, j)] = v;
             p[(j, i)] = v;
         }
     }
+    for (a, &j) in z.iter().enumerate() {
+        let y2 = y[(j, 2)];
+        for &i in &z[a..] {
+            let v = p[(i, j)] - k[(i, 2)] * y2;
+            p[(i, j)] = v;
+            p[(j, i)] = v;
+        }
+    }
+}
+
+/// The x and y states of `[v; p; d]`, and the z ones.
+const XY_STATES: [usize; 6] = [0, 1, 3, 4, 6, 7];
+const Z_STATES: [usize; 3] = [2, 5, 8];
+
+/// `a·b` for 3×3 blocks that do not couple z with x and y: `[[a, b, 0], [c, d, 0], [0, 0,
+/// e]]`. The filter's matrices all have this shape — the lag and the input matrix turn about
+/// z, the noises are diagonal, so every 3×3 block of the covariance keeps it — and this is the
+/// full product's sums without their terms that are exactly zero: the same numbers for a
+/// third of the multiplications (`covariance_keeps_z_apart` pins the shape).
+#[inline]
+fn mul_xy_z(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Matrix3<f64> {
+    let mut r = Matrix3::zeros();
+    for i in 0..2 {
+        for j in 0..2 {
+            r[(i, j)] = a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)];
+        }
+    }
+    r[(2, 2)] = a[(2, 2)] * b[(2, 2)];
+    r
+}
+
+/// `P Hᵀ · S⁻¹` with the shapes of `mul_xy_z`: an x or y state's row has no z column and a z
+/// state's row only that one.
+#[inline]
+fn gain_xy_z(pht: &Matrix9x3, si: &Matrix3<f64>) -> Matrix9x3 {
+    let mut k = Matrix9x3::zeros();
+    for i in XY_STATES {
+        for j in 0..2 {
+            k[(i, j)] = pht[(i, 0)] * si[(0, j)] + pht[(i, 1)] * si[(1, j)];
+        }
+    }
+    for i in Z_STATES {
+        k[(i, 2)] = pht[(i, 2)] * si[(2, 2)];
+    }
+    k
 }
 
 /// Whether a tick input can be used: every number finite and Δ > 0.
@@ -948,6 +995,78 @@ mod tests {
     /// Block-wise prediction and closed-form correction against the dense products, over a
     /// flight of varying Δ, heading, inputs and missing measurements, with and without the
     /// wind estimate (which couples v and d).
+    #[test]
+    fn covariance_keeps_z_apart() {
+        // The shape `mul_xy_z`, `gain_xy_z` and `subtract_symmetric` rely on: through turns,
+        // gaps in the measurements and varying Δ, no covariance entry couples a z state with
+        // an x or y one (exactly zero, with and without the wind estimate)…
+        let profile = Profile::builtin("ardrone2").unwrap();
+        for wind in [false, true] {
+            let mut e = if wind {
+                Estimator::with_disturbance(&profile)
+            } else {
+                Estimator::new(&profile)
+            };
+            e.reset(&Measurement {
+                position_m: [0.5, -1.0, 1.2],
+                heading_rad: -2.0,
+            });
+            for k in 0..3000 {
+                let t = k as f64 * 0.01;
+                let dt = 0.01 + 0.004 * (k as f64 * 0.37).sin();
+                let u = Vector3::new(0.1 * (t * 1.3).sin(), -0.08 * (t * 0.7).cos(), 0.3);
+                e.predict(dt, &u, 1.5 * (t * 0.5).sin());
+                if k % 5 != 2 {
+                    e.update(&Measurement {
+                        position_m: [t.cos(), 0.5 * t.sin(), 1.2 + 0.1 * (3.0 * t).sin()],
+                        heading_rad: -2.0 + 0.9 * t,
+                    });
+                }
+                for i in 0..9 {
+                    for j in 0..9 {
+                        if (i % 3 == 2) != (j % 3 == 2) {
+                            assert_eq!(e.p[(i, j)], 0.0, "wind {wind}, tick {k}, P[{i},{j}]");
+                        }
+                    }
+                }
+            }
+            assert!(e.p[(3, 4)] != 0.0, "x and y do couple (the heading turned)");
+        }
+        // …and on such blocks the structured products are the full ones, bit for bit.
+        let block = |s: f64| {
+            Matrix3::new(
+                0.3 * s.sin(),
+                -1.7 * s.cos(),
+                0.0,
+                2.1 * (2.0 * s).sin(),
+                0.9 + s,
+                0.0,
+                0.0,
+                0.0,
+                -0.4 * s.cos(),
+            )
+        };
+        for k in 0..200 {
+            let (a, b) = (block(k as f64 * 0.37), block(k as f64 * 0.11 + 1.0));
+            let (full, fast) = (a * b, mul_xy_z(&a, &b));
+            // Equal as numbers: the same bits, but for the sign of a zero.
+            for i in 0..9 {
+                assert_eq!(full[i], fast[i]);
+            }
+            let pht = Matrix9x3::from_fn(|i, j| {
+                if (i % 3 == 2) == (j == 2) {
+                    (i as f64 + 1.0) * (k as f64 * 0.3 + j as f64).cos()
+                } else {
+                    0.0
+                }
+            });
+            let (full, fast) = (pht * a, gain_xy_z(&pht, &a));
+            for i in 0..27 {
+                assert_eq!(full[i], fast[i]);
+            }
+        }
+    }
+
     #[test]
     fn the_structured_filter_is_the_dense_one() {
         let profile = Profile::builtin("ardrone2").unwrap();
