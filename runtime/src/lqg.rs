@@ -992,25 +992,28 @@ mod tests {
         assert_eq!(inverse_spd3(&Matrix3::zeros()), None);
     }
 
-    /// Block-wise prediction and closed-form correction against the dense products, over a
-    /// flight of varying Δ, heading, inputs and missing measurements, with and without the
-    /// wind estimate (which couples v and d).
+    /// A filter of the built-in profile, with or without the wind estimate, reset at rest.
+    fn filter_at_rest(wind: bool, heading_rad: f64) -> Estimator {
+        let profile = Profile::builtin("ardrone2").unwrap();
+        let mut e = if wind {
+            Estimator::with_disturbance(&profile)
+        } else {
+            Estimator::new(&profile)
+        };
+        e.reset(&Measurement {
+            position_m: [0.5, -1.0, 1.2],
+            heading_rad,
+        });
+        e
+    }
+
     #[test]
     fn covariance_keeps_z_apart() {
         // The shape `mul_xy_z`, `gain_xy_z` and `subtract_symmetric` rely on: through turns,
         // gaps in the measurements and varying Δ, no covariance entry couples a z state with
         // an x or y one (exactly zero, with and without the wind estimate)…
-        let profile = Profile::builtin("ardrone2").unwrap();
         for wind in [false, true] {
-            let mut e = if wind {
-                Estimator::with_disturbance(&profile)
-            } else {
-                Estimator::new(&profile)
-            };
-            e.reset(&Measurement {
-                position_m: [0.5, -1.0, 1.2],
-                heading_rad: -2.0,
-            });
+            let mut e = filter_at_rest(wind, -2.0);
             for k in 0..3000 {
                 let t = k as f64 * 0.01;
                 let dt = 0.01 + 0.004 * (k as f64 * 0.37).sin();
@@ -1067,19 +1070,13 @@ mod tests {
         }
     }
 
+    /// Block-wise prediction and closed-form correction against the dense products, over a
+    /// flight of varying Δ, heading, inputs and missing measurements, with and without the
+    /// wind estimate (which couples v and d).
     #[test]
     fn the_structured_filter_is_the_dense_one() {
-        let profile = Profile::builtin("ardrone2").unwrap();
         for wind in [false, true] {
-            let mut fast = if wind {
-                Estimator::with_disturbance(&profile)
-            } else {
-                Estimator::new(&profile)
-            };
-            fast.reset(&Measurement {
-                position_m: [0.5, -1.0, 1.2],
-                heading_rad: 2.9,
-            });
+            let mut fast = filter_at_rest(wind, 2.9);
             let mut dense = fast.clone();
             for k in 0..2000 {
                 let t = k as f64 * 0.01;
