@@ -7,21 +7,14 @@
 
 mod common;
 
-use common::{dronecine, Emulator};
+use common::{dronecine, temp_dir, Emulator};
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dronecine_compiler::profile::Profile;
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("dronecine-calibrate-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 fn load(path: &Path) -> Profile {
@@ -37,7 +30,7 @@ fn close(name: &str, got: f64, want: f64, tol: f64) {
 
 #[test]
 fn calibrates_a_different_plant_on_the_ideal_simulator_and_writes_it() {
-    let dir = scratch("ideal");
+    let dir = temp_dir("calibrate-ideal");
     let mut plant = Profile::builtin("ardrone2").unwrap();
     plant.model.gain_roll_mps_per_rad = 13.0;
     plant.model.tau_roll_s = 1.1;
@@ -129,7 +122,7 @@ fn calibrates_a_different_plant_on_the_ideal_simulator_and_writes_it() {
 
 #[test]
 fn refuses_a_poor_fit_names_the_test_and_writes_nothing() {
-    let dir = scratch("full");
+    let dir = temp_dir("calibrate-full");
     let out_file = dir.join("out.toml");
     // The full simulator: two roll doublets are too few to tell the drag's τ from the gusts.
     let o = dronecine(&[
@@ -156,7 +149,7 @@ fn refuses_a_poor_fit_names_the_test_and_writes_nothing() {
 
 #[test]
 fn identifies_the_model_from_a_shoot_log() {
-    let dir = scratch("identify");
+    let dir = temp_dir("calibrate-identify");
     let log = dir.join("square.mcap");
     let o = dronecine(&[
         "shoot",
@@ -257,7 +250,7 @@ fn calibrates_yaw_through_the_emulator_over_the_wire() {
     // The emulator reduced to the model: one real-time yaw test has a tight enough interval
     // (with all its effects one test's interval is too wide and it asks for more).
     let emulator = Emulator::start(&["--ideal"]);
-    let dir = scratch("wire");
+    let dir = temp_dir("calibrate-wire");
     let out_file = dir.join("out.toml");
     let o = dronecine(&[
         "calibrate",
@@ -294,7 +287,7 @@ fn calibrates_yaw_through_the_emulator_over_the_wire() {
 
 #[test]
 fn hardware_arguments_are_checked_before_any_flight() {
-    let dir = scratch("hw-args");
+    let dir = temp_dir("calibrate-hw-args");
     let out_file = dir.join("out.toml");
     let out = out_file.to_str().unwrap();
     // Nothing listens at these addresses: each error must come before any connection.

@@ -42,9 +42,7 @@ fn report(out: &std::process::Output) -> serde_json::Value {
 
 #[test]
 fn shoot_through_the_emulator_tracks_like_the_simulator() {
-    let dir = std::env::temp_dir().join(format!("dronecine-e2e-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("e2e");
     let script = dir.join("walk.psl");
     std::fs::write(&script, SCRIPT).unwrap();
     let script = script.to_str().unwrap();

@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 use dronecine_grammar::{Checked, Options};
@@ -71,12 +71,51 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// An empty scratch folder for one test (per process, so test binaries never share one).
-pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("dronecine-test-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// An empty scratch folder for one test, `dronecine-test-NAME-…` in the system's temporary
+/// folder (a fresh name each time, so tests and test binaries never share one). Removed with
+/// everything in it when dropped, unless the test is failing: then it is kept and its path
+/// printed, to look at the logs and files the test wrote.
+pub struct Scratch(Option<tempfile::TempDir>);
+
+impl Scratch {
+    pub fn path(&self) -> &Path {
+        self.0.as_ref().expect("held until dropped").path()
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.path()
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        self.path()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            if let Some(dir) = self.0.take() {
+                eprintln!(
+                    "the failing test's files are kept in {}",
+                    dir.keep().display()
+                );
+            }
+        }
+    }
+}
+
+/// A new [`Scratch`] folder for the test `name`.
+pub fn temp_dir(name: &str) -> Scratch {
+    let dir = tempfile::Builder::new()
+        .prefix(&format!("dronecine-test-{name}-"))
+        .tempdir()
+        .expect("a scratch folder in the temporary folder");
+    Scratch(Some(dir))
 }
 
 /// A UDP port free on loopback now (for a child process to bind).
