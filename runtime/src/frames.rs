@@ -64,9 +64,10 @@ pub const INPUT_TO_BODY: Matrix3<f64> = Matrix3::new(
     0.0, 0.0, 1.0,
 );
 
-/// Rz(c): body (forward, left, up) → world.
+/// Rz(c): body (forward, left, up) → world (its `sin_cos` from [`crate::math`]: the same bits
+/// on every machine, for replay).
 pub fn body_to_world(heading_rad: f64) -> Matrix3<f64> {
-    let (s, c) = heading_rad.sin_cos();
+    let (s, c) = crate::math::sin_cos(heading_rad);
     Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 }
 

@@ -31,6 +31,7 @@ pub mod frames;
 pub mod identify;
 pub mod log;
 pub mod lqg;
+pub mod math;
 pub mod model;
 pub mod natnet;
 pub mod pid;

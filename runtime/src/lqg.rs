@@ -595,7 +595,7 @@ pub fn paper_n1(a: &Matrix6<f64>, b: &Matrix6x3, k1: &Gain) -> Option<Gain> {
 
 /// The heading loop's closed-loop pole for a step Δ: `γ^(Δ/(τ − Δ̄))`.
 pub fn heading_pole(gamma: f64, tau_s: f64, nominal_dt_s: f64, dt_s: f64) -> f64 {
-    gamma.powf(dt_s / (tau_s - nominal_dt_s))
+    crate::math::powf(gamma, dt_s / (tau_s - nominal_dt_s))
 }
 
 /// What `dronecine gains` prints: the regulator and filter at one Δ and heading.

@@ -23,6 +23,7 @@ use dronecine_compiler::profile::Profile;
 use nalgebra::{Matrix2, Matrix3, Matrix6, SMatrix, Vector2, Vector3, Vector6};
 
 use crate::frames;
+use crate::math;
 
 /// 6×3 input matrix of the translation model.
 pub type Matrix6x3 = SMatrix<f64, 6, 3>;
@@ -63,9 +64,9 @@ impl ModelParams {
     pub fn body_lag(&self, dt_s: f64) -> Vector3<f64> {
         let t = self.body_taus_s();
         Vector3::new(
-            -(-dt_s / t[0]).exp_m1(),
-            -(-dt_s / t[1]).exp_m1(),
-            -(-dt_s / t[2]).exp_m1(),
+            -math::exp_m1(-dt_s / t[0]),
+            -math::exp_m1(-dt_s / t[1]),
+            -math::exp_m1(-dt_s / t[2]),
         )
     }
 

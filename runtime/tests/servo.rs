@@ -585,3 +585,84 @@ fn gains_report_is_consistent() {
         }
     }
 }
+
+/// A closed-loop flight whose every number is portable arithmetic (the plant is the nominal
+/// model, the reference a circle with the heading turning through ±π, Δ jittering, every
+/// ninth measurement missing), reduced to a checksum of the commands' bits (FNV-1a).
+fn command_checksum(ctl: &mut dyn Controller, profile: &Profile) -> u64 {
+    let mut plant = Plant::new(profile, [1.0, 0.0, 1.0], 0.0);
+    started(ctl, &plant);
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |bits: u64| {
+        for byte in bits.to_le_bytes() {
+            hash = (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    let (r, v) = (1.0, 0.5);
+    let w = v / r;
+    let mut t = 0.0;
+    for k in 1..=3000usize {
+        let dt = DT + 0.002 * ((k % 7) as f64 - 3.0) / 3.0;
+        t += dt;
+        let (s, c) = dronecine_runtime::math::sin_cos(w * t);
+        let reference = Reference {
+            position_m: [r * c, r * s, 1.0],
+            velocity_mps: [-v * s, v * c, 0.0],
+            acceleration_mps2: [-v * w * c, -v * w * s, 0.0],
+            heading_rad: frames::wrap_angle_rad(w * t + PI / 2.0),
+            heading_rate_radps: w,
+        };
+        let input = TickInput {
+            t_s: t,
+            dt_s: dt,
+            measurement: (k % 9 != 0).then(|| plant.measure()),
+            reference,
+        };
+        let o = ctl.tick(&input).expect("valid input");
+        let cmd = o.command;
+        for x in [cmd.roll_rad, cmd.pitch_rad, cmd.yaw_rate_radps, cmd.vz_mps] {
+            eat(x.to_bits());
+        }
+        eat(u64::from(o.saturated));
+        plant.apply(&cmd, dt);
+    }
+    hash
+}
+
+/// Replay must reproduce a log's commands bit for bit on any machine, so the controllers'
+/// arithmetic must not depend on the machine: the same flight gives the same checksum
+/// everywhere. A different checksum means the control law changed (update the constants:
+/// logs written before no longer replay) or a platform function crept into a controller
+/// (`math.rs`; replay would then fail on another machine).
+#[test]
+fn the_commands_are_the_same_bits_on_every_machine() {
+    let profile = ardrone();
+    let options = ServoOptions::default();
+    let cases: [(&str, Box<dyn Controller>, u64); 3] = [
+        (
+            "lqg",
+            Box::new(lqg(&profile, options)),
+            0x59a6_0754_fec4_60c7,
+        ),
+        (
+            "lqg --paper-prefilter",
+            Box::new(lqg(
+                &profile,
+                ServoOptions {
+                    paper_prefilter: true,
+                    ..options
+                },
+            )),
+            0x9e1a_707b_c7d3_eb30,
+        ),
+        (
+            "pid",
+            Box::new(PidController::new(&profile)),
+            0x3cd4_138a_64a5_a0f1,
+        ),
+    ];
+    for (name, mut ctl, want) in cases {
+        let got = command_checksum(ctl.as_mut(), &profile);
+        assert_eq!(got, want, "{name}: checksum {got:#018x}");
+    }
+}
