@@ -74,10 +74,11 @@ fn hold(p: [f64; 3], heading: f64) -> Reference {
     }
 }
 
-/// A horizontal circle of radius `r` at speed `v` around (0, 0, 1), starting at (r, 0).
+/// A horizontal circle of radius `r` at speed `v` around (0, 0, 1), starting at (r, 0)
+/// (portable arithmetic: [`command_checksum`] flies it).
 fn circle(t: f64, r: f64, v: f64) -> Reference {
     let w = v / r;
-    let (s, c) = (w * t).sin_cos();
+    let (s, c) = dronecine_runtime::math::sin_cos(w * t);
     Reference {
         position_m: [r * c, r * s, 1.0],
         velocity_mps: [-v * s, v * c, 0.0],
@@ -598,25 +599,15 @@ fn command_checksum(ctl: &mut dyn Controller, profile: &Profile) -> u64 {
             hash = (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
         }
     };
-    let (r, v) = (1.0, 0.5);
-    let w = v / r;
     let mut t = 0.0;
     for k in 1..=3000usize {
         let dt = DT + 0.002 * ((k % 7) as f64 - 3.0) / 3.0;
         t += dt;
-        let (s, c) = dronecine_runtime::math::sin_cos(w * t);
-        let reference = Reference {
-            position_m: [r * c, r * s, 1.0],
-            velocity_mps: [-v * s, v * c, 0.0],
-            acceleration_mps2: [-v * w * c, -v * w * s, 0.0],
-            heading_rad: frames::wrap_angle_rad(w * t + PI / 2.0),
-            heading_rate_radps: w,
-        };
         let input = TickInput {
             t_s: t,
             dt_s: dt,
             measurement: (k % 9 != 0).then(|| plant.measure()),
-            reference,
+            reference: circle(t, 1.0, 0.5),
         };
         let o = ctl.tick(&input).expect("valid input");
         let cmd = o.command;
