@@ -6,6 +6,7 @@
 //! x right, y up. A point at camera-frame coordinates (right r, forward f, up u) projects to
 //! `(r·Sx/f, u·Sy/f)` with `Sx = 1/tan(fovX/2)`, `Sy = 1/tan(fovY/2)`.
 
+use crate::math;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -51,7 +52,7 @@ impl Lens {
         Lens {
             fov_x_rad,
             aspect,
-            sx: 1.0 / (fov_x_rad / 2.0).tan(),
+            sx: 1.0 / math::tan(fov_x_rad / 2.0),
         }
     }
 
@@ -76,7 +77,7 @@ impl Lens {
     }
 
     pub fn fov_y_rad(&self) -> f64 {
-        2.0 * ((self.fov_x_rad / 2.0).tan() / self.aspect).atan()
+        2.0 * math::atan(math::tan(self.fov_x_rad / 2.0) / self.aspect)
     }
 
     /// The camera-frame ray (right, forward, up) through a screen point: `(x/Sx, 1, y/Sy)`.
@@ -98,14 +99,14 @@ pub struct CameraPose {
 
 impl CameraPose {
     pub fn forward(&self) -> Vec3 {
-        let (st, ct) = self.pitch_rad.sin_cos();
-        let (sp, cp) = self.heading_rad.sin_cos();
+        let (st, ct) = math::sin_cos(self.pitch_rad);
+        let (sp, cp) = math::sin_cos(self.heading_rad);
         Vec3::new(ct * cp, ct * sp, st)
     }
 
     /// Horizontal: a roll-free camera's right never tilts.
     pub fn right(&self) -> Vec3 {
-        let (sp, cp) = self.heading_rad.sin_cos();
+        let (sp, cp) = math::sin_cos(self.heading_rad);
         Vec3::new(sp, -cp, 0.0)
     }
 
@@ -149,16 +150,16 @@ pub struct Orientation {
 /// §4): `τ = asin(n·sin e / √(1 + y'²)) − atan(y')`, `ψ = b + atan2(x', cos τ − y'·sin τ)`.
 pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2]) -> Orientation {
     let d = target_m - position_m;
-    let b = d.y.atan2(d.x);
-    let e = d.z.atan2(crate::norm_xy(d.x, d.y));
+    let b = math::atan2(d.y, d.x);
+    let e = math::atan2(d.z, crate::norm_xy(d.x, d.y));
     let sx = lens.sx();
     let xp = screen[0] / sx;
     let yp = screen[1] / (sx * lens.aspect());
     let n = (1.0 + xp * xp + yp * yp).sqrt();
-    let arg = n * e.sin() / (1.0 + yp * yp).sqrt();
+    let arg = n * math::sin(e) / (1.0 + yp * yp).sqrt();
     let clamped = !(-1.0..=1.0).contains(&arg);
-    let pitch = arg.clamp(-1.0, 1.0).asin() - yp.atan();
-    let heading = b + xp.atan2(pitch.cos() - yp * pitch.sin());
+    let pitch = math::asin(arg.clamp(-1.0, 1.0)) - math::atan(yp);
+    let heading = b + math::atan2(xp, math::cos(pitch) - yp * math::sin(pitch));
     Orientation {
         heading_rad: dronecine_grammar::vocab::wrap_angle_rad(heading),
         pitch_rad: pitch,
@@ -185,7 +186,7 @@ pub fn orient_fixed_pitch(
     let (sin_t, cos_t) = if pitch_rad.to_bits() == 0 {
         (0.0, 1.0)
     } else {
-        pitch_rad.sin_cos()
+        math::sin_cos(pitch_rad)
     };
     // Let δ = heading − bearing; r = ρ·sin δ, f = cos τ·ρ·cos δ + sin τ·dz.
     // ρ sin δ = x' (cos τ ρ cos δ + sin τ dz)  →  ρ sin δ − x' cos τ ρ cos δ = x' sin τ dz,
@@ -195,7 +196,7 @@ pub fn orient_fixed_pitch(
     let rhs = xp * sin_t * d.z;
     let amp = crate::norm_xy(a, c);
     if amp < 1e-12 {
-        return dronecine_grammar::vocab::wrap_angle_rad(d.y.atan2(d.x));
+        return dronecine_grammar::vocab::wrap_angle_rad(math::atan2(d.y, d.x));
     }
     // heading = bearing + asin(s) − φ, composed as unit vectors (one atan2, no asin):
     // bearing (d.x, d.y)/ρ, asin(s) (√(1 − s²), s), −φ (a, −c)/amp; the scales do not
@@ -204,7 +205,7 @@ pub fn orient_fixed_pitch(
     let cs = (1.0 - s * s).sqrt();
     let (u, v) = (cs * a + s * c, s * a - cs * c);
     let (x, y) = (d.x * u - d.y * v, d.x * v + d.y * u);
-    dronecine_grammar::vocab::wrap_angle_rad(y.atan2(x))
+    dronecine_grammar::vocab::wrap_angle_rad(math::atan2(y, x))
 }
 
 #[cfg(test)]

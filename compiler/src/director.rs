@@ -18,6 +18,7 @@
 //!    position;
 //! 4. check the sample against the profile (`feasibility`).
 
+use crate::math;
 use dronecine_grammar::script::{Composition, Scene, Script, Shot, ShotContent, Transition};
 use dronecine_grammar::vocab::Size;
 use dronecine_grammar::vocab::{wrap_angle_rad, MoveKind};
@@ -978,7 +979,7 @@ impl Director {
                             plan.at((into_s + 0.5).min(duration), actors).p - a.p
                         };
                         if crate::norm_xy(v.x, v.y) > 1e-6 {
-                            (v.y.atan2(v.x), 0.0)
+                            (math::atan2(v.y, v.x), 0.0)
                         } else {
                             (self.heading.heading_rad, 0.0)
                         }
@@ -1044,7 +1045,7 @@ pub fn extrapolate(a: &ActorPose, dt_s: f64) -> ActorPose {
 /// Cylindrical coordinates (radius, angle, height) of `p` about the vertical through `c`.
 fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
     let d = p - c;
-    (crate::norm_xy(d.x, d.y), d.y.atan2(d.x), p.z)
+    (crate::norm_xy(d.x, d.y), math::atan2(d.y, d.x), p.z)
 }
 
 /// The point a fraction `s` of the way from `a` to `b`: around the pivot's vertical in
@@ -1057,7 +1058,11 @@ pub fn interpolate_around(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>, s: f64) -> V
         if ra > 0.2 && rb > 0.2 {
             let r = ra + (rb - ra) * s;
             let t = ta + wrap_angle_rad(tb - ta) * s;
-            return Vec3::new(c.x + r * t.cos(), c.y + r * t.sin(), za + (zb - za) * s);
+            return Vec3::new(
+                c.x + r * math::cos(t),
+                c.y + r * math::sin(t),
+                za + (zb - za) * s,
+            );
         }
     }
     a + (b - a) * s

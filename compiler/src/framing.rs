@@ -58,6 +58,7 @@
 //! one to change it smoothly.
 
 use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
+use crate::math;
 use crate::profile::Gimbal;
 use crate::reference::ActorPose;
 use crate::toric::Toric;
@@ -287,7 +288,7 @@ fn band_distance_m(
     }
     size::exact_distance_m(
         half_m,
-        elevation_rad.sin(),
+        math::sin(elevation_rad),
         size::band_angle_rad(lens, screen),
     )
 }
@@ -586,7 +587,7 @@ impl Pair {
 
     /// Make the screen order agree with the side φ: swap defaults, or fail on explicit ones.
     fn agree_with_side(&mut self, phi: f64) -> Result<(), FramingError> {
-        let near_side = phi.cos() >= 0.0;
+        let near_side = math::cos(phi) >= 0.0;
         if near_side != self.a_left() {
             if self.order_fixed {
                 return Err(FramingError::ScreenSideConflict);
@@ -657,7 +658,7 @@ impl Pair {
                 break;
             };
             let to_c = c - m;
-            let elevation = to_c.z.atan2(to_c.xy().norm());
+            let elevation = math::atan2(to_c.z, to_c.xy().norm());
             let Some(d) =
                 band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, elevation, false)
             else {
@@ -719,8 +720,8 @@ fn solve_together(
     let ab = pair.ab();
     let r = toric::radius_m(ab, pair.alpha);
     let alpha = pair.alpha;
-    let dist_a = |th: f64| 2.0 * r * (alpha + th / 2.0).sin();
-    let dist_b = |th: f64| 2.0 * r * (th / 2.0).sin();
+    let dist_a = |th: f64| 2.0 * r * math::sin(alpha + th / 2.0);
+    let dist_b = |th: f64| 2.0 * r * math::sin(th / 2.0);
     // At most two roots each: on the stack (this runs every tick).
     let mut candidates = [(0.0, Primary::A); 4];
     let mut count = 0;
@@ -1116,12 +1117,12 @@ fn place_blend(
     let centre = blend_centre(from, to, s, actors);
     let cyl = |p: &Vec3| {
         let d = p - centre;
-        (crate::norm_xy(d.x, d.y), d.y.atan2(d.x), d.z)
+        (crate::norm_xy(d.x, d.y), math::atan2(d.y, d.x), d.z)
     };
     let (r0, a0, z0) = cyl(&p0.position_m);
     let (r1, a1, z1) = cyl(&p1.position_m);
     let (r, a, z) = (lerp(r0, r1, s), lerp_angle(a0, a1, s), lerp(z0, z1, s));
-    let c = centre + Vec3::new(r * a.cos(), r * a.sin(), z);
+    let c = centre + Vec3::new(r * math::cos(a), r * math::sin(a), z);
     oriented(c, whole, flags, actors, lens, gimbal)
 }
 
@@ -1606,7 +1607,7 @@ pub fn two_shot_theta_rate(
     }
     let theta = t.toric.theta_rad;
     let s = if theta >= theta0 { 1.0 } else { -1.0 };
-    if (theta0 + s * 2.0 * ratio.acos() - theta).abs() > 1e-9 {
+    if (theta0 + s * 2.0 * math::acos(ratio) - theta).abs() > 1e-9 {
         return None;
     }
     let relative_mps = Vec3::from(pb.velocity_mps) - Vec3::from(pa.velocity_mps);

@@ -11,6 +11,7 @@ pub mod compile;
 pub mod director;
 pub mod feasibility;
 pub mod framing;
+pub mod math;
 pub mod output;
 pub mod paths;
 pub mod preview;

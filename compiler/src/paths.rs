@@ -7,6 +7,7 @@
 //! acceleration within half the profile's limit) and waypoints are joined by a C¹ spline with
 //! chord-length parameters, so the target the camera steers toward has bounded acceleration.
 
+use crate::math;
 use std::f64::consts::{PI, TAU};
 
 use dronecine_grammar::script::{OrbitCenter, PathShape};
@@ -124,7 +125,7 @@ impl Piece {
             } => {
                 let sign = sweep_rad.signum();
                 let ang = start_rad + sign * s / radius;
-                let (sn, cs) = ang.sin_cos();
+                let (sn, cs) = math::sin_cos(ang);
                 (
                     [center[0] + radius * cs, center[1] + radius * sn],
                     [-sign * sn, sign * cs],
@@ -207,8 +208,8 @@ impl PathPlan {
                         .map(|a| [a.position_m[0], a.position_m[1]])
                         .unwrap_or([0.0, 0.0]),
                 };
-                let start_rad = if (from.x - c[0]).hypot(from.y - c[1]) > 1e-6 {
-                    (from.y - c[1]).atan2(from.x - c[0])
+                let start_rad = if math::hypot(from.x - c[0], from.y - c[1]) > 1e-6 {
+                    math::atan2(from.y - c[1], from.x - c[0])
                 } else {
                     0.0
                 };
@@ -414,7 +415,7 @@ fn circle(
     let ang = start + sweep * s;
     let w = sweep * ds;
     let wd = sweep * dds;
-    let (sn, cs) = ang.sin_cos();
+    let (sn, cs) = math::sin_cos(ang);
     PathPoint {
         p: Vec3::new(c[0] + r * cs, c[1] + r * sn, z0 + (z1 - z0) * s),
         v: Vec3::new(cv[0] - r * sn * w, cv[1] + r * cs * w, (z1 - z0) * ds),
@@ -447,7 +448,7 @@ fn rounded_square(side: f64, c: [f64; 2], r: f64, clockwise: bool) -> Vec<Piece>
         // Arc turning left by 90° toward the next direction.
         let next = dirs[(k + 1) % 4];
         let center = [at[0] + next[0] * r, at[1] + next[1] * r];
-        let start_rad = (at[1] - center[1]).atan2(at[0] - center[0]);
+        let start_rad = math::atan2(at[1] - center[1], at[0] - center[0]);
         pieces.push(Piece::Arc {
             center,
             radius: r,

@@ -14,6 +14,7 @@
 //! The horizontal speed and acceleration limits follow from tilt and model
 //! (`derived_motion_limits`); a profile may set them lower, never higher.
 
+use crate::math;
 use std::collections::BTreeSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -834,7 +835,7 @@ fn show(x: f64) -> String {
     } else if x != 0.0 && x.abs() < 1e-3 {
         format!("{x:.4e}")
     } else {
-        let decimals = (4 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
+        let decimals = (4 - math::log10(x.abs()).floor() as i32).clamp(0, 12) as usize;
         let fixed = format!("{x:.decimals$}");
         if fixed.contains('.') {
             fixed
@@ -1689,9 +1690,9 @@ impl<'s> Reader<'s> {
         s.finish(self);
         let aspect = aspect?;
         let (fov_deg, diagonal) = fov?;
-        let half = (fov_deg.to_radians() / 2.0).tan();
+        let half = math::tan(fov_deg.to_radians() / 2.0);
         let fov_x_rad = if diagonal {
-            2.0 * (half * aspect / aspect.hypot(1.0)).atan()
+            2.0 * math::atan(half * aspect / math::hypot(aspect, 1.0))
         } else {
             fov_deg.to_radians()
         };

@@ -7,6 +7,7 @@
 //! rays through the two screen points they should land on.
 
 use crate::camera::{Lens, Vec3};
+use crate::math;
 use dronecine_grammar::vocab::Size;
 
 /// Frame bottom and top as fractions of stature, for every size in `Size::ALL` order.
@@ -90,7 +91,7 @@ pub fn exact_distance_m(half_band_m: f64, sin_elevation: f64, band_angle_rad: f6
     }
     let s = sin_elevation.clamp(-1.0, 1.0);
     if alpha < std::f64::consts::FRAC_PI_2 {
-        let c = alpha.cos().powi(2);
+        let c = math::cos(alpha).powi(2);
         let a = 1.0 - c;
         let b = h * h * (1.0 + c - 2.0 * c * s * s);
         let disc = (b * b - a * a * h.powi(4)).max(0.0);

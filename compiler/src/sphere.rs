@@ -8,6 +8,7 @@
 //! through their sum: an actor who turns swings the camera round.
 
 use crate::camera::Vec3;
+use crate::math;
 use dronecine_grammar::vocab::{wrap_angle_rad, CameraAngle};
 
 /// Elevation of `high angle` (project convention, camera-math §2).
@@ -29,22 +30,22 @@ pub fn elevation_rad(angle: CameraAngle) -> f64 {
 /// The unit vector û from the aim point to the camera for an actor facing `facing_rad`,
 /// profile azimuth `azimuth_rad` (θ) and elevation `elevation_rad` (φ).
 pub fn direction(facing_rad: f64, azimuth_rad: f64, elevation_rad: f64) -> Vec3 {
-    let (sa, ca) = (facing_rad + azimuth_rad).sin_cos();
-    let (se, ce) = elevation_rad.sin_cos();
+    let (sa, ca) = math::sin_cos(facing_rad + azimuth_rad);
+    let (se, ce) = math::sin_cos(elevation_rad);
     Vec3::new(ce * ca, ce * sa, se)
 }
 
 /// ∂û/∂θ (equal to ∂û/∂h).
 pub fn d_direction_d_azimuth(facing_rad: f64, azimuth_rad: f64, elevation_rad: f64) -> Vec3 {
-    let (sa, ca) = (facing_rad + azimuth_rad).sin_cos();
-    let ce = elevation_rad.cos();
+    let (sa, ca) = math::sin_cos(facing_rad + azimuth_rad);
+    let ce = math::cos(elevation_rad);
     Vec3::new(-ce * sa, ce * ca, 0.0)
 }
 
 /// ∂û/∂φ.
 pub fn d_direction_d_elevation(facing_rad: f64, azimuth_rad: f64, elevation_rad: f64) -> Vec3 {
-    let (sa, ca) = (facing_rad + azimuth_rad).sin_cos();
-    let (se, ce) = elevation_rad.sin_cos();
+    let (sa, ca) = math::sin_cos(facing_rad + azimuth_rad);
+    let (se, ce) = math::sin_cos(elevation_rad);
     Vec3::new(-se * ca, -se * sa, ce)
 }
 
@@ -68,11 +69,11 @@ pub fn position(aim_m: &Vec3, facing_rad: f64, s: &Spherical) -> Vec3 {
 /// azimuth and elevation come out 0.
 pub fn inverse(aim_m: &Vec3, facing_rad: f64, camera_m: &Vec3) -> Spherical {
     let v = camera_m - aim_m;
-    let rho = v.x.hypot(v.y);
+    let rho = math::hypot(v.x, v.y);
     Spherical {
         distance_m: v.norm(),
-        azimuth_rad: wrap_angle_rad(v.y.atan2(v.x) - facing_rad),
-        elevation_rad: v.z.atan2(rho),
+        azimuth_rad: wrap_angle_rad(math::atan2(v.y, v.x) - facing_rad),
+        elevation_rad: math::atan2(v.z, rho),
     }
 }
 

@@ -9,6 +9,7 @@
 //! and are never wrapped; φ is wrapped to (−π, π].
 
 use crate::camera::{Lens, Vec3};
+use crate::math;
 use dronecine_grammar::vocab::wrap_angle_rad;
 use std::f64::consts::PI;
 
@@ -53,7 +54,7 @@ pub fn alpha_from_screens(lens: &Lens, screen_a: [f64; 2], screen_b: [f64; 2]) -
 
 /// Radius of the circle carrying the generating arc: `r = |AB| / (2 sin α)`.
 pub fn radius_m(ab_m: f64, alpha_rad: f64) -> f64 {
-    ab_m / (2.0 * alpha_rad.sin())
+    ab_m / (2.0 * math::sin(alpha_rad))
 }
 
 /// The frame of step 2: `z = normalize(AB_y, −AB_x, 0)`, `n = normalize(A − B)`, `t = z × n`.
@@ -106,12 +107,12 @@ pub fn position(a_m: &Vec3, b_m: &Vec3, v: &Toric) -> Result<Vec3, ToricError> {
     }
     let f = frame(a_m, b_m)?;
     let beta = v.theta_rad / 2.0;
-    let ac_m = (b_m - a_m).norm() * (v.alpha_rad + beta).sin() / v.alpha_rad.sin();
+    let ac_m = (b_m - a_m).norm() * math::sin(v.alpha_rad + beta) / math::sin(v.alpha_rad);
     // The two rotations in closed form (Rodrigues, on the frame's axes: B − A = −|AB|·n,
     // t × n = −z, n × z = −t): Rot(t, β)·(−n) = z sin β − n cos β, then Rot(n, φ) turns z
     // into z cos φ − t sin φ and leaves n. Pinned to the rotation matrices by a test.
-    let (sin_b, cos_b) = beta.sin_cos();
-    let (sin_p, cos_p) = v.phi_rad.sin_cos();
+    let (sin_b, cos_b) = math::sin_cos(beta);
+    let (sin_p, cos_p) = math::sin_cos(v.phi_rad);
     let dir = (f.z * cos_p - f.t * sin_p) * sin_b - f.n * cos_b;
     Ok(a_m + dir * ac_m)
 }
@@ -132,7 +133,7 @@ pub fn inverse(a_m: &Vec3, b_m: &Vec3, c_m: &Vec3) -> Result<Toric, ToricError> 
     let phi = if w.norm() < 1e-12 {
         0.0
     } else {
-        f.n.dot(&f.z.cross(&w)).atan2(f.z.dot(&w))
+        math::atan2(f.n.dot(&f.z.cross(&w)), f.z.dot(&w))
     };
     Ok(Toric {
         alpha_rad: alpha,
@@ -214,7 +215,7 @@ pub fn theta_for_distance_to_a_on(alpha_rad: f64, radius_m: f64, distance_m: f64
     if ratio > 1.0 {
         return Roots::default();
     }
-    let bp = ratio.acos();
+    let bp = math::acos(ratio);
     keep_valid(
         alpha_rad,
         [
@@ -242,7 +243,7 @@ pub fn theta_for_distance_to_b_on(alpha_rad: f64, radius_m: f64, distance_m: f64
     if ratio > 1.0 {
         return Roots::default();
     }
-    let bp = ratio.acos();
+    let bp = math::acos(ratio);
     keep_valid(alpha_rad, [PI - 2.0 * bp, PI + 2.0 * bp])
 }
 
@@ -258,7 +259,7 @@ pub fn toric_distance_m(x_m: &Vec3, y_m: &Vec3, alpha_rad: f64, u: &Vec3) -> Opt
     if gamma >= PI - alpha_rad {
         return None;
     }
-    Some(xy.norm() * (PI - alpha_rad - gamma).sin() / alpha_rad.sin())
+    Some(xy.norm() * math::sin(PI - alpha_rad - gamma) / math::sin(alpha_rad))
 }
 
 /// The vantage formula: the camera on the torus seen from A along direction `u` (a profile
@@ -295,13 +296,17 @@ pub fn interpolate(
     let candidate = |x: &Vec3, y: &Vec3| -> Vec3 {
         let v0 = c0_m - x;
         let v1 = c1_m - x;
-        let yaw0 = v0.y.atan2(v0.x);
-        let yaw1 = v1.y.atan2(v1.x);
-        let el0 = v0.z.atan2(v0.x.hypot(v0.y));
-        let el1 = v1.z.atan2(v1.x.hypot(v1.y));
+        let yaw0 = math::atan2(v0.y, v0.x);
+        let yaw1 = math::atan2(v1.y, v1.x);
+        let el0 = math::atan2(v0.z, math::hypot(v0.x, v0.y));
+        let el1 = math::atan2(v1.z, math::hypot(v1.x, v1.y));
         let yaw = yaw0 + wrap_angle_rad(yaw1 - yaw0) * s;
         let el = el0 + (el1 - el0) * s;
-        let u = Vec3::new(el.cos() * yaw.cos(), el.cos() * yaw.sin(), el.sin());
+        let u = Vec3::new(
+            math::cos(el) * math::cos(yaw),
+            math::cos(el) * math::sin(yaw),
+            math::sin(el),
+        );
         let linear = v0.norm() + (v1.norm() - v0.norm()) * s;
         let d = match toric_distance_m(x, y, alpha, &u) {
             Some(toric) => {

@@ -15,6 +15,7 @@
 //! `/scene/drone`, `/scene/actors`, `/scene/path` (`foxglove.SceneUpdate`) and
 //! `/camera_calibration` (`foxglove.CameraCalibration`).
 
+use crate::math;
 use serde_json::{json, Value};
 
 use super::json;
@@ -328,7 +329,7 @@ pub type Quat = [f64; 4];
 
 /// Rotation by `angle_rad` about +z.
 pub fn yaw(angle_rad: f64) -> Quat {
-    let (s, c) = (angle_rad / 2.0).sin_cos();
+    let (s, c) = math::sin_cos(angle_rad / 2.0);
     [0.0, 0.0, s, c]
 }
 
@@ -348,7 +349,7 @@ pub fn mul(a: Quat, b: Quat) -> Quat {
 /// y left, z up) for a camera pitched up by `pitch_rad`.
 pub fn camera_in_drone(pitch_rad: f64) -> Quat {
     // Pitch up = rotation by −τ about +y (left).
-    let (s, c) = (-pitch_rad / 2.0).sin_cos();
+    let (s, c) = math::sin_cos(-pitch_rad / 2.0);
     let pitch = [0.0, s, 0.0, c];
     // Optical axes in a level forward-left-up frame: x = −y, y = −z, z = +x.
     const OPTICAL: Quat = [-0.5, 0.5, -0.5, 0.5];

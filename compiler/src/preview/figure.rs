@@ -14,6 +14,7 @@
 //! pixels).
 
 use crate::camera::{CameraPose, Lens, Vec3};
+use crate::math;
 use crate::reference::ActorPose;
 
 /// Hip height over stature.
@@ -163,7 +164,7 @@ pub fn figure(pose: &CameraPose, lens: &Lens, actor: &ActorPose) -> Option<Figur
         actor.position_m[1],
         actor.position_m[2],
     );
-    let (s, c) = actor.facing_rad.sin_cos();
+    let (s, c) = math::sin_cos(actor.facing_rad);
     let facing = Vec3::new(c, s, 0.0);
     let left = Vec3::new(-s, c, 0.0);
 
@@ -181,7 +182,7 @@ pub fn figure(pose: &CameraPose, lens: &Lens, actor: &ActorPose) -> Option<Figur
     let mut eyes = Vec::new();
     let eye_z = EYE_LIFT * head_r;
     for side in [-1.0, 1.0] {
-        let (se, ce) = (side * EYE_SPREAD_RAD).sin_cos();
+        let (se, ce) = math::sin_cos(side * EYE_SPREAD_RAD);
         let normal = facing * ce + left * se;
         let p = head_c + normal * (head_r * 0.92) + Vec3::z() * eye_z;
         // Visible when the surface there faces the camera.

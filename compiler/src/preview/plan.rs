@@ -1,6 +1,7 @@
 //! The plan views: the stage from above (`top`) and two elevations (`side`), with the camera
 //! path coloured by shot, the camera's looking direction every second, and the actors.
 
+use crate::math;
 use dronecine_grammar::vocab::wrap_angle_rad;
 
 use super::figure::{HEAD_CENTRE, HEAD_RADIUS, SHOULDER};
@@ -142,7 +143,7 @@ fn bounds(input: &PreviewInput, axes: [usize; 2], pad_m: f64) -> ([f64; 2], [f64
 fn arrow(svg: &mut Svg, a: [f64; 2], b: [f64; 2], color: &str, width: f64) {
     svg.line(a[0], a[1], b[0], b[1], &Style::stroke(color, width));
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len = dx.hypot(dy);
+    let len = math::hypot(dx, dy);
     if len < 1e-6 {
         return;
     }
@@ -427,16 +428,17 @@ pub fn top_view(input: &PreviewInput) -> Svg {
         let r = (0.18 * scale).max(6.0);
         let facing = |p: &crate::reference::ActorPose| {
             let o = frame.px([p.position_m[0], p.position_m[1]]);
-            let (s, c) = p.facing_rad.sin_cos();
+            let (s, c) = math::sin_cos(p.facing_rad);
             let tip = frame.px([
                 p.position_m[0] + c * FACING_M,
                 p.position_m[1] + s * FACING_M,
             ]);
             (o, tip)
         };
-        let moved = (first.position_m[0] - last.position_m[0])
-            .hypot(first.position_m[1] - last.position_m[1])
-            > 0.05
+        let moved = math::hypot(
+            first.position_m[0] - last.position_m[0],
+            first.position_m[1] - last.position_m[1],
+        ) > 0.05
             || wrap_angle_rad(first.facing_rad - last.facing_rad).abs() > 0.05;
         if moved {
             let (o, tip) = facing(last);
@@ -454,7 +456,7 @@ pub fn top_view(input: &PreviewInput) -> Svg {
     for i in every_second(input) {
         let s = &input.samples[i];
         let o = frame.px([s.position_m[0], s.position_m[1]]);
-        let (sn, cs) = s.heading_rad.sin_cos();
+        let (sn, cs) = math::sin_cos(s.heading_rad);
         let tip = frame.px([s.position_m[0] + cs * TICK_M, s.position_m[1] + sn * TICK_M]);
         svg.circle(o[0], o[1], 2.5, &Style::fill(TEXT));
         svg.line(o[0], o[1], tip[0], tip[1], &Style::stroke(TEXT, 1.5));
@@ -607,8 +609,8 @@ pub fn side_view(input: &PreviewInput) -> Svg {
         for i in every_second(input) {
             let s = &input.samples[i];
             let o = frame.px([s.position_m[axes[0]], s.position_m[2]]);
-            let (st, ct) = s.camera_pitch_rad.sin_cos();
-            let (sp, cp) = s.heading_rad.sin_cos();
+            let (st, ct) = math::sin_cos(s.camera_pitch_rad);
+            let (sp, cp) = math::sin_cos(s.heading_rad);
             let fwd = [ct * cp, ct * sp, st];
             let tip = frame.px([
                 s.position_m[axes[0]] + fwd[axes[0]] * TICK_M,

@@ -9,6 +9,7 @@
 
 use super::svg::{num, Anchor, Style, Svg};
 use super::{shot_color, shot_names, PreviewInput, ShotKind};
+use crate::math;
 use crate::profile::Model;
 use crate::reference::Sample;
 
@@ -23,7 +24,7 @@ pub fn nice_ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
         return Vec::new();
     }
     let raw = (hi - lo) / target as f64;
-    let mag = 10f64.powf(raw.log10().floor());
+    let mag = math::powf(10f64, math::log10(raw).floor());
     let step = [1.0, 2.0, 2.5, 5.0, 10.0]
         .iter()
         .map(|m| m * mag)
@@ -64,14 +65,14 @@ struct Panel {
 }
 
 fn horizontal(v: [f64; 3]) -> f64 {
-    v[0].hypot(v[1])
+    math::hypot(v[0], v[1])
 }
 
 /// Pitch and roll commands (rad) that fly sample `s` under the plant model `m`: per body axis
 /// `u = (τ·a + v)/K`, pitch on the longitudinal axis (positive to accelerate forward), roll
 /// on the lateral axis (positive to accelerate to the right).
 pub fn tilt_commands_rad(s: &Sample, m: &Model) -> [f64; 2] {
-    let (sn, cs) = s.heading_rad.sin_cos();
+    let (sn, cs) = math::sin_cos(s.heading_rad);
     let fwd = |v: [f64; 3]| v[0] * cs + v[1] * sn;
     let right = |v: [f64; 3]| v[0] * sn - v[1] * cs;
     let pitch =
@@ -162,7 +163,7 @@ fn panels(input: &PreviewInput) -> Vec<Panel> {
                     name: "total",
                     color: "#222222",
                     width: 2.2,
-                    values: tilts.iter().map(|t| deg(t[0].hypot(t[1]))).collect(),
+                    values: tilts.iter().map(|t| deg(math::hypot(t[0], t[1]))).collect(),
                     checked: false,
                 },
                 Series {

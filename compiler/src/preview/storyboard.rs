@@ -6,6 +6,7 @@
 //! near, each named, and faint thirds lines. An actor out of frame is named at the frame edge
 //! with an arrow toward it.
 
+use crate::math;
 use dronecine_grammar::vocab::wrap_angle_rad;
 
 use super::figure::{figure, project_segment, Figure};
@@ -155,7 +156,8 @@ fn draw_figure(svg: &mut Svg, slot: &Slot, fig: &Figure, color: &str) {
 fn draw_scene(svg: &mut Svg, slot: &Slot, input: &PreviewInput, pose: &CameraPose) {
     // Horizon: a level direction ahead projects to y = −tan(pitch)·Sy.
     let pitch = pose.pitch_rad.clamp(-1.55, 1.55);
-    let horizon = slot.px([0.0, -pitch.tan() * input.lens.sy()])[1].clamp(slot.y, slot.y + slot.h);
+    let horizon =
+        slot.px([0.0, -math::tan(pitch) * input.lens.sy()])[1].clamp(slot.y, slot.y + slot.h);
     svg.rect(slot.x, slot.y, slot.w, horizon - slot.y, &Style::fill(SKY));
     svg.rect(
         slot.x,
@@ -303,7 +305,10 @@ fn camera_caption(input: &PreviewInput, i: usize) -> String {
     );
     for (k, name) in input.actor_names.iter().enumerate() {
         if let Some(a) = input.actor(i, k) {
-            let d = (a.position_m[0] - s.position_m[0]).hypot(a.position_m[1] - s.position_m[1]);
+            let d = math::hypot(
+                a.position_m[0] - s.position_m[0],
+                a.position_m[1] - s.position_m[1],
+            );
             out.push_str(&format!(" · {name} {} m", fmt1(d)));
         }
     }

@@ -57,6 +57,7 @@
 //! 6 command ACK, 10 navdata demo, 11 bootstrap, 23–27 PIC version and the firmware's
 //! threads (always on, as in the §1.6 example), 30 com watchdog, 31 emergency.
 
+use crate::math;
 use std::collections::BTreeMap;
 
 use crate::ardrone::at::{
@@ -468,7 +469,7 @@ impl Firmware {
     fn demo(&self, t: &Truth, commanded: bool) -> Demo {
         const MDEG_PER_RAD: f64 = 180_000.0 / std::f64::consts::PI;
         // World velocity → body (forward, left, up): Rz(−c).
-        let (s, c) = t.heading_rad.sin_cos();
+        let (s, c) = math::sin_cos(t.heading_rad);
         let [vx, vy, vz] = t.velocity_mps;
         let fwd = c * vx + s * vy;
         let left = -s * vx + c * vy;

@@ -22,6 +22,7 @@
 //!   capture time as seconds and a 2⁻³² fraction.
 
 use crate::backend::{BodyPose, MocapFrame};
+use crate::math;
 use crate::natnet::frame::{
     decode_connect, encode_frame, encode_server_info, split_message, FrameOut, NatNetError,
     RigidBody, ServerDetails, ServerInfo, UpAxis, Version, NAT_CONNECT, NAT_KEEPALIVE,
@@ -116,7 +117,7 @@ impl Motive {
             };
         };
         let [x, y, z] = p.position_m;
-        let (s, c) = (p.heading_rad / 2.0).sin_cos();
+        let (s, c) = math::sin_cos(p.heading_rad / 2.0);
         // World quaternion (0, 0, s, c): a rotation by the heading about world z.
         let (position, q) = match self.up {
             // Motive Y-up: (x, z, −y); a world vector part (qx, qy, qz) → (qx, qz, −qy).

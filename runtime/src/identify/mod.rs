@@ -31,6 +31,7 @@
 //! exceeds [`CI_REL_MAX`] of its value, τ sits at the edge of the search range, or the axis
 //! was not excited — naming the axis and the test to repeat.
 
+use crate::math;
 use std::fmt;
 
 use crate::frames::{self, Command};
@@ -460,7 +461,7 @@ fn plane_response(d: &PlaneData, taus: [f64; 2], drive: Drive) -> Vec<f64> {
     for k in 0..n {
         out[k] = p[0];
         out[n + k] = p[1];
-        let (sn, cs) = d.heading[k].sin_cos();
+        let (sn, cs) = math::sin_cos(d.heading[k]);
         // Body-frame target velocity: forward = −K_θ θ, left = −K_φ φ (unit gains).
         let target = match drive {
             Drive::Roll => [0.0, -d.roll[k]],
@@ -472,7 +473,7 @@ fn plane_response(d: &PlaneData, taus: [f64; 2], drive: Drive) -> Vec<f64> {
         let vb = [cs * rel[0] + sn * rel[1], -sn * rel[0] + cs * rel[1]];
         let dt = d.dt[k];
         if dt != last_dt {
-            a = [(-dt / tb[0]).exp(), (-dt / tb[1]).exp()];
+            a = [math::exp(-dt / tb[0]), math::exp(-dt / tb[1])];
             last_dt = dt;
         }
         let mut vb_new = [0.0; 2];
@@ -563,10 +564,10 @@ fn mean_heading(seg: &[Sample]) -> Option<(f64, f64)> {
     if hs.is_empty() {
         return None;
     }
-    let (s, c) = hs
-        .iter()
-        .fold((0.0, 0.0), |(s, c), h| (s + h.sin(), c + h.cos()));
-    let mean = s.atan2(c);
+    let (s, c) = hs.iter().fold((0.0, 0.0), |(s, c), &h| {
+        (s + math::sin(h), c + math::cos(h))
+    });
+    let mean = math::atan2(s, c);
     let span = hs
         .iter()
         .map(|h| frames::wrap_angle_rad(h - mean).abs())
@@ -618,7 +619,7 @@ fn responses(d: &AxisData, tau: f64) -> (Vec<f64>, Vec<f64>) {
         g.push(sg);
         h.push(sh);
         let dt = d.dt[k];
-        let a = (-dt / tau).exp();
+        let a = math::exp(-dt / tau);
         let w = tau * (1.0 - a); // ∫₀^Δ e^{−t/τ} dt
         let u = d.u[k];
         sg += vg * w;
@@ -793,7 +794,7 @@ pub fn as_applied(seg: &[Sample], fit: &AxisFit) -> Segment {
                 // averaged over the tick (the model holds its input through the tick).
                 let dt = seg.get(k + 1).map_or(0.0, |n| n.t_s - seg[k].t_s);
                 let a = if lag_s > 0.0 {
-                    1.0 - (-dt / lag_s).exp()
+                    1.0 - math::exp(-dt / lag_s)
                 } else {
                     1.0
                 };

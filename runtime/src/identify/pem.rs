@@ -36,6 +36,7 @@
 //! against a constant-velocity extrapolation from the same state: the share of the motion
 //! over a second that the model, and not drift, explains.
 
+use crate::math;
 use nalgebra::{SMatrix, SVector};
 
 use super::{frames, AxisData, Estimate, PlaneData, TAU_MAX_S, TAU_MIN_S};
@@ -110,7 +111,7 @@ trait Family<const N: usize, const M: usize, const L: usize> {
     fn start(y: &SVector<f64, M>) -> (SVector<f64, N>, SVector<f64, N>);
     /// The allowed range of ln τ number `j` given all the ln τs `x`.
     fn ln_tau_range(_j: usize, _x: &[f64]) -> (f64, f64) {
-        (TAU_MIN_S.ln(), TAU_MAX_S.ln())
+        (math::ln(TAU_MIN_S), math::ln(TAU_MAX_S))
     }
     /// The grid's starting ln τs at a common main ln τ `lt`.
     fn grid_taus(lt: f64) -> Vec<f64>;
@@ -134,7 +135,7 @@ fn cascade(dt: f64, tau: f64, tau_a: f64, v0: f64, a0: f64, ku: f64) -> [f64; 3]
     } else {
         tau_a
     };
-    let (ea, ev) = ((-dt / tau_a).exp(), (-dt / tau).exp());
+    let (ea, ev) = (math::exp(-dt / tau_a), math::exp(-dt / tau));
     let b = (a0 - ku) * tau_a / (tau_a - tau);
     let a = ku + (a0 - ku) * ea;
     let v = ku + (v0 - ku - b) * ev + b * ea;
@@ -150,7 +151,7 @@ impl Family<10, 2, 2> for Plane {
         // Body order: forward (τ_θ), left (τ_φ).
         let tb = [taus[1], taus[0]];
         let tau_a = taus[2];
-        let (sn, cs) = t.heading.sin_cos();
+        let (sn, cs) = math::sin_cos(t.heading);
         let r = nalgebra::Matrix2::new(cs, -sn, sn, cs);
         // Per body axis: the response to v₀, a₀ and K·u (columns of s, v, a).
         let resp: [[[f64; 3]; 3]; 2] = std::array::from_fn(|j| {
@@ -172,7 +173,7 @@ impl Family<10, 2, 2> for Plane {
         f.fixed_view_mut::<2, 2>(0, 2).copy_from(&s_v);
         f.fixed_view_mut::<2, 2>(0, 4).copy_from(&(r * diag(1, 0)));
         // The drift d lags the random walk w with τ_d: ḋ = (w − d)/τ_d, and moves the drone.
-        let ed = (-dt / taus[3]).exp();
+        let ed = math::exp(-dt / taus[3]);
         let wd = taus[3] * (1.0 - ed);
         f.fixed_view_mut::<2, 2>(0, 6).copy_from(&(i2 * (dt - wd)));
         f.fixed_view_mut::<2, 2>(0, 8).copy_from(&(i2 * wd));
@@ -201,20 +202,20 @@ impl Family<10, 2, 2> for Plane {
     }
 
     fn grid_taus(lt: f64) -> Vec<f64> {
-        vec![lt, lt, ATTITUDE_LAG_START_S.ln(), lt]
+        vec![lt, lt, math::ln(ATTITUDE_LAG_START_S), lt]
     }
 
     /// The two lags in cascade answer the input alike whichever is which; the attitude's is
     /// the faster one by definition, and may vanish.
     fn ln_tau_range(j: usize, x: &[f64]) -> (f64, f64) {
-        let main = (TAU_MIN_S.ln(), TAU_MAX_S.ln());
+        let main = (math::ln(TAU_MIN_S), math::ln(TAU_MAX_S));
         if j != 2 {
             return main;
         }
-        let slowest_fast = x[0].min(x[1]).clamp(main.0, main.1) + ATTITUDE_LAG_MAX_SHARE.ln();
+        let slowest_fast = x[0].min(x[1]).clamp(main.0, main.1) + math::ln(ATTITUDE_LAG_MAX_SHARE);
         (
-            ATTITUDE_LAG_MIN_S.ln(),
-            slowest_fast.max(ATTITUDE_LAG_MIN_S.ln()),
+            math::ln(ATTITUDE_LAG_MIN_S),
+            slowest_fast.max(math::ln(ATTITUDE_LAG_MIN_S)),
         )
     }
 
@@ -257,7 +258,7 @@ impl Family<10, 2, 2> for Plane {
 impl Family<3, 1, 2> for Vertical {
     fn step(t: &Tick<1, 2>, taus: &[f64]) -> (SMatrix<f64, 3, 3>, SMatrix<f64, 3, 2>) {
         let dt = t.dt;
-        let a = (-dt / taus[0]).exp();
+        let a = math::exp(-dt / taus[0]);
         let w = taus[0] * (1.0 - a);
         let f = SMatrix::<f64, 3, 3>::new(1.0, w, dt - w, 0.0, a, 1.0 - a, 0.0, 0.0, 1.0);
         let mut g = SMatrix::<f64, 3, 2>::zeros();
@@ -317,7 +318,7 @@ impl<const L: usize> Pass<L> {
     /// The concentrated negative log-likelihood at gains `k`.
     fn nll(&self, k: &SVector<f64, L>) -> f64 {
         let n = self.n as f64;
-        0.5 * self.logdet + 0.5 * n * (self.ssr(k) / n).ln()
+        0.5 * self.logdet + 0.5 * n * math::ln(self.ssr(k) / n)
     }
 
     /// The best gains (unexcited ones held at 0).
@@ -411,7 +412,7 @@ where
     F: Family<N, M, L>,
 {
     let h = F::h();
-    let q_rel = lambda.exp();
+    let q_rel = math::exp(lambda);
     let mut out = Pass {
         a: SMatrix::zeros(),
         b: SVector::zeros(),
@@ -449,7 +450,7 @@ where
                             let Some((si, det)) = F::inv_det(&s) else {
                                 break;
                             };
-                            (p * h.transpose() * si, si, det.ln())
+                            (p * h.transpose() * si, si, math::ln(det))
                         }
                     };
                     let e0 = y - h * xa;
@@ -512,7 +513,7 @@ where
                 if hit && t.y.is_some() && change <= 1e-7 * p.abs().max() && seen > 1 {
                     let s = h * p * h.transpose() + SMatrix::<f64, M, M>::identity();
                     if let Some((si, det)) = F::inv_det(&s) {
-                        steady = Some((p * h.transpose() * si, si, det.ln()));
+                        steady = Some((p * h.transpose() * si, si, math::ln(det)));
                     }
                 }
             }
@@ -639,7 +640,7 @@ where
                 let (lo, hi) = F::ln_tau_range(j, x);
                 let c = x[j].clamp(lo, hi);
                 pen += (x[j] - c).powi(2);
-                c.exp()
+                math::exp(c)
             })
             .collect();
         let l = x[T].clamp(LAMBDA_MIN, LAMBDA_MAX);
@@ -664,7 +665,7 @@ where
     // Grid on a common τ and λ, then the simplex.
     let mut best = (f64::INFINITY, vec![0.0; T + 2]);
     for it in 0..5 {
-        let lt = (0.25f64 * 2.5f64.powi(it)).ln();
+        let lt = math::ln(0.25f64 * 2.5f64.powi(it));
         for il in 0..5 {
             let l = 2.0 * il as f64 + if T > 1 { 8.0 } else { -6.0 };
             let mut x = F::grid_taus(lt);

@@ -44,6 +44,7 @@
 //! from above (the heading of `frames.rs`: build the rigid body in Motive with its local x
 //! along the drone's nose).
 
+use crate::math;
 use std::fmt;
 
 use crate::backend::BodyPose;
@@ -939,6 +940,6 @@ pub fn to_world(up: UpAxis, position_m: [f32; 3], orientation_xyzw: [f32; 4]) ->
     Some(WorldPose {
         position_m,
         orientation_xyzw: [x, y, z, w],
-        heading_rad: wrap_angle_rad(fy.atan2(fx)),
+        heading_rad: wrap_angle_rad(math::atan2(fy, fx)),
     })
 }

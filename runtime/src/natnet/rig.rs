@@ -17,6 +17,7 @@
 //! Ids must be distinct; unknown keys are refused (a misspelt `orgin_m` is an error, not a
 //! silently ignored offset).
 
+use crate::math;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::Path;
@@ -169,7 +170,7 @@ impl Rig {
 
     /// A world-frame pose (mocap origin) in stage coordinates.
     pub fn to_stage(&self, pose: BodyPose) -> BodyPose {
-        let (s, c) = self.yaw_rad.sin_cos();
+        let (s, c) = math::sin_cos(self.yaw_rad);
         let [x, y, z] = pose.position_m;
         BodyPose {
             position_m: [

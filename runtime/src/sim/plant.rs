@@ -21,6 +21,7 @@
 //! Between grid points the position moves linearly with the step's velocity (as the model's
 //! `p' = p + h·v`) and the heading with the last yaw rate; mocap and truth read it there.
 
+use crate::math;
 use nalgebra::{Matrix3, Vector3};
 
 use super::config::{Effects, SimConfig, SimError};
@@ -195,7 +196,7 @@ impl Plant {
             expected: "gains giving an invertible input map".to_string(),
         })?;
         let taus = frames::body_taus_s(m.tau_roll_s, m.tau_pitch_s, m.tau_vz_s);
-        let e_body = taus.map(|tau| (-h / tau).exp());
+        let e_body = taus.map(|tau| math::exp(-h / tau));
         // Hover: commanded body speed −g·v makes v decay with τ/(1 + g) = hover τ.
         let hover_gain = [0, 1].map(|j| (taus[j] / cfg.hover_velocity_tau_s - 1.0).max(0.0));
         let battery = cfg.battery_start_percent;
@@ -217,8 +218,8 @@ impl Plant {
             g_inv: rows(&g_inv),
             e_body,
             hover_gain,
-            e_att: (-cfg.attitude_rate_per_s * h).exp(),
-            e_yaw: (-cfg.yaw_rate_lag_per_s * h).exp(),
+            e_att: math::exp(-cfg.attitude_rate_per_s * h),
+            e_yaw: math::exp(-cfg.yaw_rate_lag_per_s * h),
             gain_yaw: m.gain_yaw,
             tilt_max: l.tilt_max_rad,
             vz_max: l.vz_max_mps,
@@ -359,7 +360,7 @@ impl Plant {
             cmd.yaw_rate_radps = cmd.yaw_rate_radps.clamp(-self.yaw_max, self.yaw_max);
         }
         let (thrust_roll, thrust_pitch) = if eff.attitude_lag {
-            let s = (self.tilt[0].sin(), self.tilt[1].sin());
+            let s = (math::sin(self.tilt[0]), math::sin(self.tilt[1]));
             self.tilt[0] = cmd.roll_rad + (self.tilt[0] - cmd.roll_rad) * self.e_att;
             self.tilt[1] = cmd.pitch_rad + (self.tilt[1] - cmd.pitch_rad) * self.e_att;
             s

@@ -6,6 +6,7 @@
 //! process's draws do not depend on whether another process ran, was switched off, or was
 //! looked at: turning one effect off leaves every other effect's draws as they were.
 
+use crate::math;
 use std::sync::OnceLock;
 
 /// xoshiro256++: 256 bits of state, period 2²⁵⁶ − 1, a few ns per draw.
@@ -82,8 +83,8 @@ impl Rng {
                 return self.normal_tail(u < 0.0);
             }
             let x = u * z.x[i];
-            let f0 = (-0.5 * (z.x[i] * z.x[i] - x * x)).exp();
-            let f1 = (-0.5 * (z.x[i + 1] * z.x[i + 1] - x * x)).exp();
+            let f0 = math::exp(-0.5 * (z.x[i] * z.x[i] - x * x));
+            let f1 = math::exp(-0.5 * (z.x[i + 1] * z.x[i + 1] - x * x));
             if f1 + self.uniform() * (f0 - f1) < 1.0 {
                 return x;
             }
@@ -94,8 +95,8 @@ impl Rng {
     #[cold]
     fn normal_tail(&mut self, negative: bool) -> f64 {
         loop {
-            let x = self.uniform_open().ln() / ZIG_R;
-            let y = self.uniform_open().ln();
+            let x = math::ln(self.uniform_open()) / ZIG_R;
+            let y = math::ln(self.uniform_open());
             if -2.0 * y >= x * x {
                 return if negative { x - ZIG_R } else { ZIG_R - x };
             }
@@ -122,12 +123,12 @@ impl Ziggurat {
         TABLES.get_or_init(|| {
             let mut x = [0.0; ZIG_LAYERS + 1];
             let mut r = [0.0; ZIG_LAYERS];
-            let mut f = (-0.5 * ZIG_R * ZIG_R).exp();
+            let mut f = math::exp(-0.5 * ZIG_R * ZIG_R);
             x[0] = ZIG_V / f;
             x[1] = ZIG_R;
             for i in 2..ZIG_LAYERS {
-                x[i] = (-2.0 * (ZIG_V / x[i - 1] + f).ln()).sqrt();
-                f = (-0.5 * x[i] * x[i]).exp();
+                x[i] = (-2.0 * math::ln(ZIG_V / x[i - 1] + f)).sqrt();
+                f = math::exp(-0.5 * x[i] * x[i]);
             }
             x[ZIG_LAYERS] = 0.0;
             for i in 0..ZIG_LAYERS {

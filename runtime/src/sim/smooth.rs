@@ -16,6 +16,7 @@
 //! more than one knot spacing (the simulator reads forward only).
 
 use super::rng::{Rng, Ziggurat};
+use crate::math;
 
 #[derive(Clone, Debug)]
 pub struct SmoothOu {
@@ -52,7 +53,7 @@ impl SmoothOu {
         z: &Ziggurat,
     ) -> SmoothOu {
         let spacing_s = tau_s / knots_per_tau;
-        let a = (-spacing_s / tau_s).exp();
+        let a = math::exp(-spacing_s / tau_s);
         let s = sigma * (1.0 - a * a).sqrt();
         let mut p = SmoothOu {
             rng,
