@@ -828,7 +828,7 @@ fn solve_over_shoulder(
                 phi_rad: phi,
             },
         ) {
-            Ok(c) => (c - origin).angle(&u),
+            Ok(c) => math::angle(&(c - origin), &u),
             Err(_) => f64::INFINITY,
         }
     };

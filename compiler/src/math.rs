@@ -110,6 +110,24 @@ pub fn hypot(x: f64, y: f64) -> f64 {
     libm::hypot(x, y)
 }
 
+/// The angle between `a` and `b`, in [0, π] (nalgebra's `a.angle(&b)`, whose `acos` is the
+/// platform's): 0 when either is zero.
+#[inline]
+pub fn angle(a: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>) -> f64 {
+    let (na, nb) = (a.norm(), b.norm());
+    if na == 0.0 || nb == 0.0 {
+        return 0.0;
+    }
+    let c = a.dot(b) / (na * nb);
+    if c > 1.0 {
+        0.0
+    } else if c < -1.0 {
+        std::f64::consts::PI
+    } else {
+        acos(c)
+    }
+}
+
 /// The `f64` methods that call the platform's libm (`powi` does not: it multiplies).
 pub const PLATFORM: [&str; 25] = [
     "sin", "cos", "sin_cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh",
@@ -117,7 +135,18 @@ pub const PLATFORM: [&str; 25] = [
     "powf", "hypot", "cbrt",
 ];
 
-/// The calls to the platform's functions ([`PLATFORM`]) in Rust source `text`, up to its
+/// nalgebra's calls that reach the platform's libm inside (`angle` has [`angle`]).
+pub const PLATFORM_NALGEBRA: [&str; 6] = [
+    ".angle(",
+    "from_axis_angle(",
+    "from_scaled_axis(",
+    "from_euler_angles(",
+    ".euler_angles(",
+    ".slerp(",
+];
+
+/// The calls to the platform's functions ([`PLATFORM`], [`PLATFORM_NALGEBRA`]) in Rust
+/// source `text`, up to its
 /// `#[cfg(test)] mod tests` (tests may compare against the platform): `(line, method)`,
 /// lines counted from 1. Comments are skipped. The crates' tests run it over their sources.
 pub fn platform_calls(text: &str) -> Vec<(usize, &'static str)> {
@@ -129,6 +158,11 @@ pub fn platform_calls(text: &str) -> Vec<(usize, &'static str)> {
             let call = format!(".{name}(");
             if line.contains(&call) {
                 found.push((n + 1, name));
+            }
+        }
+        for call in PLATFORM_NALGEBRA {
+            if line.contains(call) {
+                found.push((n + 1, call.trim_matches(|c| c == '.' || c == '(')));
             }
         }
     }
@@ -203,11 +237,31 @@ mod tests {
         assert_eq!(atan2(0.0, -1.0), std::f64::consts::PI);
     }
 
+    /// nalgebra's `angle`, with the portable `acos`: within an ulp, the same edge cases.
+    #[test]
+    fn angle_is_nalgebras() {
+        use nalgebra::Vector3;
+        for k in 0..500 {
+            let t = k as f64 * 0.0127;
+            let a = Vector3::new(cos(t), 0.3 * t - 1.0, 0.7);
+            let b = Vector3::new(-0.4, t.sin(), 1.0 - t);
+            assert!(ulps(angle(&a, &b), a.angle(&b)) <= 1, "{t}");
+        }
+        let (x, z) = (Vector3::x(), Vector3::zeros());
+        assert_eq!(angle(&x, &z), 0.0);
+        assert_eq!(angle(&x, &x), 0.0);
+        assert_eq!(angle(&x, &-x), std::f64::consts::PI);
+    }
+
     #[test]
     fn the_scan_finds_platform_calls_outside_tests_and_comments() {
         let text = "let a = x.sin();\n// y.exp()\nlet b = math::atan2(y, x).abs();\n\
-                    let c = (a + b).hypot(c); // z.ln()\n#[cfg(test)]\nmod tests {\n x.cos();\n}\n";
-        assert_eq!(platform_calls(text), vec![(1, "sin"), (4, "hypot")]);
+                    let c = (a + b).hypot(c); // z.ln()\nlet d = u.angle(&v);\n\
+                    #[cfg(test)]\nmod tests {\n x.cos();\n}\n";
+        assert_eq!(
+            platform_calls(text),
+            vec![(1, "sin"), (4, "hypot"), (5, "angle")]
+        );
     }
 
     /// The compiler calls none of the platform's transcendental functions: only this

@@ -52,7 +52,7 @@ pub fn centred_distance_m(framed_height_m: f64, lens: &Lens) -> f64 {
 pub fn band_angle_rad(lens: &Lens, screen: [f64; 2]) -> f64 {
     let top = lens.ray([screen[0], screen[1] + 1.0]);
     let bottom = lens.ray([screen[0], screen[1] - 1.0]);
-    top.angle(&bottom)
+    math::angle(&top, &bottom)
 }
 
 /// The screen point of the bisector of the rays through `(x, y + 1)` and `(x, y − 1)`: where
@@ -103,7 +103,10 @@ pub fn exact_distance_m(half_band_m: f64, sin_elevation: f64, band_angle_rad: f6
     let u = Vec3::new((1.0 - s * s).sqrt(), 0.0, s);
     let angle = |d: f64| {
         let c = u * d;
-        (Vec3::new(0.0, 0.0, h) - c).angle(&(Vec3::new(0.0, 0.0, -h) - c))
+        math::angle(
+            &(Vec3::new(0.0, 0.0, h) - c),
+            &(Vec3::new(0.0, 0.0, -h) - c),
+        )
     };
     let (mut lo, mut hi) = (0.0, h);
     while angle(hi) > alpha {

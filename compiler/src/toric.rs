@@ -49,7 +49,7 @@ pub struct Toric {
 
 /// α from two requested screen points: the angle between their rays through the lens.
 pub fn alpha_from_screens(lens: &Lens, screen_a: [f64; 2], screen_b: [f64; 2]) -> f64 {
-    lens.ray(screen_a).angle(&lens.ray(screen_b))
+    math::angle(&lens.ray(screen_a), &lens.ray(screen_b))
 }
 
 /// Radius of the circle carrying the generating arc: `r = |AB| / (2 sin α)`.
@@ -127,8 +127,8 @@ pub fn inverse(a_m: &Vec3, b_m: &Vec3, c_m: &Vec3) -> Result<Toric, ToricError> 
         // At an actor: α is undefined.
         return Err(ToricError::Coincident);
     }
-    let beta = (b_m - a_m).angle(&ac);
-    let alpha = ac.angle(&bc);
+    let beta = math::angle(&(b_m - a_m), &ac);
+    let alpha = math::angle(&ac, &bc);
     let w = ac - f.n * ac.dot(&f.n);
     let phi = if w.norm() < 1e-12 {
         0.0
@@ -255,7 +255,7 @@ pub fn toric_distance_m(x_m: &Vec3, y_m: &Vec3, alpha_rad: f64, u: &Vec3) -> Opt
     if xy.norm() < 1e-12 || u.norm() < 1e-12 {
         return None;
     }
-    let gamma = xy.angle(u);
+    let gamma = math::angle(&xy, u);
     if gamma >= PI - alpha_rad {
         return None;
     }
@@ -310,7 +310,7 @@ pub fn interpolate(
         let linear = v0.norm() + (v1.norm() - v0.norm()) * s;
         let d = match toric_distance_m(x, y, alpha, &u) {
             Some(toric) => {
-                let margin = PI - alpha - (y - x).angle(&u);
+                let margin = PI - alpha - math::angle(&(y - x), &u);
                 let w = (margin / PULL_FADE_RAD).clamp(0.0, 1.0);
                 linear + (toric - linear) * w
             }
