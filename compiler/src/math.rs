@@ -169,10 +169,12 @@ pub fn platform_calls(text: &str) -> Vec<(usize, &'static str)> {
     found
 }
 
-/// Every `.rs` file under `dir`, recursively, sorted.
+/// [`platform_calls`] over every `.rs` file under `dir` but the `math.rs` modules: how many
+/// files were read, and each call as `path:line: `.name(``. The crates' tests assert there
+/// are none.
 #[doc(hidden)]
-pub fn rust_sources(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
-    let mut out = Vec::new();
+pub fn platform_calls_under(dir: &std::path::Path) -> (usize, Vec<String>) {
+    let mut files = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
         let Ok(entries) = std::fs::read_dir(&d) else {
@@ -182,13 +184,20 @@ pub fn rust_sources(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
             let p = e.path();
             if p.is_dir() {
                 stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                out.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") && !p.ends_with("math.rs") {
+                files.push(p);
             }
         }
     }
-    out.sort();
-    out
+    files.sort();
+    let mut found = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap_or_default();
+        for (line, name) in platform_calls(&text) {
+            found.push(format!("{}:{line}: `.{name}(`", f.display()));
+        }
+    }
+    (files.len(), found)
 }
 
 #[cfg(test)]
@@ -269,15 +278,8 @@ mod tests {
     #[test]
     fn the_compiler_calls_no_platform_math() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-        let files = rust_sources(&dir);
-        assert!(files.len() > 20, "the compiler's sources: {files:?}");
-        let mut found = Vec::new();
-        for f in files.iter().filter(|f| !f.ends_with("math.rs")) {
-            let text = std::fs::read_to_string(f).unwrap();
-            for (line, name) in platform_calls(&text) {
-                found.push(format!("{}:{line}: `.{name}(`", f.display()));
-            }
-        }
+        let (files, found) = platform_calls_under(&dir);
+        assert!(files > 20, "only {files} sources under {}", dir.display());
         assert!(
             found.is_empty(),
             "the platform's functions; use dronecine_compiler::math instead:\n{}",

@@ -17,15 +17,8 @@ mod tests {
     #[test]
     fn the_runtime_calls_no_platform_math() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-        let files = super::rust_sources(&dir);
-        assert!(files.len() > 30, "the runtime's sources: {files:?}");
-        let mut found = Vec::new();
-        for f in &files {
-            let text = std::fs::read_to_string(f).unwrap();
-            for (line, name) in super::platform_calls(&text) {
-                found.push(format!("{}:{line}: `.{name}(`", f.display()));
-            }
-        }
+        let (files, found) = super::platform_calls_under(&dir);
+        assert!(files > 30, "only {files} sources under {}", dir.display());
         assert!(
             found.is_empty(),
             "the platform's functions; use crate::math instead:\n{}",
