@@ -114,14 +114,48 @@ impl CameraPose {
         self.right().cross(&self.forward())
     }
 
+    /// The camera's position and axes, each angle's sine and cosine taken once: for
+    /// projecting several points from one pose (the same values as [`CameraPose::right`],
+    /// [`CameraPose::forward`] and [`CameraPose::up`], bit for bit).
+    pub fn frame(&self) -> CameraFrame {
+        let (st, ct) = math::sin_cos(self.pitch_rad);
+        let (sp, cp) = math::sin_cos(self.heading_rad);
+        let right = Vec3::new(sp, -cp, 0.0);
+        let forward = Vec3::new(ct * cp, ct * sp, st);
+        CameraFrame {
+            position_m: self.position_m,
+            right,
+            forward,
+            up: right.cross(&forward),
+        }
+    }
+
+    /// Camera-frame coordinates (right, forward, up) of a world point.
+    pub fn to_camera(&self, point_m: &Vec3) -> Vec3 {
+        self.frame().to_camera(point_m)
+    }
+
+    /// Screen position of a world point, `None` when it is not in front of the camera.
+    /// Points outside the frame project outside [−1, 1]².
+    pub fn project(&self, lens: &Lens, point_m: &Vec3) -> Option<[f64; 2]> {
+        self.frame().project(lens, point_m)
+    }
+}
+
+/// A [`CameraPose`]'s position and unit axes ([`CameraPose::frame`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraFrame {
+    pub position_m: Vec3,
+    pub right: Vec3,
+    pub forward: Vec3,
+    pub up: Vec3,
+}
+
+impl CameraFrame {
     /// Camera-frame coordinates (right, forward, up) of a world point.
     pub fn to_camera(&self, point_m: &Vec3) -> Vec3 {
         let d = point_m - self.position_m;
-        Vec3::new(
-            d.dot(&self.right()),
-            d.dot(&self.forward()),
-            d.dot(&self.up()),
-        )
+        Vec3::new(d.dot(&self.right), d.dot(&self.forward), d.dot(&self.up))
     }
 
     /// Screen position of a world point, `None` when it is not in front of the camera.
@@ -225,6 +259,9 @@ mod tests {
         };
         let (r, f, u) = (pose.right(), pose.forward(), pose.up());
         assert!((r.cross(&f) - u).norm() < 1e-12);
+        // One frame, its trigonometry taken once: the same axes, bit for bit.
+        let frame = pose.frame();
+        assert_eq!((frame.right, frame.forward, frame.up), (r, f, u));
         assert!(r.z.abs() < 1e-15, "no roll: right stays horizontal");
         assert!(u.z > 0.0);
         // Heading 0 looks along +x with +y on the left.

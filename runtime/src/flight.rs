@@ -657,11 +657,13 @@ impl<'s, 'b> Flight<'s, 'b> {
                 // pitch the reference asks of the gimbal (level without one).
                 self.framing.clear();
                 if let Some(m) = usable {
+                    // Its axes once for every actor projected.
                     let camera = CameraPose {
                         position_m: Vec3::from(m.position_m),
                         heading_rad: m.heading_rad,
                         pitch_rad: world_sample.camera_pitch_rad,
-                    };
+                    }
+                    .frame();
                     if director.hold_targets(
                         &self.actors.poses,
                         &camera.position_m,
