@@ -325,7 +325,10 @@ impl Observer for Display {
 pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let framing = |f: Option<f64>| f.map_or("—".to_string(), |x| format!("{x:.3}"));
+    // A figure with nothing to average (no measured tick, no hold) prints as a dash.
+    let fig = |x: Option<f64>, scale: f64, decimals: usize| {
+        x.map_or("—".to_string(), |x| format!("{:.decimals$}", x * scale))
+    };
     let _ = writeln!(
         s,
         "{} flight with {} ({}): {:.1} s in the air, {:.1} s of shots",
@@ -335,15 +338,16 @@ pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> 
         r.flight_time_s,
         r.shots_time_s
     );
+    let f = &r.figures;
     let _ = writeln!(
         s,
-        "  position error  RMS {:.1} cm, max {:.1} cm; heading error RMS {:.2}°; framing error \
-         RMS {}; saturated {:.1}% of ticks",
-        r.figures.rms_position_error_m * 100.0,
-        r.figures.max_position_error_m * 100.0,
-        r.figures.rms_heading_error_rad.to_degrees(),
-        framing(r.figures.rms_framing_error),
-        r.figures.saturated_fraction * 100.0
+        "  position error  RMS {} cm, max {} cm; heading error RMS {}°; framing error \
+         RMS {}; saturated {}% of ticks",
+        fig(f.rms_position_error_m, 100.0, 1),
+        fig(f.max_position_error_m, 100.0, 1),
+        fig(f.rms_heading_error_rad, 180.0 / std::f64::consts::PI, 2),
+        fig(f.rms_framing_error, 1.0, 3),
+        fig(f.saturated_fraction, 100.0, 1)
     );
     if r.failsafes + r.faults + r.deadline_misses > 0 {
         let _ = writeln!(
@@ -365,13 +369,13 @@ pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> 
         }
         let _ = writeln!(
             s,
-            "  {:>4}  {:>8.1}  {:>8.1}  {:>8.2}  {:>8}  {:>7.1}  {label}",
+            "  {:>4}  {:>8}  {:>8}  {:>8}  {:>8}  {:>7}  {label}",
             shot.index + 1,
-            f.rms_position_error_m * 100.0,
-            f.max_position_error_m * 100.0,
-            f.rms_heading_error_rad.to_degrees(),
-            framing(f.rms_framing_error),
-            f.saturated_fraction * 100.0
+            fig(f.rms_position_error_m, 100.0, 1),
+            fig(f.max_position_error_m, 100.0, 1),
+            fig(f.rms_heading_error_rad, 180.0 / std::f64::consts::PI, 2),
+            fig(f.rms_framing_error, 1.0, 3),
+            fig(f.saturated_fraction, 100.0, 1)
         );
     }
     s
@@ -379,7 +383,55 @@ pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> 
 
 #[cfg(test)]
 mod tests {
-    use super::civil_from_days;
+    use super::{civil_from_days, render_report};
+    use dronecine_runtime::report::{Figures, FlightReport, ShotReport};
+
+    #[test]
+    fn unmeasured_figures_print_as_dashes() {
+        let measured = Figures {
+            rms_position_error_m: Some(0.0123),
+            max_position_error_m: Some(0.05),
+            rms_heading_error_rad: Some(0.01),
+            rms_framing_error: Some(0.021),
+            saturated_fraction: Some(0.5),
+            measured_ticks: 100,
+        };
+        let blind = Figures {
+            saturated_fraction: Some(0.0),
+            ..Figures::default()
+        };
+        let shot = |index, figures| ShotReport {
+            index,
+            label: format!("shot {index}"),
+            start_s: 0.0,
+            end_s: 1.0,
+            figures,
+        };
+        let r = FlightReport {
+            completed: true,
+            flight_time_s: 10.0,
+            shots_time_s: 2.0,
+            figures: measured.clone(),
+            failsafes: 0,
+            faults: 0,
+            deadline_misses: 0,
+            latency_mean_s: None,
+            latency_max_s: None,
+            shots: vec![shot(0, measured), shot(1, blind)],
+        };
+        let text = render_report(&r, "ardrone2", "lqg");
+        assert!(
+            text.contains(
+                "RMS 1.2 cm, max 5.0 cm; heading error RMS 0.57°; framing error RMS \
+                 0.021; saturated 50.0% of ticks"
+            ),
+            "{text}"
+        );
+        let rows: Vec<&str> = text.lines().filter(|l| l.ends_with("shot 1")).collect();
+        assert_eq!(rows.len(), 1, "{text}");
+        let cells: Vec<&str> = rows[0].split_whitespace().collect();
+        assert_eq!(cells[..6], ["2", "—", "—", "—", "—", "0.0"], "{text}");
+    }
 
     #[test]
     fn civil_dates() {

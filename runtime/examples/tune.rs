@@ -233,11 +233,11 @@ fn run() -> Result<(), String> {
             println!(
                 "{controller} {name:24} RMS {:5.2} cm  max {:5.2} cm  heading {:4.2}°  framing {}  \
                  saturated {:4.1}%{}{}",
-                f.rms_position_error_m * 100.0,
-                f.max_position_error_m * 100.0,
-                f.rms_heading_error_rad.to_degrees(),
+                f.rms_position_error_m.unwrap_or(f64::NAN) * 100.0,
+                f.max_position_error_m.unwrap_or(f64::NAN) * 100.0,
+                f.rms_heading_error_rad.unwrap_or(f64::NAN).to_degrees(),
                 f.rms_framing_error.map_or("  —  ".into(), |x| format!("{x:.3}")),
-                f.saturated_fraction * 100.0,
+                f.saturated_fraction.unwrap_or(f64::NAN) * 100.0,
                 if r.completed { "" } else { "  (not completed)" },
                 demand.report()
             );

@@ -17,15 +17,19 @@ use serde::Serialize;
 use crate::control::{TickFault, TickInput, TickOutput};
 use crate::record::{FramingRecord, Phase};
 
-/// Figures of one shot, or of the whole flight.
+/// Figures of one shot, or of the whole flight. A figure with nothing to average is `None`
+/// (JSON null), never a zero that would read as perfect tracking.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Figures {
-    pub rms_position_error_m: f64,
-    pub max_position_error_m: f64,
-    pub rms_heading_error_rad: f64,
-    /// `None` (JSON null) when there was no hold.
+    /// `None` when no tick was measured (`measured_ticks` is 0: the drone's body was lost
+    /// for the whole shot).
+    pub rms_position_error_m: Option<f64>,
+    pub max_position_error_m: Option<f64>,
+    pub rms_heading_error_rad: Option<f64>,
+    /// `None` when there was no hold.
     pub rms_framing_error: Option<f64>,
-    pub saturated_fraction: f64,
+    /// `None` when no tick of the shots was flown.
+    pub saturated_fraction: Option<f64>,
     /// Ticks with a measurement.
     pub measured_ticks: u64,
 }
@@ -78,17 +82,14 @@ struct Accum {
 
 impl Accum {
     fn figures(&self) -> Figures {
-        let rms = |s: f64, n: u64| if n == 0 { 0.0 } else { (s / n as f64).sqrt() };
+        let rms = |s: f64, n: u64| (n > 0).then(|| (s / n as f64).sqrt());
         Figures {
             rms_position_error_m: rms(self.sq_pos, self.n),
-            max_position_error_m: self.max_pos,
+            max_position_error_m: (self.n > 0).then_some(self.max_pos),
             rms_heading_error_rad: rms(self.sq_heading, self.n),
-            rms_framing_error: (self.framing_n > 0).then(|| rms(self.sq_framing, self.framing_n)),
-            saturated_fraction: if self.controlled == 0 {
-                0.0
-            } else {
-                self.saturated as f64 / self.controlled as f64
-            },
+            rms_framing_error: rms(self.sq_framing, self.framing_n),
+            saturated_fraction: (self.controlled > 0)
+                .then(|| self.saturated as f64 / self.controlled as f64),
             measured_ticks: self.n,
         }
     }
@@ -314,15 +315,79 @@ mod tests {
         );
         let r = m.report(&["a".into(), "b".into()], Counts::default());
         let rms = ((0.09 + 0.16 + 0.0) / 3.0f64).sqrt();
-        assert!((r.figures.rms_position_error_m - rms).abs() < 1e-12);
-        assert!((r.figures.max_position_error_m - 0.4).abs() < 1e-12);
+        let near = |x: Option<f64>, want: f64, tol: f64| x.is_some_and(|x| (x - want).abs() < tol);
+        assert!(near(r.figures.rms_position_error_m, rms, 1e-12));
+        assert!(near(r.figures.max_position_error_m, 0.4, 1e-12));
         assert_eq!(r.figures.measured_ticks, 3);
-        assert!((r.figures.saturated_fraction - 0.25).abs() < 1e-12);
+        assert!(near(r.figures.saturated_fraction, 0.25, 1e-12));
         let h = 6.2 - 2.0 * std::f64::consts::PI;
-        assert!((r.shots[1].figures.rms_heading_error_rad - h.abs()).abs() < 1e-9);
-        assert!((r.shots[0].figures.max_position_error_m - 0.4).abs() < 1e-12);
+        assert!(near(
+            r.shots[1].figures.rms_heading_error_rad,
+            h.abs(),
+            1e-9
+        ));
+        assert!(near(r.shots[0].figures.max_position_error_m, 0.4, 1e-12));
         assert_eq!((r.shots[1].start_s, r.shots[1].end_s), (2.0, 2.01));
         assert_eq!(r.figures.rms_framing_error, None);
+    }
+
+    #[test]
+    fn a_shot_never_measured_has_null_errors_not_zero() {
+        // Shot 0 measured, shot 1 flown blind (its body lost throughout).
+        let mut m = Metrics::new(2);
+        let ok = Ok(TickOutput::default());
+        m.record(
+            Phase::Shots,
+            Some(0),
+            &input(1.0, 0.3, 0.1, true),
+            &ok,
+            &[],
+            None,
+        );
+        for k in 0..3 {
+            let t = 2.0 + 0.01 * k as f64;
+            m.record(
+                Phase::Shots,
+                Some(1),
+                &input(t, 0.0, 0.0, false),
+                &ok,
+                &[],
+                None,
+            );
+        }
+        let r = m.report(&["a".into(), "b".into()], Counts::default());
+        let blind = &r.shots[1].figures;
+        assert_eq!(blind.measured_ticks, 0);
+        assert_eq!(
+            (
+                blind.rms_position_error_m,
+                blind.max_position_error_m,
+                blind.rms_heading_error_rad
+            ),
+            (None, None, None)
+        );
+        // Flown, so its saturation is known.
+        assert_eq!(blind.saturated_fraction, Some(0.0));
+        // The flight's figures come from the measured tick alone.
+        assert_eq!(r.figures.measured_ticks, 1);
+        assert!(r
+            .figures
+            .rms_position_error_m
+            .is_some_and(|e| (e - 0.3).abs() < 1e-12));
+        let json = serde_json::to_value(&r).unwrap();
+        let shot = &json["shots"][1];
+        for key in [
+            "rms_position_error_m",
+            "max_position_error_m",
+            "rms_heading_error_rad",
+        ] {
+            assert!(shot[key].is_null(), "{key}: {}", shot[key]);
+        }
+        assert!(json["rms_position_error_m"].is_number());
+        // Nothing flown: nothing to average, not even the saturation.
+        let r = Metrics::new(1).report(&["a".into()], Counts::default());
+        assert_eq!(r.figures, Figures::default());
+        assert_eq!(r.figures.saturated_fraction, None);
     }
 
     #[test]

@@ -204,7 +204,10 @@ fn square_rms_m(servo: &Profile, seed: u64) -> f64 {
     };
     let report = fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap();
     assert!(report.completed);
-    report.figures.rms_position_error_m
+    report
+        .figures
+        .rms_position_error_m
+        .expect("the shots were measured")
 }
 
 #[test]
