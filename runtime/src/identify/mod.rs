@@ -565,7 +565,8 @@ fn mean_heading(seg: &[Sample]) -> Option<(f64, f64)> {
         return None;
     }
     let (s, c) = hs.iter().fold((0.0, 0.0), |(s, c), &h| {
-        (s + math::sin(h), c + math::cos(h))
+        let (sin, cos) = math::sin_cos(h);
+        (s + sin, c + cos)
     });
     let mean = math::atan2(s, c);
     let span = hs
