@@ -188,27 +188,10 @@ pub mod json {
             f64(out, x);
             return;
         }
-        let n = super::round_half_away(scaled);
         // Sign, up to 16 integer digits, the point and up to 9 decimals.
         let mut buf = [0u8; 32];
-        let mut len = 0;
-        if n < 0 {
-            buf[0] = b'-';
-            len = 1;
-        }
-        let n = n.unsigned_abs();
-        let (mut int, mut frac) = (n / POW10[d], n % POW10[d]);
-        let mut digits = 1;
-        let mut p = 10;
-        while digits < 16 && int >= p {
-            digits += 1;
-            p *= 10;
-        }
-        for i in (len..len + digits).rev() {
-            buf[i] = b'0' + (int % 10) as u8;
-            int /= 10;
-        }
-        len += digits;
+        let (mut len, mut frac) =
+            sign_and_integer(&mut buf, super::round_half_away(scaled), POW10[d], 16);
         if frac != 0 {
             buf[len] = b'.';
             for i in (len + 1..=len + d).rev() {
@@ -223,6 +206,31 @@ pub mod json {
         let start = out.len();
         out.extend_from_slice(&buf);
         out.truncate(start + len);
+    }
+
+    /// Writes the sign of `n` (when negative) and the integer part of `|n| / scale` (at most
+    /// `max_digits` digits) from the start of `buf`; returns the length written and the
+    /// remainder `|n| % scale`, the decimals still to write. [`fixed`] and [`micro`] share it.
+    #[inline(always)]
+    fn sign_and_integer(buf: &mut [u8; 32], n: i64, scale: u64, max_digits: usize) -> (usize, u64) {
+        let mut len = 0;
+        if n < 0 {
+            buf[0] = b'-';
+            len = 1;
+        }
+        let n = n.unsigned_abs();
+        let (mut int, frac) = (n / scale, n % scale);
+        let mut digits = 1;
+        let mut p = 10;
+        while digits < max_digits && int >= p {
+            digits += 1;
+            p *= 10;
+        }
+        for i in (len..len + digits).rev() {
+            buf[i] = b'0' + (int % 10) as u8;
+            int /= 10;
+        }
+        (len + digits, frac)
     }
 
     /// Two-digit pairs `00`…`99`.
@@ -248,28 +256,11 @@ pub mod json {
             f64(out, x);
             return;
         }
-        let n = super::round_half_away(scaled);
         // Sign, up to 10 integer digits, the point and 6 decimals.
-        let mut buf = [0u8; 24];
-        let mut len = 0;
-        if n < 0 {
-            buf[0] = b'-';
-            len = 1;
-        }
-        let n = n.unsigned_abs();
-        let mut int = n / 1_000_000;
-        let frac = (n % 1_000_000) as usize;
-        let mut digits = 1;
-        let mut p = 10;
-        while digits < 10 && int >= p {
-            digits += 1;
-            p *= 10;
-        }
-        for i in (len..len + digits).rev() {
-            buf[i] = b'0' + (int % 10) as u8;
-            int /= 10;
-        }
-        len += digits;
+        let mut buf = [0u8; 32];
+        let (mut len, frac) =
+            sign_and_integer(&mut buf, super::round_half_away(scaled), 1_000_000, 10);
+        let frac = frac as usize;
         if frac != 0 {
             let (hi, rest) = (frac / 10_000, frac % 10_000);
             let (mid, lo) = (rest / 100, rest % 100);
