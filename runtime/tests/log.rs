@@ -946,3 +946,62 @@ fn a_short_compressed_log_reads_whole() {
     assert!(!log.truncated, "{:?}", log.damage);
     assert_eq!(log.ticks.len(), ticks.len());
 }
+
+/// The log's writer and syncer lower their own priority (nice +10, clamped at 19) so that the
+/// loop comes first when every core is busy; the loop's thread keeps its own.
+#[cfg(target_os = "linux")]
+#[test]
+fn the_log_threads_yield_to_the_loop() {
+    // Field 19 of a task's `stat` (the 17th after the command name's closing parenthesis).
+    fn nice(stat_path: &Path) -> Option<i64> {
+        let stat = std::fs::read_to_string(stat_path).ok()?;
+        stat.get(stat.rfind(')')? + 2..)?
+            .split_whitespace()
+            .nth(16)?
+            .parse()
+            .ok()
+    }
+    /// The nice values of this process's log threads (other tests' included), by name.
+    fn log_threads() -> Vec<(String, i64)> {
+        let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+            return Vec::new();
+        };
+        tasks
+            .flatten()
+            .filter_map(|t| {
+                let comm = std::fs::read_to_string(t.path().join("comm")).ok()?;
+                let comm = comm.trim().to_string();
+                comm.starts_with("flight-log")
+                    .then(|| Some((comm, nice(&t.path().join("stat"))?)))?
+            })
+            .collect()
+    }
+    let own = nice(Path::new("/proc/thread-self/stat")).expect("this thread's nice value");
+    let expected = (own + 10).min(19);
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let w = FlightLogWriter::create(&dir.path().join("nice.mcap"), &header(), &scene_of(&names))
+        .unwrap();
+    let sink = LogThread::spawn(w, 100.0).unwrap();
+    // Each thread lowers its priority as it starts: wait for it (and for any other test's).
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+    let threads = loop {
+        let threads = log_threads();
+        let names: BTreeSet<&str> = threads.iter().map(|(n, _)| n.as_str()).collect();
+        let both = names.contains("flight-log") && names.contains("flight-log-sync");
+        if both && threads.iter().all(|&(_, n)| n == expected) {
+            break threads;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "log threads {threads:?}, expected nice {expected} (this thread's {own})"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    assert_eq!(
+        nice(Path::new("/proc/thread-self/stat")),
+        Some(own),
+        "the loop's thread keeps its priority ({threads:?})"
+    );
+    sink.finish().unwrap();
+}

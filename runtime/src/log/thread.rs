@@ -26,6 +26,9 @@
 //! 0.60 s (0.91 s against 0.74 s when the bench still truncated the previous hour's file),
 //! the dirty pages piling up until the kernel throttles the writer.
 //!
+//! Both threads lower their own scheduling priority ([`LOG_NICE`]): the loop comes first
+//! when the machine's cores are all busy.
+//!
 //! What a crash may lose: a batch is handed over every [`BATCH_PERIOD_S`] of flight time and
 //! the writer, polling, takes it up within [`POLL_MAX_S`] and closes a chunk every
 //! `flush_period_s` (the caller's [`LogOptions`]), so a process that dies loses at most
@@ -70,6 +73,12 @@ const POLL_MIN: Duration = Duration::from_micros(100);
 /// …doubled while none comes, up to this: how long a full batch may wait for the writer.
 pub const POLL_MAX_S: f64 = 0.02;
 const POLL_MAX: Duration = Duration::from_micros((POLL_MAX_S * 1e6) as u64);
+/// How much the log's threads lower their priority (nice value, Linux): when a third thread
+/// (the syncer, the kernel's writeback) wants a core, the scheduler takes it from them rather
+/// than from the loop. Measured on the hour's flight with its log (30 interleaved runs each):
+/// median 0.482 → 0.464 s, mean 0.486 → 0.463 s. On set it keeps a slow disk's writer from
+/// delaying a tick.
+const LOG_NICE: i32 = 10;
 /// How long the loop sleeps between looks for an emptied batch when the writer holds them
 /// all (it has fallen [`BATCHES`] behind).
 const WAIT_FOR_BATCH: Duration = Duration::from_micros(50);
@@ -271,6 +280,7 @@ impl LogThread {
             std::thread::Builder::new()
                 .name("flight-log-sync".into())
                 .spawn(move || {
+                    yield_to_the_loop();
                     while rx.recv().is_ok() {
                         let _ = file.sync_data();
                     }
@@ -280,7 +290,10 @@ impl LogThread {
         });
         let handle = std::thread::Builder::new()
             .name("flight-log".into())
-            .spawn(move || write_batches(writer, full_rx, empty_tx, err_tx))?;
+            .spawn(move || {
+                yield_to_the_loop();
+                write_batches(writer, full_rx, empty_tx, err_tx)
+            })?;
         Ok(LogThread {
             full: Some(full_tx),
             empty: empty_rx,
@@ -453,6 +466,20 @@ fn write_batches(
         return Err(io::Error::other("the flight log could not be written"));
     }
     writer.finish()
+}
+
+/// Lowers the calling thread's scheduling priority by [`LOG_NICE`], so that when the loop,
+/// the writer, the syncer and the kernel's writeback want more cores than there are, the
+/// loop keeps its own. Best effort (a failure leaves the priority as it was), on Linux only,
+/// where the nice value belongs to the thread (elsewhere it is the whole process's, the
+/// loop's included).
+fn yield_to_the_loop() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: `nice` only changes the calling thread's scheduling weight (a thread attribute
+    // on Linux); it touches no memory of the program. Raising it needs no privilege.
+    unsafe {
+        libc::nice(LOG_NICE);
+    }
 }
 
 fn write_batch(writer: &mut FlightLogWriter, batch: &Batch) -> io::Result<()> {
