@@ -163,7 +163,7 @@ pub mod json {
     /// written in their shortest round-trip form.
     ///
     /// As [`micro`]: the text is built in a stack buffer and appended with one fixed-size
-    /// copy, then cut to length. A flight log writes about 1.3 million of these an hour
+    /// copy, then cut to length. A flight log writes about 6.6 million of these an hour
     /// (`/tf`); formatting through `itoa`, with its copies, took twice the instructions.
     /// Always inlined: a constant `decimals` folds the divisions into multiplications.
     #[inline(always)]
@@ -402,7 +402,7 @@ mod tests {
             f64::INFINITY,
         ];
         for _ in 0..50_000 {
-            // Magnitudes from 1e-9 to 1e15, both signs.
+            // Magnitudes from about 1e-10 to 1e14, both signs.
             x = (x * 1.618_033_988_749_895).fract();
             let e = (x * 24.0) as i32 - 9;
             let v = x * 10f64.powi(e);
