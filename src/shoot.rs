@@ -14,7 +14,7 @@ use dronecine_grammar::diag;
 use dronecine_runtime::flight::{Observer, Progress};
 use dronecine_runtime::log::{self, FlightLogWriter, LogOptions, LogScene, LogThread};
 use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase};
-use dronecine_runtime::report::FlightReport;
+use dronecine_runtime::report::{Figures, FlightReport};
 use dronecine_runtime::session::{self, HardwareFlight, SimFlight};
 use dronecine_runtime::sim::{Effects, SimConfig};
 
@@ -325,9 +325,21 @@ impl Observer for Display {
 pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    // A figure with nothing to average (no measured tick, no hold) prints as a dash.
-    let fig = |x: Option<f64>, scale: f64, decimals: usize| {
-        x.map_or("—".to_string(), |x| format!("{:.decimals$}", x * scale))
+    // The five figures as printed: RMS and max position error in cm, RMS heading error in
+    // degrees, RMS framing error, saturation in %; one with nothing to average (no measured
+    // tick, no hold) as a dash.
+    let cells = |f: &Figures| {
+        let fig = |x: Option<f64>, decimals: usize| {
+            x.map_or("—".to_string(), |x| format!("{x:.decimals$}"))
+        };
+        let cm = |x: Option<f64>| x.map(|m| m * 100.0);
+        [
+            fig(cm(f.rms_position_error_m), 1),
+            fig(cm(f.max_position_error_m), 1),
+            fig(f.rms_heading_error_rad.map(f64::to_degrees), 2),
+            fig(f.rms_framing_error, 3),
+            fig(f.saturated_fraction.map(|x| x * 100.0), 1),
+        ]
     };
     let _ = writeln!(
         s,
@@ -338,16 +350,11 @@ pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> 
         r.flight_time_s,
         r.shots_time_s
     );
-    let f = &r.figures;
+    let [rms, max, heading, framing, saturated] = cells(&r.figures);
     let _ = writeln!(
         s,
-        "  position error  RMS {} cm, max {} cm; heading error RMS {}°; framing error \
-         RMS {}; saturated {}% of ticks",
-        fig(f.rms_position_error_m, 100.0, 1),
-        fig(f.max_position_error_m, 100.0, 1),
-        fig(f.rms_heading_error_rad, 180.0 / std::f64::consts::PI, 2),
-        fig(f.rms_framing_error, 1.0, 3),
-        fig(f.saturated_fraction, 100.0, 1)
+        "  position error  RMS {rms} cm, max {max} cm; heading error RMS {heading}°; framing \
+         error RMS {framing}; saturated {saturated}% of ticks"
     );
     if r.failsafes + r.faults + r.deadline_misses > 0 {
         let _ = writeln!(
@@ -362,20 +369,15 @@ pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> 
         "#", "RMS cm", "max cm", "head °", "framing", "sat %"
     );
     for shot in &r.shots {
-        let f = &shot.figures;
         let mut label = shot.label.clone();
         if label.chars().count() > 60 {
             label = label.chars().take(59).collect::<String>() + "…";
         }
+        let [rms, max, heading, framing, saturated] = cells(&shot.figures);
         let _ = writeln!(
             s,
-            "  {:>4}  {:>8}  {:>8}  {:>8}  {:>8}  {:>7}  {label}",
+            "  {:>4}  {rms:>8}  {max:>8}  {heading:>8}  {framing:>8}  {saturated:>7}  {label}",
             shot.index + 1,
-            fig(f.rms_position_error_m, 100.0, 1),
-            fig(f.max_position_error_m, 100.0, 1),
-            fig(f.rms_heading_error_rad, 180.0 / std::f64::consts::PI, 2),
-            fig(f.rms_framing_error, 1.0, 3),
-            fig(f.saturated_fraction, 100.0, 1)
         );
     }
     s
