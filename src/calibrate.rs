@@ -317,7 +317,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
         Ok(t) => t,
         Err(e) => return fail(e),
     };
-    let prior = match crate::compile::profile_arg(&a.profile, color) {
+    let prior = match crate::compile::profile_arg("--profile", &a.profile, color) {
         Ok(p) => p,
         Err(c) => return c,
     };
@@ -331,7 +331,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
     let (backends, note) = match &target {
         None => {
             let plant = match &a.plant {
-                Some(name) => match crate::compile::profile_arg(name, color) {
+                Some(name) => match crate::compile::profile_arg("--plant", name, color) {
                     Ok(p) => p,
                     Err(c) => return c,
                 },
@@ -434,7 +434,7 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
         }
     };
     let prev = match &a.profile {
-        Some(name) => match crate::compile::profile_arg(name, color) {
+        Some(name) => match crate::compile::profile_arg("--profile", name, color) {
             Ok(p) => p,
             Err(c) => return c,
         },

@@ -83,11 +83,15 @@ pub fn load_profile(
     }
 }
 
-/// The profile named or pointed at by `--profile`, through the compiler's loader (which
-/// renders profile errors as diagnostics).
-pub fn profile_arg(arg: &str, color: bool) -> Result<Profile, ExitCode> {
+/// The profile named or pointed at by `option` (`--profile`, `--plant`), through the
+/// compiler's loader (which renders profile errors as diagnostics). A name that is neither
+/// built in nor a file is refused with the built-in names and the closest of them.
+pub fn profile_arg(option: &str, arg: &str, color: bool) -> Result<Profile, ExitCode> {
     let is_file =
         Profile::builtin(arg).is_none() && (arg.ends_with(".toml") || Path::new(arg).exists());
+    if !is_file && Profile::builtin(arg).is_none() {
+        return Err(fail(unknown_profile(option, arg)));
+    }
     let drone = if is_file {
         DroneRef::File {
             path: arg.to_string(),
@@ -104,7 +108,29 @@ pub fn profile_arg(arg: &str, color: bool) -> Result<Profile, ExitCode> {
         actors: Vec::new(),
         blocking: Vec::new(),
     };
-    load_profile(&scene, Path::new(""), "--profile", arg, color)
+    load_profile(&scene, Path::new(""), option, arg, color)
+}
+
+/// The message for `option NAME` that names no built-in profile and no file: the closest
+/// built-in names, all of them, and how to give a file instead.
+fn unknown_profile(option: &str, name: &str) -> String {
+    use dronecine_compiler::profile::BUILTIN_NAMES;
+    use dronecine_grammar::suggest;
+    let list = suggest::or_list(BUILTIN_NAMES);
+    let help = match suggest::did_you_mean(name, BUILTIN_NAMES.iter().copied()) {
+        Some(guess) => format!(
+            "{guess} (built-in profiles: {list}; or give a profile's TOML file: \
+             `{option} mine.toml`)"
+        ),
+        None => format!(
+            "built-in profiles are {list}; for your own, give its TOML file: \
+             `{option} profiles/mine.toml`"
+        ),
+    };
+    format!(
+        "{option} `{}` is not a built-in drone profile, nor a file\n  help: {help}",
+        suggest::shorten(name)
+    )
 }
 
 /// A script that checks clean, has a scene, and names a drone profile that loads: what

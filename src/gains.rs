@@ -71,7 +71,7 @@ fn numbers<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], String> {
 }
 
 pub fn run(a: &Args, color: bool) -> ExitCode {
-    let mut p = match crate::compile::profile_arg(&a.profile, color) {
+    let mut p = match crate::compile::profile_arg("--profile", &a.profile, color) {
         Ok(p) => p,
         Err(code) => return code,
     };

@@ -14,8 +14,8 @@ pub struct Target {
 }
 
 /// `None` without `--drone` and `--mocap` (the command flies the simulator); the error
-/// message (without `error: `) when only one is given, a URL is malformed or the rig file
-/// is bad. `actors`: the scene's actor names in order (`None` for a command that flies no
+/// message (without `error: `) when only one is given, when `--rig` comes without them, a
+/// URL is malformed or the rig file is bad. `actors`: the scene's actor names in order (`None` for a command that flies no
 /// scene), numbered 2, 3, … when there is no rig file.
 pub fn target(
     command: &str,
@@ -25,7 +25,16 @@ pub fn target(
     actors: Option<&[&str]>,
 ) -> Result<Option<Target>, String> {
     match (drone, mocap) {
-        (None, None) => Ok(None),
+        (None, None) => match rig {
+            // A rig file without the hardware it describes is a forgotten --drone/--mocap,
+            // not something to ignore: the flight would silently be simulated.
+            Some(path) => Err(format!(
+                "--rig {} needs --drone and --mocap: it names a real flight's rigid bodies \
+                 (without both, {command} flies the simulator)",
+                path.display()
+            )),
+            None => Ok(None),
+        },
         (Some(d), Some(m)) => {
             let drone = ArDroneUrl::parse(d).map_err(|e| format!("--drone: {e}"))?;
             let mocap = NatNetUrl::parse(m).map_err(|e| format!("--mocap: {e}"))?;

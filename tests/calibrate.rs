@@ -292,7 +292,7 @@ fn hardware_arguments_are_checked_before_any_flight() {
     let out = out_file.to_str().unwrap();
     // Nothing listens at these addresses: each error must come before any connection.
     let (drone, mocap) = ("ardrone://127.0.0.1:9:9", "natnet://127.0.0.1:9?unicast");
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 8] = [
         (
             &["--drone", drone],
             "--drone needs --mocap: the servo flies on motion-capture positions",
@@ -322,6 +322,16 @@ fn hardware_arguments_are_checked_before_any_flight() {
                 "/nonexistent/rig.toml",
             ],
             "cannot read the rig file",
+        ),
+        (
+            &["--rig", "rig.toml"],
+            "--rig rig.toml needs --drone and --mocap: it names a real flight's rigid bodies \
+             (without both, calibrate flies the simulator)",
+        ),
+        (
+            &["--plant", "ardron"],
+            "--plant `ardron` is not a built-in drone profile, nor a file\n  help: did you mean \
+             `ardrone2`?",
         ),
     ];
     for (args, want) in cases {

@@ -175,8 +175,20 @@ fn bad_weights_fail_with_exit_code_1() {
 fn unknown_profiles_fail_with_exit_code_1() {
     let o = dronecine(&["gains", "--profile", "ardrone3"]);
     assert_eq!(o.status.code(), Some(1));
+    // The fix comes with the error: the closest name, every built-in one, and the file form.
+    for part in [
+        "--profile `ardrone3` is not a built-in drone profile, nor a file",
+        "did you mean `ardrone2`?",
+        "`ardrone2` or `ardrone2-outdoor`",
+        "`--profile mine.toml`",
+    ] {
+        assert!(stderr(&o).contains(part), "{part}: {}", stderr(&o));
+    }
+    let o = dronecine(&["gains", "--profile", "zz"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!stderr(&o).contains("did you mean"), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("not a built-in drone profile"),
+        stderr(&o).contains("built-in profiles are `ardrone2` or `ardrone2-outdoor`"),
         "{}",
         stderr(&o)
     );

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{dronecine, stderr, temp_dir};
+use common::{dronecine, stderr, stdout, temp_dir};
 
 use std::process::{Command, Output};
 
@@ -160,6 +160,15 @@ fn bad_input_is_a_clear_error() {
         "{}",
         stderr(&o)
     );
+    // A rig file without the drone it describes: refused, not a silently simulated flight.
+    let o = dronecine(&["shoot", "shots/square.psl", "--rig", "rig.toml", "-q"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("--rig rig.toml needs --drone and --mocap"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!stdout(&o).contains("flight log"), "{}", stdout(&o));
     let o = dronecine(&[
         "shoot",
         "shots/square.psl",
