@@ -433,6 +433,11 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
             ))
         }
     };
+    // The fit uses what could be read; its segments never span a gap (identify splits them
+    // where ticks are missing).
+    for line in crate::replay::damage_warnings(&a.log, &log) {
+        eprintln!("{line}");
+    }
     let prev = match &a.profile {
         Some(name) => match crate::compile::profile_arg("--profile", name, color) {
             Ok(p) => p,

@@ -18,12 +18,8 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    if log.truncated {
-        eprintln!(
-            "warning: `{}` ends early (the flight was cut short); replaying the {} ticks it holds",
-            file.display(),
-            log.ticks.len()
-        );
+    for line in damage_warnings(file, &log) {
+        eprintln!("{line}");
     }
     let r = match replay::replay(&log) {
         Ok(r) => r,
@@ -35,6 +31,14 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
     if json {
         let value = serde_json::json!({
             "ticks": r.ticks,
+            "unreplayed": r.unreplayed,
+            "damage": log.damage.iter().map(|d| serde_json::json!({
+                "offset": d.offset,
+                "detail": d.detail,
+                "cut": d.cut,
+                "tick": d.tick,
+                "resumed_at": d.resumed_at,
+            })).collect::<Vec<_>>(),
             "mismatches": r.mismatches,
             "report": r.report,
         });
@@ -43,16 +47,42 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             serde_json::to_string_pretty(&value).unwrap_or_default()
         );
     } else {
+        // A log cut before the flight's end does not say how the flight ended.
+        let ended = log.events.iter().any(|e| e.kind == "flight_end");
+        let status = match (ended, r.report.completed) {
+            (false, _) => "unfinished log of a",
+            (true, true) => "completed",
+            (true, false) => "ABORTED",
+        };
         print!(
             "{}",
-            crate::shoot::render_report(
+            crate::shoot::render_report_as(
                 &r.report,
+                status,
                 &log.header.profile_name,
                 &log.header.controller.kind
             )
         );
     }
     match &r.first_mismatch {
+        None if r.unreplayed > 0 => {
+            let at = log
+                .ticks
+                .get(r.ticks)
+                .map(|t| t.input.t_s)
+                .unwrap_or(f64::NAN);
+            eprintln!(
+                "replay: {} controller ticks reproduce the logged commands exactly ({} {})",
+                r.ticks, log.header.controller.kind, log.header.profile_name
+            );
+            eprintln!(
+                "error: the {} ticks after the damage (from t = {at:.3} s) are in the report but \
+                 were not replayed: the controller's state after a gap depends on the ticks lost \
+                 in it",
+                r.unreplayed
+            );
+            ExitCode::FAILURE
+        }
         None => {
             eprintln!(
                 "replay: {} controller ticks reproduce the logged commands exactly ({} {})",
@@ -69,4 +99,45 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// One warning line per stretch of `log` the reader skipped and one for a log that ends
+/// early: where, why, and what it costs (shared by `replay` and `identify`).
+pub fn damage_warnings(file: &Path, log: &FlightLog) -> Vec<String> {
+    let name = file.display();
+    let t = |k: usize| log.ticks.get(k).map(|t| t.input.t_s);
+    log.damage
+        .iter()
+        .map(|d| match d.resumed_at {
+            Some(resumed) => {
+                let lost = match (d.tick.checked_sub(1).and_then(t), t(d.tick)) {
+                    (Some(a), Some(b)) => format!("the ticks between t = {a:.3} s and {b:.3} s"),
+                    (None, Some(b)) => format!("the ticks before t = {b:.3} s"),
+                    (Some(a), None) => format!("the ticks after t = {a:.3} s"),
+                    (None, None) => "no tick".to_string(),
+                };
+                format!(
+                    "warning: `{name}` is damaged at byte {} ({}): skipped {} bytes to the next \
+                     intact chunk, at byte {resumed}; {lost} are lost",
+                    d.offset,
+                    d.detail,
+                    resumed - d.offset
+                )
+            }
+            None if d.cut => format!(
+                "warning: `{name}` ends early, at byte {} ({}): the flight was cut short, or the \
+                 copy did not finish; read {} ticks",
+                d.offset,
+                d.detail,
+                log.ticks.len()
+            ),
+            None => format!(
+                "warning: `{name}` is damaged from byte {} on ({}), with no intact chunk after \
+                 it; read {} ticks",
+                d.offset,
+                d.detail,
+                log.ticks.len()
+            ),
+        })
+        .collect()
 }

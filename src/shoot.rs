@@ -322,7 +322,20 @@ impl Observer for Display {
     }
 }
 
+/// The report as `shoot` prints it, headed "completed" or "ABORTED".
 pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> String {
+    let status = if r.completed { "completed" } else { "ABORTED" };
+    render_report_as(r, status, profile_name, controller)
+}
+
+/// The report headed by `status` (`replay` of a log that ends before the flight did says
+/// so instead of "ABORTED").
+pub fn render_report_as(
+    r: &FlightReport,
+    status: &str,
+    profile_name: &str,
+    controller: &str,
+) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     // The five figures as printed: RMS and max position error in cm, RMS heading error in
@@ -343,12 +356,8 @@ pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> 
     };
     let _ = writeln!(
         s,
-        "{} flight with {} ({}): {:.1} s in the air, {:.1} s of shots",
-        if r.completed { "completed" } else { "ABORTED" },
-        profile_name,
-        controller,
-        r.flight_time_s,
-        r.shots_time_s
+        "{status} flight with {} ({}): {:.1} s in the air, {:.1} s of shots",
+        profile_name, controller, r.flight_time_s, r.shots_time_s
     );
     let [rms, max, heading, framing, saturated] = cells(&r.figures);
     let _ = writeln!(

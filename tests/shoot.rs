@@ -61,7 +61,37 @@ fn shoot_reports_json_logs_the_flight_and_replay_reproduces_it() {
     assert!(stderr(&o).contains("reproduce the logged commands exactly"));
     let replayed = report(&o);
     assert_eq!(replayed["mismatches"], 0);
+    assert_eq!(replayed["unreplayed"], 0);
     assert_eq!(replayed["report"], r, "replay gives the flight's report");
+
+    // One flipped bit in a chunk in the middle: the rest of the log is still read, the
+    // damage named, the replay stops at it and says so (exit 1: not all of it was checked).
+    let mut bytes = std::fs::read(&log).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let c = &summary.chunk_indexes[summary.chunk_indexes.len() / 2];
+    bytes[(c.chunk_start_offset + c.chunk_length / 2) as usize] ^= 0x04;
+    let damaged = dir.join("damaged.mcap");
+    std::fs::write(&damaged, &bytes).unwrap();
+    let o = dronecine(&["replay", damaged.to_str().unwrap(), "--report", "json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    let offset = c.chunk_start_offset;
+    assert!(
+        err.contains(&format!(
+            "is damaged at byte {offset} (a chunk whose CRC does not match"
+        )),
+        "{err}"
+    );
+    assert!(err.contains("intact chunk, at byte"), "{err}");
+    assert!(err.contains("were not replayed"), "{err}");
+    let replayed = report(&o);
+    assert_eq!(replayed["mismatches"], 0);
+    assert!(replayed["unreplayed"].as_u64().unwrap() > 0, "{replayed}");
+    assert_eq!(replayed["damage"][0]["offset"], offset);
+    assert_eq!(
+        replayed["report"]["completed"], true,
+        "read past the damage"
+    );
 }
 
 #[test]

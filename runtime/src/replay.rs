@@ -4,6 +4,10 @@
 //!
 //! The replay rule of `flight.rs`: the controller is reset once, with the first logged tick's
 //! measurement at `t_s − dt_s`, then given every logged tick in order.
+//!
+//! A log the reader had to skip damage in ([`FlightLog::first_gap`]) is replayed up to the
+//! gap only: the controller's state after it depends on the ticks that were lost. The ticks
+//! after it still count in the report (nothing that was read is dropped).
 
 use crate::control::{TickFault, TickOutput};
 use crate::frames::Command;
@@ -35,7 +39,10 @@ pub struct Mismatch {
 
 #[derive(Clone, Debug)]
 pub struct Replay {
+    /// Ticks the controller re-ran.
     pub ticks: usize,
+    /// Ticks after a gap in the log, in the report but not re-run (0 for an intact log).
+    pub unreplayed: usize,
     pub mismatches: usize,
     pub first_mismatch: Option<Mismatch>,
     pub report: FlightReport,
@@ -62,27 +69,30 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
     let mut metrics = Metrics::new(0);
     let (mut mismatches, mut first_mismatch) = (0usize, None);
     let mut started = false;
+    let replayable = log.first_gap().unwrap_or(log.ticks.len());
     for (k, tick) in log.ticks.iter().enumerate() {
-        if !started {
-            let Some(m) = tick.input.measurement else {
-                return Err(format!(
-                    "the log's first controller tick (t = {:.3} s) has no measurement; \
-                     it was not written by this dronecine",
-                    tick.input.t_s
-                ));
-            };
-            controller.reset(tick.input.t_s - tick.input.dt_s, &m);
-            started = true;
-        }
-        let replayed = controller.tick(&tick.input);
-        if !same_output(&replayed, &tick.output) {
-            mismatches += 1;
-            first_mismatch.get_or_insert(Mismatch {
-                tick: k,
-                t_s: tick.input.t_s,
-                logged: tick.output,
-                replayed,
-            });
+        if k < replayable {
+            if !started {
+                let Some(m) = tick.input.measurement else {
+                    return Err(format!(
+                        "the log's first controller tick (t = {:.3} s) has no measurement; \
+                         it was not written by this dronecine",
+                        tick.input.t_s
+                    ));
+                };
+                controller.reset(tick.input.t_s - tick.input.dt_s, &m);
+                started = true;
+            }
+            let replayed = controller.tick(&tick.input);
+            if !same_output(&replayed, &tick.output) {
+                mismatches += 1;
+                first_mismatch.get_or_insert(Mismatch {
+                    tick: k,
+                    t_s: tick.input.t_s,
+                    logged: tick.output,
+                    replayed,
+                });
+            }
         }
         metrics.record(
             tick.phase,
@@ -100,6 +110,8 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
         completed: end.is_some_and(|e| e.message.starts_with("completed")),
         flight_time_s: match (time_of("take_off"), end) {
             (Some(a), Some(b)) => b.t_s - a,
+            // A log cut before the flight's end: in the air as far as it goes.
+            (Some(a), None) => log.ticks.last().map_or(0.0, |t| (t.input.t_s - a).max(0.0)),
             _ => 0.0,
         },
         failsafes: count("failsafe"),
@@ -107,7 +119,8 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
         deadline_misses: count("deadline_missed"),
     };
     Ok(Replay {
-        ticks: log.ticks.len(),
+        ticks: replayable,
+        unreplayed: log.ticks.len() - replayable,
         mismatches,
         first_mismatch,
         report: metrics.report(&labels(&log.header.script_text), counts),

@@ -645,7 +645,10 @@ fn a_crash_loses_at_most_the_last_second() {
 
         let log = FlightLog::open(&path).unwrap();
         assert!(log.truncated, "{n} ticks");
-        assert!(log.damage.is_some());
+        assert_eq!(log.damage.len(), 1, "{:?}", log.damage);
+        assert_eq!(log.damage[0].resumed_at, None);
+        assert!(log.damage[0].cut, "{:?}", log.damage);
+        assert_eq!(log.first_gap(), None);
         assert_eq!(log.header, header());
         let recovered = log.ticks.len();
         let must = ticks
@@ -700,7 +703,8 @@ proptest! {
         }
     }
 
-    /// Flipped bytes never panic the reader either.
+    /// Flipped bytes never panic the reader either, and never make it invent a tick: what it
+    /// reads is what was written, less at most one run of ticks (the damaged chunk's).
     #[test]
     fn a_corrupted_log_never_panics_the_reader(at in 0.0..1.0f64, byte in any::<u8>()) {
         let mut bytes = reference_log().to_vec();
@@ -709,7 +713,106 @@ proptest! {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("corrupt.mcap");
         std::fs::write(&path, &bytes).unwrap();
-        let _ = FlightLog::open(&path);
+        if let Ok(log) = FlightLog::open(&path) {
+            let whole: Vec<LoggedTick> = (0..250).map(|k| flight_tick(k).logged()).collect();
+            let n = log.ticks.len();
+            let a = log.ticks.iter().zip(&whole).take_while(|(x, y)| x == y).count();
+            prop_assert!(n <= whole.len());
+            prop_assert_eq!(&log.ticks[a..], &whole[whole.len() - (n - a)..]);
+        }
+    }
+}
+
+/// Each chunk of an MCAP file: its offset, its length, and its messages' first and last log
+/// times (ns), from the summary's chunk indexes (read by the mcap crate).
+fn chunks_of(bytes: &[u8]) -> Vec<(u64, u64, u64, u64)> {
+    let summary = mcap::Summary::read(bytes).unwrap().unwrap();
+    summary
+        .chunk_indexes
+        .iter()
+        .map(|c| {
+            (
+                c.chunk_start_offset,
+                c.chunk_length,
+                c.message_start_time,
+                c.message_end_time,
+            )
+        })
+        .collect()
+}
+
+/// A log damaged in one chunk, in the middle: the reader skips that chunk and reads on. The
+/// ticks read are the ones written less those of that chunk, the damage says where it was
+/// and where reading resumed, and the footer is still found.
+#[test]
+fn damage_in_the_middle_costs_its_chunk_and_nothing_else() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let ticks: Vec<Tick> = (0..1000).map(flight_tick).collect();
+    let whole: Vec<LoggedTick> = ticks.iter().map(Tick::logged).collect();
+    for compression in [
+        dronecine_runtime::log::LogCompression::None,
+        dronecine_runtime::log::LogCompression::Lz4,
+    ] {
+        let path = dir.path().join("whole.mcap");
+        let options = dronecine_runtime::log::LogOptions {
+            compression,
+            ..Default::default()
+        };
+        let mut w =
+            FlightLogWriter::create_with(&path, &header(), &scene_of(&names), options).unwrap();
+        for t in &ticks {
+            w.write_tick(&t.record()).unwrap();
+        }
+        w.write_event(&events()[0]).unwrap();
+        w.finish().unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let chunks = chunks_of(&bytes);
+        assert!(chunks.len() >= 8, "{} chunks", chunks.len());
+        let k = chunks.len() / 2;
+        let (start, len, t0_ns, t1_ns) = chunks[k];
+
+        // A flipped bit in the chunk's records (its CRC fails), or a length that runs past
+        // the end of the file (its framing fails).
+        let flip = |b: &mut Vec<u8>| b[(start + len / 2) as usize] ^= 0x10;
+        let overrun = |b: &mut Vec<u8>| {
+            let at = start as usize + 1;
+            b[at..at + 8].copy_from_slice(&(u64::MAX / 4).to_le_bytes());
+        };
+        for (what, damage) in [
+            ("a flipped bit", &flip as &dyn Fn(&mut Vec<u8>)),
+            ("a wrong length", &overrun),
+        ] {
+            let mut bad = bytes.clone();
+            damage(&mut bad);
+            let path = dir.path().join("damaged.mcap");
+            std::fs::write(&path, &bad).unwrap();
+            let log = FlightLog::open(&path).unwrap();
+            let case = format!("{compression:?}, {what}");
+            assert!(!log.truncated, "{case}: {:?}", log.damage);
+            assert_eq!(log.damage.len(), 1, "{case}: {:?}", log.damage);
+            let d = &log.damage[0];
+            assert_eq!(d.offset, start, "{case}");
+            assert!(!d.cut, "{case}: corrupt, not cut");
+            assert_eq!(d.resumed_at, Some(chunks[k + 1].0), "{case}");
+            assert_eq!(log.first_gap(), Some(d.tick), "{case}");
+
+            // What is missing is one run of ticks, exactly those logged inside that chunk.
+            let a = d.tick;
+            let lost = whole.len() - log.ticks.len();
+            assert!(lost > 0, "{case}");
+            assert_eq!(&log.ticks[..a], &whole[..a], "{case}");
+            assert_eq!(&log.ticks[a..], &whole[a + lost..], "{case}");
+            for t in &whole[a..a + lost] {
+                let ns = (t.input.t_s * 1e9).round() as u64;
+                assert!((t0_ns..=t1_ns).contains(&ns), "{case}: {} s", t.input.t_s);
+            }
+            for t in whole[..a].iter().chain(&whole[a + lost..]) {
+                let ns = (t.input.t_s * 1e9).round() as u64;
+                assert!(!(t0_ns..=t1_ns).contains(&ns), "{case}: {} s", t.input.t_s);
+            }
+            assert_eq!(log.events.len(), 1, "{case}: the event after the damage");
+        }
     }
 }
 

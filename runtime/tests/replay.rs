@@ -1,10 +1,11 @@
 //! Replay is deterministic and can tell: a flight logged to MCAP replays with zero
-//! mismatches, and one altered command in the log is found.
+//! mismatches, and one altered command in the log is found. A damaged log replays up to its
+//! damage, and what follows still counts in the report.
 
 use dronecine_compiler::profile::Profile;
 use dronecine_runtime::flight::{FlightSink, NoObserver};
 use dronecine_runtime::log::{FlightLog, FlightLogWriter, LogScene};
-use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, TickRecord};
+use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
 use dronecine_runtime::replay::replay;
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::SimConfig;
@@ -108,4 +109,56 @@ fn a_logged_flight_replays_exactly_and_an_altered_command_is_found() {
         assert_eq!(r.mismatches, 1);
         assert_eq!(r.first_mismatch.unwrap().tick, k);
     }
+}
+
+#[test]
+fn a_damaged_log_replays_up_to_the_damage_and_reports_all_it_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lqg.mcap");
+    let flown = fly_to_log("lqg", &path);
+    let whole = FlightLog::open(&path).unwrap();
+    // The chunk that holds the middle of the shot: one bit of it flipped.
+    let in_shot: Vec<f64> = whole
+        .ticks
+        .iter()
+        .filter(|t| t.phase == Phase::Shots)
+        .map(|t| t.input.t_s)
+        .collect();
+    let mid_ns = (in_shot[in_shot.len() / 2] * 1e9).round() as u64;
+    let mut bytes = std::fs::read(&path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let c = summary
+        .chunk_indexes
+        .iter()
+        .find(|c| (c.message_start_time..=c.message_end_time).contains(&mid_ns))
+        .unwrap();
+    bytes[(c.chunk_start_offset + c.chunk_length / 2) as usize] ^= 0x01;
+    let damaged = dir.path().join("damaged.mcap");
+    std::fs::write(&damaged, &bytes).unwrap();
+
+    let log = FlightLog::open(&damaged).unwrap();
+    let gap = log.first_gap().expect("the damaged chunk is skipped");
+    assert!(
+        gap > 0 && gap < log.ticks.len(),
+        "{gap} of {}",
+        log.ticks.len()
+    );
+    let r = replay(&log).unwrap();
+    assert_eq!(r.mismatches, 0, "{:?}", r.first_mismatch);
+    assert_eq!(r.ticks, gap, "replayed up to the gap");
+    assert_eq!(r.unreplayed, log.ticks.len() - gap);
+    // The report counts every tick read: fewer than the flight's, more than the replayed.
+    assert!(log.ticks.len() < whole.ticks.len());
+    let measured = r.report.figures.measured_ticks;
+    assert!(measured < flown.figures.measured_ticks);
+    let replayed_only = replay(&FlightLog {
+        ticks: log.ticks[..gap].to_vec(),
+        ..log.clone()
+    })
+    .unwrap();
+    assert!(measured > replayed_only.report.figures.measured_ticks);
+    assert!(
+        r.report.completed,
+        "the flight's end event is after the damage"
+    );
 }

@@ -883,8 +883,9 @@ pub fn simulate_fit(seg: &[Sample], fit: &AxisFit) -> Option<Vec<(f64, Option<f6
 }
 
 /// The segments a flight log gives: the ticks of the approach and the shots (the servo's
-/// commands; take-off and landing are the firmware's), cut into windows of `window_s` and at
-/// every tick whose controller output was refused (a failsafe hover is not the command).
+/// commands; take-off and landing are the firmware's), cut into windows of `window_s`, at
+/// every tick whose controller output was refused (a failsafe hover is not the command) and
+/// where ticks are missing (a damaged log, read past its damage).
 pub fn segments_from_log(ticks: &[crate::log::LoggedTick], window_s: f64) -> Vec<Segment> {
     use crate::record::Phase;
     let mut out = Vec::new();
@@ -895,7 +896,12 @@ pub fn segments_from_log(ticks: &[crate::log::LoggedTick], window_s: f64) -> Vec
             && t.input.t_s.is_finite();
         let too_long = seg.first().is_some_and(|f| t.input.t_s - f.t_s >= window_s);
         let backwards = seg.last().is_some_and(|l| t.input.t_s <= l.t_s);
-        if !usable || too_long || backwards {
+        // Ticks missing in between (a damaged log read past the damage): the tick came
+        // `dt_s` after the loop's previous one, which is not the segment's last.
+        let gap = seg
+            .last()
+            .is_some_and(|l| t.input.t_s - l.t_s > 1.5 * t.input.dt_s);
+        if !usable || too_long || backwards || gap {
             if seg.len() >= 3 {
                 out.push(std::mem::take(&mut seg));
             } else {
@@ -956,6 +962,46 @@ pub fn simulate_plane(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A damaged log read past its damage has ticks missing: no segment spans the gap (the
+    /// model would be integrated over commands that were never seen).
+    #[test]
+    fn log_segments_never_span_missing_ticks() {
+        use crate::control::{Measurement, TickInput, TickOutput};
+        use crate::log::LoggedTick;
+        use crate::record::Phase;
+        let tick = |k: usize| LoggedTick {
+            phase: Phase::Shots,
+            shot: Some(0),
+            input: TickInput {
+                t_s: k as f64 * 0.01,
+                dt_s: 0.01,
+                measurement: Some(Measurement {
+                    position_m: [0.0, 0.0, 1.5],
+                    heading_rad: 0.0,
+                }),
+                ..TickInput::default()
+            },
+            output: Ok(TickOutput::default()),
+            command_sent: Command::HOVER,
+            actors: Vec::new(),
+            framing: Vec::new(),
+            latency_s: None,
+        };
+        let whole: Vec<LoggedTick> = (1..=300).map(tick).collect();
+        let lens = |ticks: &[LoggedTick]| -> Vec<usize> {
+            segments_from_log(ticks, 20.0)
+                .iter()
+                .map(Vec::len)
+                .collect()
+        };
+        assert_eq!(lens(&whole), [300]);
+        // Ticks 101–150 lost: two segments, split where they are missing.
+        let damaged: Vec<LoggedTick> = whole[..100].iter().chain(&whole[150..]).cloned().collect();
+        assert_eq!(lens(&damaged), [100, 150]);
+        let first = &segments_from_log(&damaged, 20.0)[1][0];
+        assert_eq!(first.t_s, whole[150].input.t_s);
+    }
 
     /// A deterministic Gaussian-ish noise (sum of uniforms) so the tests need no RNG crate.
     struct Noise(u64);

@@ -1,14 +1,21 @@
 //! [`FlightLog`]: reads a flight log back for `dronecine replay`: the header, every tick of
 //! `/servo/tick` and every event, recovering what precedes any damage.
 //!
-//! The file is streamed through the mcap crate's sans-io linear reader (memory: one chunk at a
-//! time plus the decoded ticks). Chunk CRCs are checked before a chunk's records are used, so a
-//! damaged chunk is never half-read; reading stops at the first damage (a cut or a corrupt
-//! record) and [`FlightLog::truncated`] says so.
+//! The file is streamed through the mcap crate's sans-io linear reader, which frames the
+//! top-level records (memory: one chunk at a time plus the decoded ticks); this module opens
+//! the chunks itself, so that it knows where each record starts. A chunk's CRC is checked
+//! before any of its records is used, so a damaged chunk is never half-read.
+//!
+//! Damage does not end the reading. A record that does not frame or parse, or a chunk whose
+//! CRC fails, is skipped: the reader searches forward for the next intact chunk (one whose
+//! header is consistent and whose CRC matches) and goes on from there, so one bad sector in
+//! an hour's log loses a second of it, not the rest. Each skip is a [`Damage`] with the ticks
+//! it separates; a file that ends before its footer (a crash, a copy that did not finish) is
+//! [`FlightLog::truncated`], everything before the cut read.
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::Read;
+use std::io::{self, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use mcap::records::Record;
@@ -42,14 +49,46 @@ pub struct LoggedTick {
 #[derive(Clone, Debug)]
 pub struct FlightLog {
     pub header: FlightHeader,
-    /// Every tick, in the order written.
+    /// Every tick that could be read, in the order written.
     pub ticks: Vec<LoggedTick>,
     pub events: Vec<Event>,
-    /// The file ends before its footer (a crash, a cut copy) or is damaged: everything before
-    /// the damage was read.
+    /// The file does not end with its footer: cut short (a crash, a copy that did not
+    /// finish), or damaged with nothing intact after the damage. Everything before was read;
+    /// the last entry of `damage` says where and why it ends.
     pub truncated: bool,
-    /// What stopped the reading when `truncated` (for the user).
-    pub damage: Option<String>,
+    /// The damage met, in file order: each a stretch skipped (reading resumed at the next
+    /// intact chunk) or, last, where the readable file ends when `truncated`.
+    pub damage: Vec<Damage>,
+}
+
+/// Where a flight log could not be read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Damage {
+    /// File offset of the first byte that could not be used (the start of the bad record,
+    /// or the file's length when it simply ends before its footer).
+    pub offset: u64,
+    /// What was wrong, for the user.
+    pub detail: String,
+    /// Whether the file simply ends there (before its footer, or inside a record): a
+    /// flight cut short or a copy that did not finish, rather than corrupt bytes.
+    pub cut: bool,
+    /// Ticks read before the damage: the index in [`FlightLog::ticks`] of the first tick
+    /// after it.
+    pub tick: usize,
+    /// The offset of the intact chunk where reading went on; `None` when nothing intact
+    /// follows (the file ends here, as far as it can be read).
+    pub resumed_at: Option<u64>,
+}
+
+impl FlightLog {
+    /// The index in [`ticks`](Self::ticks) of the first tick after the first stretch the
+    /// reader skipped: the ticks from there on do not follow the ones before without a gap.
+    pub fn first_gap(&self) -> Option<usize> {
+        self.damage
+            .iter()
+            .find(|d| d.resumed_at.is_some())
+            .map(|d| d.tick)
+    }
 }
 
 #[derive(Deserialize)]
@@ -104,8 +143,9 @@ fn parse_header(
 }
 
 impl FlightLog {
-    /// Reads the log at `path`. A cut or damaged file gives every tick and event before the
-    /// damage with `truncated` set; a file that is not MCAP, or has no flight header, is an
+    /// Reads the log at `path`. A damaged file gives every tick and event in its intact
+    /// chunks, with each skipped stretch in `damage`; a file cut short gives everything before
+    /// the cut with `truncated` set. A file that is not MCAP, or has no flight header, is an
     /// error.
     pub fn open(path: &Path) -> Result<FlightLog, LogError> {
         let io_err = |source| LogError::Io {
@@ -114,12 +154,7 @@ impl FlightLog {
         };
         let mut file = File::open(path).map_err(io_err)?;
         let len = file.metadata().map_err(io_err)?.len();
-        let mut reader = LinearReader::new_with_options(
-            LinearReaderOptions::default()
-                .with_validate_chunk_crcs(true)
-                .with_prevalidate_chunk_crcs(true)
-                .with_record_length_limit(record_length_limit(len)),
-        );
+        let limit = record_length_limit(len);
         let mut state = ReadState {
             path: path.to_path_buf(),
             channels: HashMap::new(),
@@ -130,51 +165,64 @@ impl FlightLog {
             records: 0,
             footer: false,
         };
-        let damage = loop {
-            let event = match reader.next_event() {
-                None => break None,
-                Some(Ok(event)) => event,
-                Some(Err(e)) => break Some(e),
+        let mut chunk = ChunkScratch::default();
+        let mut damage: Vec<Damage> = Vec::new();
+        // Where the linear reader starts: the file's magic, then each intact chunk found
+        // after damage.
+        let mut start: Option<u64> = None;
+        loop {
+            let (end, first_error) =
+                read_from(&mut file, start, limit, &mut state, &mut chunk).map_err(io_err)?;
+            let Some((offset, error)) = end else {
+                break;
             };
-            match event {
-                LinearReadEvent::ReadRequest(need) => {
-                    let buf = reader.insert(need);
-                    let n = loop {
-                        match file.read(buf) {
-                            Ok(n) => break n,
-                            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                            Err(e) => return Err(io_err(e)),
-                        }
-                    };
-                    reader.notify_read(n);
-                }
-                LinearReadEvent::Record { opcode, data } => {
-                    let record = match mcap::parse_record(opcode, data) {
-                        Ok(record) => record,
-                        Err(e) => break Some(e),
-                    };
-                    state.records += 1;
-                    state.record(record)?;
-                }
-            }
-        };
-        let truncated = damage.is_some() || !state.footer;
-        if let Some(e) = &damage {
             if state.records == 0 {
                 return Err(LogError::NotMcap {
                     path: path.to_path_buf(),
-                    detail: describe(e),
+                    detail: describe_read(&error),
                 });
             }
+            if let Some(e) = first_error {
+                return Err(e);
+            }
+            let cut = offset >= len || matches!(error, ReadError::Mcap(McapError::UnexpectedEof));
+            let detail = if offset >= len {
+                "the file ends before its footer".to_string()
+            } else {
+                describe_read(&error)
+            };
+            let resumed_at = if state.footer || offset >= len {
+                None
+            } else {
+                find_chunk(&mut file, offset + 1, len, limit, &mut chunk).map_err(io_err)?
+            };
+            damage.push(Damage {
+                offset,
+                detail,
+                // A record cut by the end of the file, unless intact data follows it (then
+                // its length was what was damaged).
+                cut: cut && resumed_at.is_none(),
+                tick: state.ticks.len(),
+                resumed_at,
+            });
+            match resumed_at {
+                Some(p) => start = Some(p),
+                None => break,
+            }
+        }
+        let truncated = !state.footer;
+        if truncated && damage.last().is_none_or(|d| d.resumed_at.is_some()) {
+            damage.push(Damage {
+                offset: len,
+                detail: "the file ends before its footer".to_string(),
+                cut: true,
+                tick: state.ticks.len(),
+                resumed_at: None,
+            });
         }
         let header = state.header.take().ok_or_else(|| LogError::NoHeader {
             path: path.to_path_buf(),
         })?;
-        let damage = match damage {
-            Some(e) => Some(describe(&e)),
-            None if truncated => Some("the file ends before its footer".to_string()),
-            None => None,
-        };
         Ok(FlightLog {
             header,
             ticks: state.ticks,
@@ -183,6 +231,325 @@ impl FlightLog {
             damage,
         })
     }
+}
+
+/// Why one run of the linear reader stopped early.
+enum ReadError {
+    /// The reader's framing (a cut record, a length beyond the limit, no magic).
+    Mcap(McapError),
+    /// A chunk that cannot be used (CRC, compression, inner framing).
+    Chunk(String),
+    /// A top-level record that does not parse or is not one a flight log holds.
+    Record(String),
+}
+
+fn describe_read(e: &ReadError) -> String {
+    match e {
+        ReadError::Mcap(e) => describe(e),
+        ReadError::Chunk(s) | ReadError::Record(s) => s.clone(),
+    }
+}
+
+/// Reads records with the mcap crate's linear reader from `start` (a chunk's offset, or
+/// `None`: the file's start and its magic) until the end or the first damage. Returns where
+/// the damage starts and what it is (`None`: the file read to its end magic), and the first
+/// flight-log error met in an intact record (a message that does not decode).
+#[allow(clippy::type_complexity)]
+fn read_from(
+    file: &mut File,
+    start: Option<u64>,
+    limit: usize,
+    state: &mut ReadState,
+    chunk: &mut ChunkScratch,
+) -> io::Result<(Option<(u64, ReadError)>, Option<LogError>)> {
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_skip_start_magic(start.is_some())
+            .with_emit_chunks(true)
+            .with_record_length_limit(limit),
+    );
+    let mut offset = match start {
+        Some(p) => p,
+        None => MAGIC_LEN,
+    };
+    file.seek(SeekFrom::Start(start.unwrap_or(0)))?;
+    loop {
+        let event = match reader.next_event() {
+            None => return Ok((None, None)),
+            Some(Ok(event)) => event,
+            Some(Err(e)) => {
+                // Before the first record the magic itself is what failed: offset 0.
+                let at = if start.is_none() && state.records == 0 {
+                    0
+                } else {
+                    offset
+                };
+                return Ok((Some((at, ReadError::Mcap(e))), None));
+            }
+        };
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let buf = reader.insert(need);
+                let n = loop {
+                    match file.read(buf) {
+                        Ok(n) => break n,
+                        Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                        Err(e) => return Err(e),
+                    }
+                };
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { opcode, data } => {
+                let at = offset;
+                offset += 9 + data.len() as u64;
+                let outcome = if opcode == mcap::records::op::CHUNK {
+                    chunk.open(data).map_err(ReadError::Chunk).map(|at| {
+                        let records = match at {
+                            RecordsAt::Body(range) => &data[range],
+                            RecordsAt::Decompressed => &chunk.decompressed[..],
+                        };
+                        let mut result = Ok(());
+                        for (opcode, range) in &chunk.records {
+                            let body = &records[range.clone()];
+                            // Framed, and CRC-checked when the writer set one: a record
+                            // that does not parse was written so, and is skipped.
+                            let Ok(record) = mcap::parse_record(*opcode, body) else {
+                                continue;
+                            };
+                            state.records += 1;
+                            if let Err(e) = state.record(record) {
+                                result = Err(e);
+                                break;
+                            }
+                        }
+                        result
+                    })
+                } else {
+                    match mcap::parse_record(opcode, data) {
+                        Ok(mcap::records::Record::Unknown { opcode, .. }) => {
+                            Err(ReadError::Record(format!(
+                                "a record of unknown kind (opcode {opcode:#04x})"
+                            )))
+                        }
+                        Ok(record) => {
+                            state.records += 1;
+                            Ok(state.record(record))
+                        }
+                        Err(e) => Err(ReadError::Record(e.to_string())),
+                    }
+                };
+                match outcome {
+                    Ok(Ok(())) => {}
+                    Ok(Err(e)) => {
+                        return Ok((Some((at, ReadError::Record(e.to_string()))), Some(e)))
+                    }
+                    Err(e) => return Ok((Some((at, e)), None)),
+                }
+            }
+        }
+    }
+}
+
+/// The MCAP magic's length: the first record starts after it.
+const MAGIC_LEN: u64 = 8;
+/// A chunk record's fixed fields after its opcode and length: start and end time,
+/// uncompressed size, CRC, the compression's length prefix, and the records' length prefix.
+const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4 + 8;
+
+/// A chunk opened: its records decompressed and CRC-checked, and framed.
+#[derive(Default)]
+struct ChunkScratch {
+    /// The decompressed records of an LZ4 chunk.
+    decompressed: Vec<u8>,
+    /// Each inner record's opcode and body range, in `records`.
+    records: Vec<(u8, std::ops::Range<usize>)>,
+    /// The window [`find_chunk`] scans.
+    window: Vec<u8>,
+}
+
+impl ChunkScratch {
+    /// Opens a chunk record's body: decompresses it, checks its CRC (when the writer set one)
+    /// and frames every inner record, before any of them is used. Returns where the records'
+    /// bytes are.
+    fn open(&mut self, body: &[u8]) -> Result<RecordsAt, String> {
+        let record = mcap::parse_record(mcap::records::op::CHUNK, body)
+            .map_err(|e| format!("a chunk that does not parse ({e})"))?;
+        let mcap::records::Record::Chunk { header, data } = record else {
+            return Err("a chunk that does not parse".into());
+        };
+        // `data` borrows `body` (parse_record does not copy): its place in it.
+        let std::borrow::Cow::Borrowed(data) = data else {
+            return Err("a chunk that does not parse".into());
+        };
+        let start = data.as_ptr() as usize - body.as_ptr() as usize;
+        let compression = header.compression.as_str();
+        let records: &[u8] = if compression.is_empty() {
+            data
+        } else {
+            let size = usize::try_from(header.uncompressed_size)
+                .ok()
+                .filter(|&n| n <= body.len().saturating_mul(256).max(16 << 20))
+                .ok_or_else(|| {
+                    format!(
+                        "a chunk that claims {} bytes uncompressed",
+                        header.uncompressed_size
+                    )
+                })?;
+            self.decompressed.clear();
+            self.decompressed.reserve(size);
+            // One byte more than it claims: a chunk that holds more is caught below.
+            let cap = size as u64 + 1;
+            let read = match compression {
+                "lz4" => lz4::Decoder::new(data)
+                    .and_then(|d| d.take(cap).read_to_end(&mut self.decompressed)),
+                "zstd" => zstd::stream::read::Decoder::new(data)
+                    .and_then(|d| d.take(cap).read_to_end(&mut self.decompressed)),
+                other => {
+                    return Err(format!(
+                        "a chunk compressed with `{}`, which this reader does not know",
+                        short(other)
+                    ))
+                }
+            };
+            read.map_err(|e| {
+                format!("a chunk whose {compression} data does not decompress ({e})")
+            })?;
+            &self.decompressed
+        };
+        let at = if compression.is_empty() {
+            RecordsAt::Body(start..start + data.len())
+        } else {
+            RecordsAt::Decompressed
+        };
+        if records.len() as u64 != header.uncompressed_size {
+            return Err(format!(
+                "a chunk of {} bytes that says it holds {}",
+                records.len(),
+                header.uncompressed_size
+            ));
+        }
+        if header.uncompressed_crc != 0 && crc32fast::hash(records) != header.uncompressed_crc {
+            return Err("a chunk whose CRC does not match its bytes".into());
+        }
+        self.records.clear();
+        let mut i = 0usize;
+        while i < records.len() {
+            let head = records
+                .get(i..i + 9)
+                .ok_or_else(|| "a chunk whose last record is cut".to_string())?;
+            let n = u64::from_le_bytes(head[1..9].try_into().expect("8 bytes"));
+            let end = usize::try_from(n)
+                .ok()
+                .and_then(|n| (i + 9).checked_add(n))
+                .filter(|&end| end <= records.len())
+                .ok_or_else(|| "a chunk whose records overrun it".to_string())?;
+            self.records.push((head[0], i + 9..end));
+            i = end;
+        }
+        Ok(at)
+    }
+}
+
+/// Where an opened chunk's records are: a range of the chunk record's body (uncompressed),
+/// or [`ChunkScratch::decompressed`].
+enum RecordsAt {
+    Body(std::ops::Range<usize>),
+    Decompressed,
+}
+
+/// A string cut to 16 characters for a message.
+fn short(s: &str) -> String {
+    s.chars().take(16).collect()
+}
+
+/// The offset of the first intact chunk at or after `from`: a chunk opcode whose length fits
+/// the file and the limit, whose header is consistent, and whose records pass [`ChunkScratch::open`]
+/// (its CRC matches). `None` when there is none before the end.
+fn find_chunk(
+    file: &mut File,
+    from: u64,
+    len: u64,
+    limit: usize,
+    chunk: &mut ChunkScratch,
+) -> io::Result<Option<u64>> {
+    const WINDOW: usize = 1 << 20;
+    /// What a candidate's header needs in view: opcode, length, the fixed fields and a
+    /// compression name of up to 8 bytes.
+    const HEAD: usize = 9 + CHUNK_FIXED as usize + 8;
+    let mut base = from;
+    let mut window = std::mem::take(&mut chunk.window);
+    let mut body = Vec::new();
+    let found = 'scan: loop {
+        if base >= len {
+            break None;
+        }
+        window.clear();
+        file.seek(SeekFrom::Start(base))?;
+        file.by_ref()
+            .take((WINDOW + HEAD) as u64)
+            .read_to_end(&mut window)?;
+        let last = window.len().min(WINDOW);
+        for i in 0..last {
+            if window[i] != mcap::records::op::CHUNK {
+                continue;
+            }
+            let at = base + i as u64;
+            let Some(head) = window.get(i..i + HEAD).or_else(|| window.get(i..)) else {
+                continue;
+            };
+            if !plausible_chunk_head(head, at, len, limit) {
+                continue;
+            }
+            let n = u64::from_le_bytes(head[1..9].try_into().expect("8 bytes"));
+            body.clear();
+            file.seek(SeekFrom::Start(at + 9))?;
+            file.by_ref().take(n).read_to_end(&mut body)?;
+            if body.len() as u64 == n && chunk.open(&body).is_ok() {
+                break 'scan Some(at);
+            }
+        }
+        base += last as u64;
+        if last == 0 {
+            break None;
+        }
+    };
+    chunk.window = window;
+    Ok(found)
+}
+
+/// Whether `head` (a candidate chunk's first bytes, at file offset `at`) can start a chunk of
+/// a flight log: its length fits the file and the limit, its compression is one this reader
+/// opens, its records' length is what is left of it, and it carries a CRC.
+fn plausible_chunk_head(head: &[u8], at: u64, len: u64, limit: usize) -> bool {
+    let u64_at = |k: usize| {
+        head.get(k..k + 8)
+            .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+    };
+    let u32_at = |k: usize| {
+        head.get(k..k + 4)
+            .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
+    };
+    let (Some(n), Some(crc), Some(name_len)) = (u64_at(1), u32_at(9 + 24), u32_at(9 + 28)) else {
+        return false;
+    };
+    let name_len = u64::from(name_len);
+    if n < CHUNK_FIXED || n > limit as u64 || at.saturating_add(9).saturating_add(n) > len {
+        return false;
+    }
+    if crc == 0 || name_len > 8 {
+        return false;
+    }
+    let name_at = 9 + 32;
+    let Some(name) = head.get(name_at..name_at + name_len as usize) else {
+        return false;
+    };
+    if !matches!(name, b"" | b"lz4" | b"zstd") {
+        return false;
+    }
+    let Some(records_len) = u64_at(name_at + name_len as usize) else {
+        return false;
+    };
+    records_len == n - CHUNK_FIXED - name_len
 }
 
 /// The largest record (or decompressed chunk) the reader accepts in a file of `len` bytes:
