@@ -186,7 +186,12 @@ impl FlightLog {
                 return Err(e);
             }
             let cut = offset >= len || matches!(error, ReadError::Mcap(McapError::UnexpectedEof));
-            let detail = if offset >= len {
+            let detail = if state.footer {
+                format!(
+                    "what follows the footer is not the closing MCAP magic ({})",
+                    describe_read(&error)
+                )
+            } else if offset >= len {
                 "the file ends before its footer".to_string()
             } else {
                 describe_read(&error)
