@@ -49,8 +49,10 @@
 //! the file flushed (to the OS, without `fsync`) every `flush_period_s` of flight time
 //! ([`LogOptions`]). `shoot` writes through [`LogThread`], which hands the ticks to a writer
 //! thread every quarter second (taken up within 20 ms) and closes chunks every 0.73 s, so a
-//! crash of the process loses at most the last second; [`FlightLog::open`] reads every complete chunk before the damage
-//! and sets [`FlightLog::truncated`]. A power cut may lose what the OS had not yet written.
+//! crash of the process loses at most the last second; [`FlightLog::open`] reads every complete
+//! chunk before the cut and sets [`FlightLog::truncated`]. Damage inside the file (a bad
+//! sector, a corrupt copy) costs the chunks it touches: the reader skips to the next intact
+//! chunk and reads on. A power cut may lose what the OS had not yet written.
 
 pub mod cdr;
 mod mcap_file;
