@@ -83,6 +83,14 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             );
             ExitCode::FAILURE
         }
+        None if r.ticks == 0 => {
+            // Nothing was checked: say so rather than "0 ticks reproduce exactly".
+            eprintln!(
+                "replay: the log holds no controller tick (the flight never reached its first \
+                 tick, or the log was cut before it): nothing to check"
+            );
+            ExitCode::SUCCESS
+        }
         None => {
             eprintln!(
                 "replay: {} controller ticks reproduce the logged commands exactly ({} {})",

@@ -92,6 +92,24 @@ fn shoot_reports_json_logs_the_flight_and_replay_reproduces_it() {
         replayed["report"]["completed"], true,
         "read past the damage"
     );
+
+    // Cut inside its first chunk: no tick to check, and replay says so.
+    let first = &summary.chunk_indexes[0];
+    let cut = dir.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..(first.chunk_start_offset + 20) as usize]).unwrap();
+    let o = dronecine(&["replay", cut.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("ends early"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("holds no controller tick"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        stdout(&o).starts_with("unfinished log of a flight"),
+        "{}",
+        stdout(&o)
+    );
 }
 
 #[test]
