@@ -87,9 +87,9 @@ pub fn load_profile(
 /// compiler's loader (which renders profile errors as diagnostics). A name that is neither
 /// built in nor a file is refused with the built-in names and the closest of them.
 pub fn profile_arg(option: &str, arg: &str, color: bool) -> Result<Profile, ExitCode> {
-    let is_file =
-        Profile::builtin(arg).is_none() && (arg.ends_with(".toml") || Path::new(arg).exists());
-    if !is_file && Profile::builtin(arg).is_none() {
+    let builtin = Profile::builtin(arg).is_some();
+    let is_file = !builtin && (arg.ends_with(".toml") || Path::new(arg).exists());
+    if !builtin && !is_file {
         return Err(fail(unknown_profile(option, arg)));
     }
     let drone = if is_file {

@@ -65,16 +65,23 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
         );
     }
     match &r.first_mismatch {
-        None if r.unreplayed > 0 => {
-            let at = log
-                .ticks
-                .get(r.ticks)
-                .map(|t| t.input.t_s)
-                .unwrap_or(f64::NAN);
-            eprintln!(
-                "replay: {} controller ticks reproduce the logged commands exactly ({} {})",
-                r.ticks, log.header.controller.kind, log.header.profile_name
-            );
+        None => {
+            if r.ticks > 0 {
+                eprintln!(
+                    "replay: {} controller ticks reproduce the logged commands exactly ({} {})",
+                    r.ticks, log.header.controller.kind, log.header.profile_name
+                );
+            } else if r.unreplayed == 0 {
+                // Nothing was checked: say so rather than "0 ticks reproduce exactly".
+                eprintln!(
+                    "replay: the log holds no controller tick (the flight never reached its \
+                     first tick, or the log was cut before it): nothing to check"
+                );
+            }
+            if r.unreplayed == 0 {
+                return ExitCode::SUCCESS;
+            }
+            let at = log.ticks.get(r.ticks).map_or(f64::NAN, |t| t.input.t_s);
             eprintln!(
                 "error: the {} ticks after the damage (from t = {at:.3} s) are in the report but \
                  were not replayed: the controller's state after a gap depends on the ticks lost \
@@ -82,21 +89,6 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
                 r.unreplayed
             );
             ExitCode::FAILURE
-        }
-        None if r.ticks == 0 => {
-            // Nothing was checked: say so rather than "0 ticks reproduce exactly".
-            eprintln!(
-                "replay: the log holds no controller tick (the flight never reached its first \
-                 tick, or the log was cut before it): nothing to check"
-            );
-            ExitCode::SUCCESS
-        }
-        None => {
-            eprintln!(
-                "replay: {} controller ticks reproduce the logged commands exactly ({} {})",
-                r.ticks, log.header.controller.kind, log.header.profile_name
-            );
-            ExitCode::SUCCESS
         }
         Some(m) => {
             eprintln!(

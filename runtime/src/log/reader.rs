@@ -171,9 +171,8 @@ impl FlightLog {
         // after damage.
         let mut start: Option<u64> = None;
         loop {
-            let (end, first_error) =
-                read_from(&mut file, start, limit, &mut state, &mut chunk).map_err(io_err)?;
-            let Some((offset, error)) = end else {
+            let Some((offset, error)) = read_from(&mut file, start, limit, &mut state, &mut chunk)?
+            else {
                 break;
             };
             if state.records == 0 {
@@ -181,9 +180,6 @@ impl FlightLog {
                     path: path.to_path_buf(),
                     detail: describe_read(&error),
                 });
-            }
-            if let Some(e) = first_error {
-                return Err(e);
             }
             let cut = offset >= len || matches!(error, ReadError::Mcap(McapError::UnexpectedEof));
             let detail = if state.footer {
@@ -257,16 +253,21 @@ fn describe_read(e: &ReadError) -> String {
 
 /// Reads records with the mcap crate's linear reader from `start` (a chunk's offset, or
 /// `None`: the file's start and its magic) until the end or the first damage. Returns where
-/// the damage starts and what it is (`None`: the file read to its end magic), and the first
-/// flight-log error met in an intact record (a message that does not decode).
-#[allow(clippy::type_complexity)]
+/// the damage starts and what it is (`None`: the file read to its end magic); an I/O error,
+/// or an intact record that is not what a flight log holds (a message that does not
+/// decode), is an error.
 fn read_from(
     file: &mut File,
     start: Option<u64>,
     limit: usize,
     state: &mut ReadState,
     chunk: &mut ChunkScratch,
-) -> io::Result<(Option<(u64, ReadError)>, Option<LogError>)> {
+) -> Result<Option<(u64, ReadError)>, LogError> {
+    let path = state.path.clone();
+    let io_err = |source| LogError::Io {
+        path: path.clone(),
+        source,
+    };
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default()
             .with_skip_start_magic(start.is_some())
@@ -277,10 +278,11 @@ fn read_from(
         Some(p) => p,
         None => MAGIC_LEN,
     };
-    file.seek(SeekFrom::Start(start.unwrap_or(0)))?;
+    file.seek(SeekFrom::Start(start.unwrap_or(0)))
+        .map_err(io_err)?;
     loop {
         let event = match reader.next_event() {
-            None => return Ok((None, None)),
+            None => return Ok(None),
             Some(Ok(event)) => event,
             Some(Err(e)) => {
                 // Before the first record the magic itself is what failed: offset 0.
@@ -289,7 +291,7 @@ fn read_from(
                 } else {
                     offset
                 };
-                return Ok((Some((at, ReadError::Mcap(e))), None));
+                return Ok(Some((at, ReadError::Mcap(e))));
             }
         };
         match event {
@@ -299,7 +301,7 @@ fn read_from(
                     match file.read(buf) {
                         Ok(n) => break n,
                         Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-                        Err(e) => return Err(e),
+                        Err(e) => return Err(io_err(e)),
                     }
                 };
                 reader.notify_read(n);
@@ -345,10 +347,8 @@ fn read_from(
                 };
                 match outcome {
                     Ok(Ok(())) => {}
-                    Ok(Err(e)) => {
-                        return Ok((Some((at, ReadError::Record(e.to_string()))), Some(e)))
-                    }
-                    Err(e) => return Ok((Some((at, e)), None)),
+                    Ok(Err(e)) => return Err(e),
+                    Err(e) => return Ok(Some((at, e))),
                 }
             }
         }
@@ -412,7 +412,7 @@ impl ChunkScratch {
                 other => {
                     return Err(format!(
                         "a chunk compressed with `{}`, which this reader does not know",
-                        short(other)
+                        dronecine_grammar::suggest::shorten(other)
                     ))
                 }
             };
@@ -460,11 +460,6 @@ impl ChunkScratch {
 enum RecordsAt {
     Body(std::ops::Range<usize>),
     Decompressed,
-}
-
-/// A string cut to 16 characters for a message.
-fn short(s: &str) -> String {
-    s.chars().take(16).collect()
 }
 
 /// The offset of the first intact chunk at or after `from`: a chunk opcode whose length fits
