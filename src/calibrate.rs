@@ -91,7 +91,7 @@ pub struct IdentifyArgs {
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
+    errln!("error: {msg}");
     ExitCode::FAILURE
 }
 
@@ -256,12 +256,12 @@ fn finish(
     output: &Path,
     note: &str,
 ) -> ExitCode {
-    print!("{}", render(fit, errors, prev, axes));
+    out!("{}", render(fit, errors, prev, axes));
     if !errors.is_empty() {
         for e in errors {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
         }
-        eprintln!(
+        errln!(
             "error: no profile written to `{}` (a poor fit)",
             output.display()
         );
@@ -272,7 +272,7 @@ fn finish(
     if let Err(e) = crate::files::write_atomic(output, &p.to_toml()) {
         return fail(format!("cannot write `{}`: {e}", output.display()));
     }
-    println!("wrote {}", output.display());
+    outln!("wrote {}", output.display());
     ExitCode::SUCCESS
 }
 
@@ -325,7 +325,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
     if let Err(e) = ctrlc::set_handler(|| {
         INTERRUPTS.fetch_add(1, Ordering::Relaxed);
     }) {
-        eprintln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
+        errln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
     }
     let (sim, mut sim_backends, mut hardware);
     let (backends, note) = match &target {
@@ -406,7 +406,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
                     })
                     .collect();
                 match write_report(dir, &c.fit, &c.errors, &prior, &tests) {
-                    Ok(files) => println!("report: {} files in {}", files.len(), dir.display()),
+                    Ok(files) => outln!("report: {} files in {}", files.len(), dir.display()),
                     Err(e) => return fail(e),
                 }
             }
@@ -436,7 +436,7 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
     // The fit uses what could be read; its segments never span a gap (identify splits them
     // where ticks are missing).
     for line in crate::replay::damage_warnings(&a.log, &log) {
-        eprintln!("{line}");
+        errln!("{line}");
     }
     let prev = match &a.profile {
         Some(name) => match crate::compile::profile_arg("--profile", name, color) {
@@ -453,7 +453,7 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
             .map(|&ax| (ax, most_excited(&segments, ax, 4)))
             .collect();
         match write_report(dir, &fit, &errors, &prev, &tests) {
-            Ok(files) => println!("report: {} files in {}", files.len(), dir.display()),
+            Ok(files) => outln!("report: {} files in {}", files.len(), dir.display()),
             Err(e) => return fail(e),
         }
     }

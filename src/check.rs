@@ -114,7 +114,7 @@ pub fn run(inputs: &[PathBuf], json: bool, color: bool) -> ExitCode {
     let stdout = std::io::stdout();
     let stderr = std::io::stderr();
     if paths.is_empty() {
-        eprintln!(
+        errln!(
             "error: no .psl files found in {}",
             inputs
                 .iter()
@@ -157,13 +157,16 @@ pub fn run(inputs: &[PathBuf], json: bool, color: bool) -> ExitCode {
                 let _ = stderr.lock().write_all(text.as_bytes());
             }
             if let Some(s) = &r.checked.script {
-                let _ = writeln!(stdout.lock(), "{}", summary_line(&r.name, s));
+                crate::out::stdout_result(writeln!(stdout.lock(), "{}", summary_line(&r.name, s)));
             }
         }
     }
     if json {
-        let _ = serde_json::to_writer_pretty(stdout.lock(), &report);
-        let _ = writeln!(stdout.lock());
+        crate::out::stdout_result(
+            serde_json::to_writer_pretty(stdout.lock(), &report)
+                .map_err(std::io::Error::from)
+                .and_then(|()| writeln!(stdout.lock())),
+        );
     } else if failed > 0 {
         let _ = writeln!(
             stderr.lock(),

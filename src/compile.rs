@@ -4,7 +4,6 @@
 //! is made; previews get a decimated copy (10 Hz). Writers go through temporary files, so a
 //! failed compilation (or a crash) never leaves an output that looks complete.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -32,7 +31,7 @@ pub struct Args<'a> {
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
+    errln!("error: {msg}");
     ExitCode::FAILURE
 }
 
@@ -55,14 +54,14 @@ pub fn load_profile(
                 Ok((profile, source, warnings)) => {
                     if !warnings.is_empty() {
                         let name = full.display().to_string();
-                        eprint!("{}", diag::render(&name, &source, &warnings, color, 100));
+                        err!("{}", diag::render(&name, &source, &warnings, color, 100));
                     }
                     Ok(profile)
                 }
                 Err(e @ ProfileError::Unreadable { .. }) => {
                     let d = e.not_found(Default::default());
                     if let Some(d) = d {
-                        eprint!(
+                        err!(
                             "{}",
                             diag::render(script_name, script_text, &[d], color, 100)
                         );
@@ -74,8 +73,8 @@ pub fn load_profile(
                     diagnostics,
                 }) => {
                     let name = full.display().to_string();
-                    eprint!("{}", diag::render(&name, &source, &diagnostics, color, 100));
-                    eprintln!("error: the drone profile `{name}` is not valid");
+                    err!("{}", diag::render(&name, &source, &diagnostics, color, 100));
+                    errln!("error: the drone profile `{name}` is not valid");
                     Err(ExitCode::FAILURE)
                 }
             }
@@ -159,17 +158,17 @@ impl Loaded {
 pub fn load_scene(path: &Path, color: bool, what: &str) -> Result<Loaded, ExitCode> {
     let r = check::check_file(path);
     if r.checked.has_errors() || r.checked.script.is_none() {
-        eprint!(
+        err!(
             "{}",
             diag::render(&r.name, &r.text, &r.checked.diagnostics, color, 100)
         );
-        eprintln!("error: `{}` has errors; nothing was {what}", r.name);
+        errln!("error: `{}` has errors; nothing was {what}", r.name);
         return Err(ExitCode::FAILURE);
     }
     let script = r.checked.script.as_ref().expect("checked above");
     let Some(scene) = &script.scene else {
         let d = compile::no_scene(script);
-        eprint!("{}", diag::render(&r.name, &r.text, &[d], color, 100));
+        err!("{}", diag::render(&r.name, &r.text, &[d], color, 100));
         return Err(ExitCode::FAILURE);
     };
     let base = crate::files::base_dir(path);
@@ -248,16 +247,17 @@ pub fn run(a: &Args) -> ExitCode {
         }
     }
     if !compiled.diagnostics.is_empty() {
-        eprint!(
+        err!(
             "{}",
             diag::render(&r.name, &r.text, &compiled.diagnostics, a.color, 100)
         );
     }
     if errors && !a.allow_infeasible {
-        eprintln!(
+        errln!(
             "error: `{}` cannot be flown by {}; nothing was written (--allow-infeasible writes \
              it anyway)",
-            r.name, profile.name
+            r.name,
+            profile.name
         );
         return ExitCode::FAILURE;
     }
@@ -288,14 +288,13 @@ pub fn run(a: &Args) -> ExitCode {
             Err(e) => return fail(format!("cannot write previews to `{}`: {e}", dir.display())),
         }
     }
-    let _ = writeln!(
-        std::io::stdout().lock(),
+    outln!(
         "{}",
         summary(&r.name, script, &profile, &compiled, a.rate_hz)
     );
     for p in written {
         let size = std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
-        println!("  wrote {} ({})", p.display(), human_bytes(size));
+        outln!("  wrote {} ({})", p.display(), human_bytes(size));
     }
     ExitCode::SUCCESS
 }

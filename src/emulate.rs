@@ -31,7 +31,7 @@ pub struct Args<'a> {
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
+    errln!("error: {msg}");
     ExitCode::FAILURE
 }
 
@@ -92,43 +92,43 @@ pub fn run(a: &Args) -> ExitCode {
         Ok(h) => h,
         Err(e) => return fail(e),
     };
-    println!(
+    outln!(
         "emulating an AR.Drone 2.0 ({profile_name}, seed {}) in real time",
         a.seed
     );
-    println!("  AT commands     udp {}", handle.at_addr());
-    println!(
+    outln!("  AT commands     udp {}", handle.at_addr());
+    outln!(
         "  navdata         udp {} (send 01 00 00 00 to start it)",
         handle.navdata_addr()
     );
     match (handle.natnet_command_addr(), handle.natnet_data()) {
         (Some(cmd), Some(data)) => {
-            println!("  NatNet command  udp {cmd} (NatNet {version})");
+            outln!("  NatNet command  udp {cmd} (NatNet {version})");
             let kind = match data {
                 NatNetData::Multicast(_) => "multicast",
                 NatNetData::Unicast(_) => "unicast",
             };
-            println!(
+            outln!(
                 "  NatNet frames → udp {} ({kind}, {}-up, 100 Hz)",
                 data.addr(),
                 if a.z_up { "Z" } else { "Y" }
             );
             if matches!(data, NatNetData::Multicast(_)) && a.host.is_loopback() {
-                eprintln!(
+                errln!(
                     "warning: multicast frames from {} leave by the loopback interface, which \
                      often carries no multicast: use --host 0.0.0.0, or unicast \
                      (--natnet 127.0.0.1:PORT) for a client on this machine",
                     a.host
                 );
             }
-            println!("  rigid bodies    {DRONE_ID} = drone");
+            outln!("  rigid bodies    {DRONE_ID} = drone");
             for (i, n) in names.iter().enumerate() {
-                println!("                  {} = {n}", ACTOR_ID_BASE + i as i32);
+                outln!("                  {} = {n}", ACTOR_ID_BASE + i as i32);
             }
         }
-        _ => println!("  NatNet          off"),
+        _ => outln!("  NatNet          off"),
     }
-    println!("Ctrl-C to stop.");
+    outln!("Ctrl-C to stop.");
     match handle.wait() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => fail(e),

@@ -17,7 +17,7 @@ pub fn run(inputs: &[PathBuf], check: bool, color: bool) -> ExitCode {
         let bytes = match std::fs::read(path) {
             Ok(b) => b,
             Err(e) => {
-                eprintln!("error: cannot read `{name}`: {e}");
+                errln!("error: cannot read `{name}`: {e}");
                 failed = true;
                 continue;
             }
@@ -37,19 +37,19 @@ pub fn run(inputs: &[PathBuf], check: bool, color: bool) -> ExitCode {
                 let _ = stderr
                     .lock()
                     .write_all(diag::render(&name, src, &diags, color, 100).as_bytes());
-                eprintln!("error: `{name}` was not formatted: fix the errors above first");
+                errln!("error: `{name}` was not formatted: fix the errors above first");
                 failed = true;
             }
             Ok(formatted) if formatted == src => {}
             Ok(formatted) => {
                 if check {
-                    println!("would reformat {name}");
+                    outln!("would reformat {name}");
                     failed = true;
                 } else if let Err(e) = files::write_atomic(path, &formatted) {
-                    eprintln!("error: cannot write `{name}`: {e}");
+                    errln!("error: cannot write `{name}`: {e}");
                     failed = true;
                 } else {
-                    println!("formatted {name}");
+                    outln!("formatted {name}");
                 }
             }
         }

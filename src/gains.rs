@@ -48,7 +48,7 @@ pub struct Args {
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
+    errln!("error: {msg}");
     ExitCode::FAILURE
 }
 
@@ -125,9 +125,9 @@ pub fn run(a: &Args, color: bool) -> ExitCode {
         }
     };
     if a.json {
-        println!("{}", json(&report));
+        outln!("{}", json(&report));
     } else {
-        print!("{}", text(&p.name, &report));
+        out!("{}", text(&p.name, &report));
     }
     ExitCode::SUCCESS
 }

@@ -43,12 +43,12 @@ pub fn target(
                 None => {
                     let names = actors.unwrap_or(&[]);
                     if actors.is_some() {
-                        eprintln!(
+                        errln!(
                             "note: no --rig: the drone is rigid body 1 and the actors 2, 3, … in \
                              the script's order, Y up (the layout of `dronecine emulate`)"
                         );
                     } else {
-                        eprintln!(
+                        errln!(
                             "note: no --rig: the drone is rigid body 1, Y up (the layout of \
                              `dronecine emulate`)"
                         );

@@ -1,6 +1,13 @@
 //! `dronecine`: the command line. It only wires the crates together: the language front end
 //! (`dronecine-grammar`), the compiler and the runtime. Each subcommand lives in its own
 //! module.
+//!
+//! Everything printed goes through `out.rs`'s macros, never `println!` (which panics when
+//! the output cannot be written).
+#![warn(clippy::print_stdout, clippy::print_stderr)]
+
+#[macro_use]
+mod out;
 
 mod calibrate;
 mod check;
@@ -269,7 +276,19 @@ impl ColorChoice {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let code = run(Cli::parse());
+    // Output that did not reach stdout (not a closed pipe: a full disk behind `>`) is not a
+    // success, whatever the command did.
+    match out::stdout_failure() {
+        Some(e) => {
+            errln!("error: cannot write the output: {e}");
+            ExitCode::FAILURE
+        }
+        None => code,
+    }
+}
+
+fn run(cli: Cli) -> ExitCode {
     let color = cli.color.enabled();
     match cli.command {
         Command::Check { files, format } => check::run(&files, format == Format::Json, color),
@@ -372,12 +391,10 @@ fn main() -> ExitCode {
             interval_s: interval,
         }),
         Command::Completions { shell } => {
-            clap_complete::generate(
-                shell,
-                &mut Cli::command(),
-                "dronecine",
-                &mut std::io::stdout(),
-            );
+            // Into memory first: clap_complete panics when its writer fails.
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "dronecine", &mut script);
+            out!("{}", String::from_utf8_lossy(&script));
             ExitCode::SUCCESS
         }
     }

@@ -11,7 +11,7 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
     let log = match FlightLog::open(file) {
         Ok(l) => l,
         Err(e) => {
-            eprintln!(
+            errln!(
                 "error: cannot read the flight log `{}`: {e}",
                 file.display()
             );
@@ -19,12 +19,12 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
         }
     };
     for line in damage_warnings(file, &log) {
-        eprintln!("{line}");
+        errln!("{line}");
     }
     let r = match replay::replay(&log) {
         Ok(r) => r,
         Err(e) => {
-            eprintln!("error: cannot replay `{}`: {e}", file.display());
+            errln!("error: cannot replay `{}`: {e}", file.display());
             return ExitCode::FAILURE;
         }
     };
@@ -42,7 +42,7 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             "mismatches": r.mismatches,
             "report": r.report,
         });
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&value).unwrap_or_default()
         );
@@ -54,7 +54,7 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             (true, true) => "completed",
             (true, false) => "ABORTED",
         };
-        print!(
+        out!(
             "{}",
             crate::shoot::render_report_as(
                 &r.report,
@@ -67,13 +67,15 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
     match &r.first_mismatch {
         None => {
             if r.ticks > 0 {
-                eprintln!(
+                errln!(
                     "replay: {} controller ticks reproduce the logged commands exactly ({} {})",
-                    r.ticks, log.header.controller.kind, log.header.profile_name
+                    r.ticks,
+                    log.header.controller.kind,
+                    log.header.profile_name
                 );
             } else if r.unreplayed == 0 {
                 // Nothing was checked: say so rather than "0 ticks reproduce exactly".
-                eprintln!(
+                errln!(
                     "replay: the log holds no controller tick (the flight never reached its \
                      first tick, or the log was cut before it): nothing to check"
                 );
@@ -82,7 +84,7 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
                 return ExitCode::SUCCESS;
             }
             let at = log.ticks.get(r.ticks).map_or(f64::NAN, |t| t.input.t_s);
-            eprintln!(
+            errln!(
                 "error: the {} ticks after the damage (from t = {at:.3} s) are in the report but \
                  were not replayed: the controller's state after a gap depends on the ticks lost \
                  in it",
@@ -91,10 +93,15 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             ExitCode::FAILURE
         }
         Some(m) => {
-            eprintln!(
+            errln!(
                 "error: replay differs from the log on {} of {} ticks; first at tick {} \
                  (t = {:.3} s): logged {:?}, replayed {:?}",
-                r.mismatches, r.ticks, m.tick, m.t_s, m.logged, m.replayed
+                r.mismatches,
+                r.ticks,
+                m.tick,
+                m.t_s,
+                m.logged,
+                m.replayed
             );
             ExitCode::FAILURE
         }

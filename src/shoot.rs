@@ -49,7 +49,7 @@ enum Target {
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
+    errln!("error: {msg}");
     ExitCode::FAILURE
 }
 
@@ -82,14 +82,15 @@ pub fn run(a: &Args) -> ExitCode {
             Err(e) => return fail(e),
         };
     if compiled.has_errors() {
-        eprint!(
+        err!(
             "{}",
             diag::render(&r.name, &r.text, &compiled.diagnostics, a.color, 100)
         );
-        eprintln!(
+        errln!(
             "error: `{}` cannot be flown by {}; nothing was flown (`dronecine compile --preview` \
              shows why)",
-            r.name, profile.name
+            r.name,
+            profile.name
         );
         return ExitCode::FAILURE;
     }
@@ -155,7 +156,7 @@ pub fn run(a: &Args) -> ExitCode {
     if let Err(e) = ctrlc::set_handler(|| {
         INTERRUPTS.fetch_add(1, Ordering::Relaxed);
     }) {
-        eprintln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
+        errln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
     }
     let mut display = Display::new(a.quiet);
     let result = match &target {
@@ -199,7 +200,7 @@ pub fn run(a: &Args) -> ExitCode {
     let report = match result {
         Ok(report) => report,
         Err(e) => {
-            eprintln!("flight log: {}", log_path.display());
+            errln!("flight log: {}", log_path.display());
             return fail(e);
         }
     };
@@ -211,13 +212,13 @@ pub fn run(a: &Args) -> ExitCode {
     }
     if a.json {
         match serde_json::to_string_pretty(&report) {
-            Ok(s) => println!("{s}"),
+            Ok(s) => outln!("{s}"),
             Err(e) => return fail(e),
         }
     } else {
-        print!("{}", render_report(&report, &profile.name, a.controller));
+        out!("{}", render_report(&report, &profile.name, a.controller));
     }
-    eprintln!("flight log: {}", log_path.display());
+    errln!("flight log: {}", log_path.display());
     if report.completed {
         ExitCode::SUCCESS
     } else {
@@ -317,7 +318,7 @@ impl Observer for Display {
         let line = format!("{} at {:.2} s: {}", e.level, e.t_s, e.message);
         match &self.bar {
             Some(bar) => bar.println(line),
-            None => eprintln!("{line}"),
+            None => errln!("{line}"),
         }
     }
 }

@@ -21,7 +21,7 @@ pub struct Args<'a> {
 }
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {msg}");
+    errln!("error: {msg}");
     ExitCode::FAILURE
 }
 
@@ -74,9 +74,9 @@ fn text(url: &ArDroneUrl, s: &ArDroneStatus) -> String {
 fn print(url: &ArDroneUrl, s: &ArDroneStatus, json: bool) -> Result<(), String> {
     if json {
         let line = serde_json::to_string(s).map_err(|e| e.to_string())?;
-        println!("{line}");
+        outln!("{line}");
     } else {
-        print!("{}", text(url, s));
+        out!("{}", text(url, s));
     }
     Ok(())
 }
@@ -126,7 +126,7 @@ pub fn run(a: &Args) -> ExitCode {
         next += interval;
         let status = client.status();
         if !a.json {
-            println!();
+            outln!();
         }
         if let Err(e) = print(&url, &status, a.json) {
             return fail(e);

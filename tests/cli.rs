@@ -295,3 +295,67 @@ fn profile_text() -> String {
     ))
     .unwrap()
 }
+
+/// Output that cannot be written is never a panic. A pipe closed by its reader (`dronecine …
+/// | head -1`) is let go, as other Unix tools do: the command finishes (a flight flies to its
+/// end and its log is whole) and exits as it would have. A full disk behind stdout is an
+/// error (exit 1), so that a cut output is not taken for a whole one.
+#[test]
+fn closed_pipes_and_full_disks_are_not_panics() {
+    use std::process::{Command, Stdio};
+    let dir = temp_dir("pipes");
+    let log = dir.join("square.mcap");
+    // stdout (and stderr when asked) closed before the command writes a byte.
+    let run = |args: &[&str], close_stderr: bool| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_dronecine"))
+            .args(args)
+            .current_dir(common::workspace())
+            .env("NO_COLOR", "1")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        if close_stderr {
+            drop(child.stderr.take());
+        }
+        child.wait_with_output().unwrap()
+    };
+
+    let o = run(&["gains", "--json"], false);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+
+    let o = run(&["completions", "bash"], false);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+
+    let o = run(
+        &["shoot", "shots/square.psl", "--log", log.to_str().unwrap()],
+        true,
+    );
+    assert_eq!(o.status.code(), Some(0), "the flight completes");
+    let o = dronecine(&["replay", log.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        !stderr(&o).contains("warning"),
+        "a whole log: {}",
+        stderr(&o)
+    );
+
+    let full = std::path::Path::new("/dev/full");
+    if full.exists() {
+        let sink = std::fs::OpenOptions::new().write(true).open(full).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
+            .args(["gains"])
+            .current_dir(common::workspace())
+            .stdout(sink)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("error: cannot write the output"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
