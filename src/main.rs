@@ -278,7 +278,8 @@ impl ColorChoice {
 fn main() -> ExitCode {
     let code = run(Cli::parse());
     // Output that did not reach stdout (not a closed pipe: a full disk behind `>`) is not a
-    // success, whatever the command did.
+    // success, whatever the command did. What is still buffered is written first.
+    out::stdout_result(std::io::Write::flush(&mut std::io::stdout()));
     match out::stdout_failure() {
         Some(e) => {
             errln!("error: cannot write the output: {e}");
