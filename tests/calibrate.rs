@@ -209,12 +209,8 @@ fn identifies_the_model_from_a_shoot_log() {
 
     // The same log with one chunk damaged in the middle: read past it, named, and fitted on
     // what is left (no window spans the gap), still within 2 % on pitch.
-    let mut bytes = std::fs::read(&log).unwrap();
-    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-    let c = &summary.chunk_indexes[summary.chunk_indexes.len() / 2];
-    bytes[(c.chunk_start_offset + c.chunk_length / 2) as usize] ^= 0x02;
     let damaged = dir.join("damaged.mcap");
-    std::fs::write(&damaged, &bytes).unwrap();
+    let offset = common::damage_middle_chunk(&log, &damaged);
     let out_file = dir.join("id-damaged.toml");
     let o = dronecine(&[
         "identify",
@@ -224,7 +220,7 @@ fn identifies_the_model_from_a_shoot_log() {
     ]);
     assert!(o.status.success(), "{}{}", text(&o.stdout), text(&o.stderr));
     assert!(
-        text(&o.stderr).contains(&format!("is damaged at byte {}", c.chunk_start_offset)),
+        text(&o.stderr).contains(&format!("is damaged at byte {offset}")),
         "{}",
         text(&o.stderr)
     );

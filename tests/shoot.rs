@@ -66,16 +66,11 @@ fn shoot_reports_json_logs_the_flight_and_replay_reproduces_it() {
 
     // One flipped bit in a chunk in the middle: the rest of the log is still read, the
     // damage named, the replay stops at it and says so (exit 1: not all of it was checked).
-    let mut bytes = std::fs::read(&log).unwrap();
-    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-    let c = &summary.chunk_indexes[summary.chunk_indexes.len() / 2];
-    bytes[(c.chunk_start_offset + c.chunk_length / 2) as usize] ^= 0x04;
     let damaged = dir.join("damaged.mcap");
-    std::fs::write(&damaged, &bytes).unwrap();
+    let offset = common::damage_middle_chunk(&log, &damaged);
     let o = dronecine(&["replay", damaged.to_str().unwrap(), "--report", "json"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let err = stderr(&o);
-    let offset = c.chunk_start_offset;
     assert!(
         err.contains(&format!(
             "is damaged at byte {offset} (a chunk whose CRC does not match"
@@ -94,9 +89,10 @@ fn shoot_reports_json_logs_the_flight_and_replay_reproduces_it() {
     );
 
     // Cut inside its first chunk: no tick to check, and replay says so.
-    let first = &summary.chunk_indexes[0];
+    let (first, _) = common::chunks(&log)[0];
+    let bytes = std::fs::read(&log).unwrap();
     let cut = dir.join("cut.mcap");
-    std::fs::write(&cut, &bytes[..(first.chunk_start_offset + 20) as usize]).unwrap();
+    std::fs::write(&cut, &bytes[..(first + 20) as usize]).unwrap();
     let o = dronecine(&["replay", cut.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("ends early"), "{}", stderr(&o));

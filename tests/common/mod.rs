@@ -175,3 +175,27 @@ impl Drop for Emulator {
         let _ = self.child.wait();
     }
 }
+
+/// The chunks of the MCAP file at `path`: each one's file offset and length, from the
+/// summary's chunk indexes (read by the `mcap` crate).
+pub fn chunks(path: &Path) -> Vec<(u64, u64)> {
+    let bytes = std::fs::read(path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    summary
+        .chunk_indexes
+        .iter()
+        .map(|c| (c.chunk_start_offset, c.chunk_length))
+        .collect()
+}
+
+/// Writes to `damaged` a copy of the MCAP file `log` with one bit flipped in the middle of its
+/// middle chunk (whose CRC then fails); returns that chunk's offset, where a reader meets the
+/// damage.
+pub fn damage_middle_chunk(log: &Path, damaged: &Path) -> u64 {
+    let chunks = chunks(log);
+    let (start, len) = chunks[chunks.len() / 2];
+    let mut bytes = std::fs::read(log).unwrap();
+    bytes[(start + len / 2) as usize] ^= 0x04;
+    std::fs::write(damaged, &bytes).unwrap();
+    start
+}
