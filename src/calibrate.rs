@@ -44,7 +44,12 @@ pub struct CalibrateArgs {
     #[arg(long)]
     ideal: bool,
     /// Control rate, Hz.
-    #[arg(long, value_name = "HZ", default_value_t = 100.0)]
+    #[arg(
+        long,
+        value_name = "HZ",
+        default_value_t = 100.0,
+        allow_negative_numbers = true
+    )]
     rate: f64,
     /// Tests per axis [default: 12 on roll and pitch, 4 on vz and yaw]. Each sign in turn; roll
     /// and pitch fly doublets, the last two short steps; vz and yaw doublets then steps.
@@ -86,7 +91,12 @@ pub struct IdentifyArgs {
     #[arg(long, value_name = "DIR")]
     report: Option<std::path::PathBuf>,
     /// Length of the windows the log is cut into (each with its own initial state), seconds.
-    #[arg(long, value_name = "S", default_value_t = 20.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 20.0,
+        allow_negative_numbers = true
+    )]
     window: f64,
 }
 
@@ -295,6 +305,9 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
                 "{names} {verb}: a real drone (--drone) has its own plant and noise"
             ));
         }
+    }
+    if let Err(e) = crate::shoot::check_servo_rate(a.rate) {
+        return fail(e);
     }
     if a.repeats == Some(0) {
         return fail("--repeats must be at least 1 (tests per axis)");

@@ -75,7 +75,12 @@ enum Command {
         #[arg(short, long, value_name = "OUT.mcap")]
         output: PathBuf,
         /// Sample rate of the reference, Hz.
-        #[arg(long, value_name = "HZ", default_value_t = 100.0)]
+        #[arg(
+            long,
+            value_name = "HZ",
+            default_value_t = 100.0,
+            allow_negative_numbers = true
+        )]
         rate: f64,
         /// Write previews (top and side views, plots, storyboard; SVG and PNG) to this folder.
         #[arg(long, value_name = "DIR")]
@@ -127,7 +132,12 @@ enum Command {
         #[arg(long)]
         realtime: bool,
         /// Control rate, Hz.
-        #[arg(long, value_name = "HZ", default_value_t = 100.0)]
+        #[arg(
+            long,
+            value_name = "HZ",
+            default_value_t = 100.0,
+            allow_negative_numbers = true
+        )]
         rate: f64,
         /// How to print the report.
         #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
@@ -176,10 +186,20 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Seconds to wait for the drone's navdata before giving up.
-        #[arg(long, value_name = "SECONDS", default_value_t = 3.0)]
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            default_value_t = 3.0,
+            allow_negative_numbers = true
+        )]
         timeout: f64,
         /// Seconds between two prints with --watch.
-        #[arg(long, value_name = "SECONDS", default_value_t = 0.5)]
+        #[arg(
+            long,
+            value_name = "SECONDS",
+            default_value_t = 0.5,
+            allow_negative_numbers = true
+        )]
         interval: f64,
     },
     /// Emulate a drone and its motion capture over the network, on the embedded simulator.

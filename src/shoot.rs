@@ -53,12 +53,20 @@ fn fail(msg: impl std::fmt::Display) -> ExitCode {
     ExitCode::FAILURE
 }
 
+/// The servo rates a flight may take (`shoot`, `calibrate`): `Err` says why not.
+pub(crate) fn check_servo_rate(rate_hz: f64) -> Result<(), String> {
+    if rate_hz.is_finite() && (10.0..=1000.0).contains(&rate_hz) {
+        Ok(())
+    } else {
+        Err(format!(
+            "--rate {rate_hz} is outside 10–1000 Hz; the servo runs at 100 Hz (the default)"
+        ))
+    }
+}
+
 pub fn run(a: &Args) -> ExitCode {
-    if !(a.rate_hz.is_finite() && (10.0..=1000.0).contains(&a.rate_hz)) {
-        return fail(format!(
-            "--rate {} is outside 10–1000 Hz; the servo runs at 100 Hz (the default)",
-            a.rate_hz
-        ));
+    if let Err(e) = check_servo_rate(a.rate_hz) {
+        return fail(e);
     }
     let loaded = match crate::compile::load_scene(a.file, a.color, "flown") {
         Ok(l) => l,

@@ -255,6 +255,32 @@ fn bad_arguments_exit_1() {
         "{}",
         text(&o.stderr)
     );
+    // The servo rates `shoot` flies, negative numbers included (a 5 Hz or a 1 GHz servo
+    // was flown before, and its fit written).
+    for rate in ["5", "1e9", "-3"] {
+        let o = dronecine(&["calibrate", "--rate", rate, "-o", "/nonexistent/x.toml"]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(
+            text(&o.stderr).contains(&format!("--rate {rate} is outside 10–1000 Hz"))
+                || text(&o.stderr).contains("--rate 1000000000 is outside 10–1000 Hz"),
+            "{}",
+            text(&o.stderr)
+        );
+    }
+    let o = dronecine(&[
+        "identify",
+        "/nonexistent/log.mcap",
+        "-o",
+        "/nonexistent/x.toml",
+        "--window",
+        "-2",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("--window must be a positive number"),
+        "{}",
+        text(&o.stderr)
+    );
     let o = dronecine(&["calibrate", "--repeats", "0", "-o", "/nonexistent/x.toml"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(

@@ -190,6 +190,15 @@ fn bad_input_is_a_clear_error() {
     let o = dronecine(&["shoot", "shots/square.psl", "--rate", "0", "-q"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--rate"), "{}", stderr(&o));
+    // A negative number is the option's value, checked as such (not an unknown flag `-5`
+    // with clap's advice to write `-- -5`, which would make it the script's name).
+    let o = dronecine(&["shoot", "shots/square.psl", "--rate", "-5", "-q"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("--rate -5 is outside 10–1000 Hz"),
+        "{}",
+        stderr(&o)
+    );
 
     let o = dronecine(&[
         "shoot",

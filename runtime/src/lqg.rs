@@ -177,7 +177,7 @@ pub fn check_profile(profile: &Profile, nominal_dt_s: f64) -> Result<(), ServoEr
         return bad(
             "servo.heading_tau_s",
             s.heading_tau_s,
-            "finite and longer than one tick",
+            "finite and longer than the servo's tick (`--dt`, or 1/`--rate`)",
         );
     }
     for (i, &v) in s.process_noise.iter().enumerate() {
