@@ -375,10 +375,13 @@ pub fn render_report_as(
          error RMS {framing}; saturated {saturated}% of ticks"
     );
     if r.failsafes + r.faults + r.deadline_misses > 0 {
+        let count = |n: u64, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
         let _ = writeln!(
             s,
-            "  {} failsafes, {} controller faults, {} missed deadlines (see the log's /events)",
-            r.failsafes, r.faults, r.deadline_misses
+            "  {}, {}, {} (see the log's /events)",
+            count(r.failsafes, "failsafe"),
+            count(r.faults, "controller fault"),
+            count(r.deadline_misses, "missed deadline")
         );
     }
     let _ = writeln!(
