@@ -96,7 +96,7 @@ fn summary_line(name: &str, s: &Script) -> String {
         shots,
         if shots == 1 { "shot" } else { "shots" },
         s.duration_s,
-        if s.is_annotation() {
+        if s.is_annotation() && shots > 0 {
             " (film annotation)"
         } else {
             ""

@@ -153,9 +153,10 @@ impl Loaded {
     }
 }
 
-/// Checks `path`, requires a scene, loads its profile; prints the diagnostics otherwise and
-/// ends with "nothing was {what}".
-pub fn load_scene(path: &Path, color: bool, what: &str) -> Result<Loaded, ExitCode> {
+/// Checks `path`, requires a scene (and with `shots`, a shot), loads its profile; prints the
+/// diagnostics otherwise and ends with "nothing was {what}". `emulate` takes a scene without
+/// shots (its actors and their blocking); `compile` and `shoot` need shots.
+pub fn load_scene(path: &Path, color: bool, what: &str, shots: bool) -> Result<Loaded, ExitCode> {
     let r = check::check_file(path);
     if r.checked.has_errors() || r.checked.script.is_none() {
         err!(
@@ -166,9 +167,11 @@ pub fn load_scene(path: &Path, color: bool, what: &str) -> Result<Loaded, ExitCo
         return Err(ExitCode::FAILURE);
     }
     let script = r.checked.script.as_ref().expect("checked above");
-    let Some(scene) = &script.scene else {
-        let d = compile::no_scene(script);
-        err!("{}", diag::render(&r.name, &r.text, &[d], color, 100));
+    let refused = compile::unflyable(script).filter(|_| shots || script.scene.is_none());
+    let (Some(scene), None) = (&script.scene, &refused) else {
+        let d: Vec<_> = refused.into_iter().collect();
+        err!("{}", diag::render(&r.name, &r.text, &d, color, 100));
+        errln!("error: `{}` has nothing to fly; nothing was {what}", r.name);
         return Err(ExitCode::FAILURE);
     };
     let base = crate::files::base_dir(path);
@@ -183,7 +186,7 @@ pub fn run(a: &Args) -> ExitCode {
             a.rate_hz
         ));
     }
-    let loaded = match load_scene(a.file, a.color, "compiled") {
+    let loaded = match load_scene(a.file, a.color, "compiled", true) {
         Ok(l) => l,
         Err(code) => return code,
     };

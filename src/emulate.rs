@@ -61,7 +61,7 @@ pub fn run(a: &Args) -> ExitCode {
             Vec::new(),
         ),
         Some(path) => {
-            let loaded = match crate::compile::load_scene(path, a.color, "emulated") {
+            let loaded = match crate::compile::load_scene(path, a.color, "emulated", false) {
                 Ok(l) => l,
                 Err(code) => return code,
             };

@@ -68,7 +68,7 @@ pub fn run(a: &Args) -> ExitCode {
     if let Err(e) = check_servo_rate(a.rate_hz) {
         return fail(e);
     }
-    let loaded = match crate::compile::load_scene(a.file, a.color, "flown") {
+    let loaded = match crate::compile::load_scene(a.file, a.color, "flown", true) {
         Ok(l) => l,
         Err(code) => return code,
     };

@@ -223,6 +223,45 @@ fn compile_bad_inputs_are_clear_errors_not_panics() {
     let o = dronecine(&["compile", "shots/annotation.psl", "-o", outs]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("compile::no_scene"), "{}", stderr(&o));
+    // A scene without shots, and an empty file: nothing to fly, said so (the first panicked
+    // in the director, `compile` and `shoot` alike; the second was called a film annotation).
+    let no_shots = dir.join("no-shots.psl");
+    std::fs::write(
+        &no_shots,
+        "stage 8m x 6m x 3m\ndrone ardrone2\nactor Ann height 1.70m at (0, 0) facing 0deg\n",
+    )
+    .unwrap();
+    let empty = dir.join("empty.psl");
+    std::fs::write(&empty, "# nothing yet\n").unwrap();
+    for (script, says) in [
+        (
+            &no_shots,
+            "the script has no shots: there is nothing to fly",
+        ),
+        (&empty, "the script is empty"),
+    ] {
+        let script = script.to_str().unwrap();
+        for args in [
+            vec!["compile", script, "-o", outs],
+            vec!["shoot", script, "-q", "--log", outs],
+        ] {
+            let o = dronecine(&args);
+            assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+            let e = stderr(&o);
+            assert!(e.contains("psl::empty_script") && e.contains(says), "{e}");
+            assert!(e.contains("has nothing to fly"), "{e}");
+        }
+    }
+    assert!(stderr(&dronecine(&[
+        "compile",
+        no_shots.to_str().unwrap(),
+        "-o",
+        outs
+    ]))
+    .contains("add a shot such as `MS on Ann front for 4s`"));
+    assert!(!out.exists(), "nothing compiled, nothing written");
+    let o = dronecine(&["check", empty.to_str().unwrap()]);
+    assert!(!stdout(&o).contains("film annotation"), "{}", stdout(&o));
     // An unwritable output path.
     let o = dronecine(&[
         "compile",

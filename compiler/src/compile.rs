@@ -3,7 +3,7 @@
 
 use dronecine_grammar::script::{Script, ShotContent};
 use dronecine_grammar::vocab::CameraAngle;
-use dronecine_grammar::{Code, Diagnostic};
+use dronecine_grammar::{Code, Diagnostic, Span};
 
 use crate::blocking::Blocking;
 use crate::director::{Director, ShotTiming};
@@ -50,10 +50,10 @@ pub fn compile<E>(
     opts: &Options,
     mut sink: impl FnMut(&Sample, &[ActorPose]) -> Result<(), E>,
 ) -> Result<Compiled, E> {
-    let Some(scene) = &script.scene else {
+    let (Some(scene), None) = (&script.scene, unflyable(script)) else {
         return Ok(Compiled {
             timings: Vec::new(),
-            diagnostics: vec![no_scene(script)],
+            diagnostics: unflyable(script).into_iter().collect(),
             samples: 0,
             duration_s: 0.0,
         });
@@ -88,19 +88,44 @@ pub fn compile<E>(
     })
 }
 
-/// Why a film annotation (no scene set-up) cannot be compiled, on its first shot.
-pub fn no_scene(script: &Script) -> Diagnostic {
-    let span = script.timeline.first().map(|s| s.span).unwrap_or_default();
-    Diagnostic::error(
-        Code::NoScene,
-        span,
-        "this script is a film annotation: it has no stage, actors or drone to fly",
-    )
-    .with_label("subtitle-timed annotation")
-    .with_help(
-        "add a scene set-up (`stage 8m x 6m x 3m`, `actor A height 1.80m at (0, 0) facing 0deg`) \
-         and write the shots with durations (`MS on A for 4s`)",
-    )
+/// Why `script` cannot be compiled or flown, if it cannot: a film annotation (no scene
+/// set-up), an empty script, or a scene without shots.
+pub fn unflyable(script: &Script) -> Option<Diagnostic> {
+    match (&script.scene, script.timeline.first()) {
+        (Some(_), Some(_)) => None,
+        (None, Some(first)) => Some(
+            Diagnostic::error(
+                Code::NoScene,
+                first.span,
+                "this script is a film annotation: it has no stage, actors or drone to fly",
+            )
+            .with_label("subtitle-timed annotation")
+            .with_help(
+                "add a scene set-up (`stage 8m x 6m x 3m`, `actor A height 1.80m at (0, 0) \
+                 facing 0deg`) and write the shots with durations (`MS on A for 4s`)",
+            ),
+        ),
+        (None, None) => Some(
+            Diagnostic::error(Code::EmptyScript, Span::default(), "the script is empty")
+                .with_label("nothing to fly")
+                .with_help(
+                    "write a scene set-up (`stage 8m x 6m x 3m`, `drone ardrone2`, `actor A \
+                     height 1.80m at (0, 0) facing 0deg`) and a shot (`MS on A front for 4s`)",
+                ),
+        ),
+        (Some(scene), None) => {
+            let actor = scene.actors.first().map_or("A", |a| a.name.as_str());
+            Some(
+                Diagnostic::error(
+                    Code::EmptyScript,
+                    Span::default(),
+                    "the script has no shots: there is nothing to fly",
+                )
+                .with_label("a scene set-up without shots")
+                .with_help(format!("add a shot such as `MS on {actor} front for 4s`")),
+            )
+        }
+    }
 }
 
 /// Warnings that need no flight: camera angles a drone without a gimbal cannot render.
@@ -134,4 +159,66 @@ fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn script(text: &str) -> Script {
+        let opts = dronecine_grammar::Options {
+            known_drones: crate::profile::BUILTIN_NAMES,
+            base_dir: None,
+        };
+        let checked = dronecine_grammar::check(text, &opts);
+        assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
+        checked.script.expect("a script")
+    }
+
+    /// A scene without shots compiles to an error, not a panic; the director given one
+    /// anyway is done at once.
+    #[test]
+    fn a_scene_without_shots_is_an_error_not_a_panic() {
+        let s = script(
+            "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n",
+        );
+        let profile = Profile::builtin("ardrone2").unwrap();
+        let mut samples = 0;
+        let c = compile(&s, &profile, &Options::default(), |_, _| {
+            samples += 1;
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        assert_eq!((samples, c.samples), (0, 0));
+        assert!(c.has_errors());
+        assert_eq!(c.diagnostics[0].code, Code::EmptyScript);
+        assert!(
+            c.diagnostics[0].message.contains("no shots"),
+            "{:?}",
+            c.diagnostics
+        );
+
+        let scene = s.scene.as_ref().unwrap();
+        let mut director = Director::new(&s, scene, &profile);
+        let poses = Blocking::new(scene).poses(0.0);
+        let sample = director.step(0.0, &poses);
+        assert!(director.finished());
+        assert!(sample.position_m.iter().all(|x| x.is_finite()));
+    }
+
+    /// A film annotation and an empty script are refused, each for what it is.
+    #[test]
+    fn annotations_and_empty_scripts_are_refused_for_what_they_are() {
+        let annotation = script("1 00:00:01 --> 00:00:05 LS on Rick 34left screen left\n");
+        let d = unflyable(&annotation).unwrap();
+        assert_eq!(d.code, Code::NoScene);
+        let empty = script("# nothing yet\n");
+        let d = unflyable(&empty).unwrap();
+        assert_eq!(d.code, Code::EmptyScript);
+        assert!(d.message.contains("empty"), "{}", d.message);
+        let flyable = script(
+            "stage 8m x 6m x 3m\nactor A height 1.80m at (0, 0) facing 0deg\nMS on A for 2s\n",
+        );
+        assert!(unflyable(&flyable).is_none());
+    }
 }

@@ -387,7 +387,13 @@ impl Director {
     pub fn step(&mut self, t_s: f64, actors: &[ActorPose]) -> Sample {
         let first = matches!(self.phase, Phase::NotStarted);
         if first {
-            self.begin_shot(0, 0.0, actors);
+            if self.shots.is_empty() {
+                // Nothing to direct: done at once, the camera where it is. (`compile` and
+                // the flight refuse such a script before it comes here.)
+                self.phase = Phase::Done;
+            } else {
+                self.begin_shot(0, 0.0, actors);
+            }
         }
         let dt = if first { 0.0 } else { t_s - self.last_t_s };
         let continuous = self.advance(t_s, actors);

@@ -378,6 +378,11 @@ impl<'s, 'b> Flight<'s, 'b> {
                 setup.rate_hz
             )));
         }
+        if setup.script.timeline.is_empty() {
+            return Err(FlightError::Preflight(
+                "the script has no shots: there is nothing to fly".into(),
+            ));
+        }
         let n_actors = setup.scene.actors.len();
         let script_duration_s = setup.script.timeline.last().map_or(0.0, |s| s.end_s);
         let probe = Director::new(setup.script, setup.scene, setup.profile);

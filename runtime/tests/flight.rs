@@ -637,3 +637,16 @@ fn preflight_refuses_a_first_framing_outside_the_stage() {
     }
     assert!(rec.first("take_off").is_none());
 }
+
+#[test]
+fn preflight_refuses_a_scene_without_shots() {
+    // Before, the director indexed the first shot of an empty timeline: a panic.
+    let src = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n";
+    let (r, rec, state) = fly_on(src, |_| {}, None, Rig::plain);
+    match r {
+        Err(FlightError::Preflight(m)) => assert!(m.contains("no shots"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(rec.first("take_off").is_none());
+    assert_eq!(state, FlightState::Landed);
+}
