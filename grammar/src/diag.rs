@@ -55,6 +55,7 @@ codes! {
     DuplicateSetting => "psl::duplicate_setting": "`stage`, `lens` or `drone` is set twice.",
     SetupAfterShots => "psl::setup_after_shots": "A scene set-up line comes after the first shot.",
     OutsideStage => "psl::outside_stage": "A position lies outside the stage volume.",
+    ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
     OverlappingMovement => "psl::overlapping_movement": "Two movements of one actor overlap in time.",
     ThenWithoutShot => "psl::then_without_shot": "A `then` line has no shot before it to continue.",
     ThenAfterPath => "psl::then_after_path": "A `then` move follows a path, which has no composition to move from.",

@@ -30,6 +30,9 @@ pub struct Options<'o> {
 /// Longest time the language accepts anywhere: a day.
 const MAX_TIME_S: f64 = 86_400.0;
 const EPS_S: f64 = 1e-9;
+/// Two actors' start positions closer than this are one place (two bodies cannot stand
+/// closer, centre to centre).
+const MIN_APART_M: f64 = 0.3;
 
 /// Resolve a parsed file. Returns the script when no diagnostic is an error.
 pub fn resolve<'a>(file: &ast::File<'a>, opts: &Options<'_>) -> (Option<Script>, Vec<Diagnostic>) {
@@ -460,6 +463,41 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 if let Some(actor) = self.actor(a, stage.as_ref()) {
                     actors.push(actor);
                 }
+            }
+        }
+
+        // Two actors on one spot: no one stands there, and no framing can tell them apart.
+        for (j, b) in actors.iter().enumerate() {
+            let near = actors[..j].iter().find(|a| {
+                let d = [
+                    a.position_m[0] - b.position_m[0],
+                    a.position_m[1] - b.position_m[1],
+                ];
+                (d[0] * d[0] + d[1] * d[1]).sqrt() < MIN_APART_M
+            });
+            if let Some(a) = near {
+                let d = [
+                    a.position_m[0] - b.position_m[0],
+                    a.position_m[1] - b.position_m[1],
+                ];
+                self.err(
+                    Diagnostic::error(
+                        Code::ActorsOverlap,
+                        b.span,
+                        format!(
+                            "`{}` starts {:.2} m from `{}`: two actors cannot stand in one place",
+                            b.name,
+                            (d[0] * d[0] + d[1] * d[1]).sqrt(),
+                            a.name
+                        ),
+                    )
+                    .with_label(format!("on `{}`'s spot", a.name))
+                    .with_related(a.span, format!("`{}` stands here", a.name))
+                    .with_help(format!(
+                        "move one of them: two actors stand at least {MIN_APART_M} m apart \
+                         (centre to centre)"
+                    )),
+                );
             }
         }
 
