@@ -242,64 +242,55 @@ fn identifies_the_model_from_a_shoot_log() {
 
 #[test]
 fn bad_arguments_exit_1() {
-    let o = dronecine(&[
-        "calibrate",
-        "--axis",
-        "sideways",
-        "-o",
-        "/nonexistent/x.toml",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        text(&o.stderr).contains("--axis `sideways`"),
-        "{}",
-        text(&o.stderr)
-    );
-    // The servo rates `shoot` flies, negative numbers included (a 5 Hz or a 1 GHz servo
-    // was flown before, and its fit written).
-    for rate in ["5", "1e9", "-3"] {
-        let o = dronecine(&["calibrate", "--rate", rate, "-o", "/nonexistent/x.toml"]);
-        assert_eq!(o.status.code(), Some(1));
+    const OUT: &str = "/nonexistent/x.toml";
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["calibrate", "--axis", "sideways", "-o", OUT],
+            "--axis `sideways`",
+        ),
+        // The servo rates `shoot` flies, negative numbers included (a 5 Hz or a 1 GHz servo
+        // was flown before, and its fit written).
+        (
+            &["calibrate", "--rate", "5", "-o", OUT],
+            "--rate 5 is outside 10–1000 Hz",
+        ),
+        (
+            &["calibrate", "--rate", "1e9", "-o", OUT],
+            "--rate 1000000000 is outside 10–1000 Hz",
+        ),
+        (
+            &["calibrate", "--rate", "-3", "-o", OUT],
+            "--rate -3 is outside 10–1000 Hz",
+        ),
+        (
+            &["calibrate", "--repeats", "0", "-o", OUT],
+            "--repeats must be at least 1",
+        ),
+        (
+            &[
+                "identify",
+                "/nonexistent/log.mcap",
+                "-o",
+                OUT,
+                "--window",
+                "-2",
+            ],
+            "--window must be a positive number",
+        ),
+        (
+            &["identify", "/nonexistent/log.mcap", "-o", OUT],
+            "cannot read the flight log",
+        ),
+    ];
+    for (args, says) in cases {
+        let o = dronecine(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
         assert!(
-            text(&o.stderr).contains(&format!("--rate {rate} is outside 10–1000 Hz"))
-                || text(&o.stderr).contains("--rate 1000000000 is outside 10–1000 Hz"),
-            "{}",
+            text(&o.stderr).contains(says),
+            "{args:?}: {}",
             text(&o.stderr)
         );
     }
-    let o = dronecine(&[
-        "identify",
-        "/nonexistent/log.mcap",
-        "-o",
-        "/nonexistent/x.toml",
-        "--window",
-        "-2",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        text(&o.stderr).contains("--window must be a positive number"),
-        "{}",
-        text(&o.stderr)
-    );
-    let o = dronecine(&["calibrate", "--repeats", "0", "-o", "/nonexistent/x.toml"]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        text(&o.stderr).contains("--repeats must be at least 1"),
-        "{}",
-        text(&o.stderr)
-    );
-    let o = dronecine(&[
-        "identify",
-        "/nonexistent/log.mcap",
-        "-o",
-        "/nonexistent/x.toml",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        text(&o.stderr).contains("cannot read the flight log"),
-        "{}",
-        text(&o.stderr)
-    );
 }
 
 #[test]

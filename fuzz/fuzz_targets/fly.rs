@@ -65,11 +65,7 @@ fuzz_target!(|data: &[u8]| {
         scene,
         profile: &profile,
         rate_hz: 50.0,
-        controller: ControllerSetup {
-            kind: "lqg".into(),
-            paper_prefilter: false,
-            per_tick_solve: false,
-        },
+        controller: ControllerSetup::new("lqg"),
         plant: None,
         sim,
         realtime: false,

@@ -68,11 +68,7 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>) {
         scene,
         profile: &profile,
         rate_hz: 100.0,
-        controller: ControllerSetup {
-            kind: "lqg".into(),
-            paper_prefilter: false,
-            per_tick_solve: false,
-        },
+        controller: ControllerSetup::new("lqg"),
         plant: None,
         sim,
         realtime: false,

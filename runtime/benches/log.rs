@@ -134,11 +134,7 @@ fn header(names: &[String]) -> FlightHeader {
         profile_name: "ardrone2".into(),
         profile_toml: String::new(),
         profile: dronecine_compiler::profile::Profile::builtin("ardrone2").unwrap(),
-        controller: ControllerSetup {
-            kind: "lqg".into(),
-            paper_prefilter: false,
-            per_tick_solve: false,
-        },
+        controller: ControllerSetup::new("lqg"),
         backend: "sim".into(),
         seed: Some(1),
         rate_hz: RATE_HZ,

@@ -213,11 +213,7 @@ fn run() -> Result<(), String> {
                 scene,
                 profile: &profile,
                 rate_hz: 100.0,
-                controller: ControllerSetup {
-                    kind: controller.into(),
-                    paper_prefilter: false,
-                    per_tick_solve: false,
-                },
+                controller: ControllerSetup::new(controller),
                 plant: None,
                 sim,
                 realtime: false,

@@ -22,6 +22,18 @@ pub struct ControllerSetup {
     pub per_tick_solve: bool,
 }
 
+impl ControllerSetup {
+    /// The controller `kind` (`"lqg"` or `"pid"`) as `shoot` flies it by default: LQG with
+    /// the acceleration feed-forward and its gains rotated each tick.
+    pub fn new(kind: &str) -> ControllerSetup {
+        ControllerSetup {
+            kind: kind.into(),
+            paper_prefilter: false,
+            per_tick_solve: false,
+        }
+    }
+}
+
 /// Written once, at the start of the log (MCAP metadata `dronecine.flight`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FlightHeader {

@@ -114,11 +114,7 @@ fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
     let script = dronecine_grammar::check(SCRIPT, &opts).script.unwrap();
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
-    let setup = ControllerSetup {
-        kind: "lqg".into(),
-        paper_prefilter: false,
-        per_tick_solve: false,
-    };
+    let setup = ControllerSetup::new("lqg");
     let names: Vec<String> = vec!["A".into(), "B".into()];
     let dir = tempfile::tempdir().unwrap();
     let writer = FlightLogWriter::create(

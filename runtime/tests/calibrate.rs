@@ -192,11 +192,7 @@ fn square_rms_m(servo: &Profile, seed: u64) -> f64 {
         scene: script.scene.as_ref().unwrap(),
         profile: servo,
         rate_hz: 100.0,
-        controller: ControllerSetup {
-            kind: "lqg".into(),
-            paper_prefilter: false,
-            per_tick_solve: false,
-        },
+        controller: ControllerSetup::new("lqg"),
         plant: Some(&nominal),
         sim: SimConfig::new(seed),
         realtime: false,

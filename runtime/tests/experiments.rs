@@ -47,11 +47,7 @@ fn fly_sim(text: &str, script: &Script, controller: &str, sim: SimConfig) -> Fli
         scene,
         profile: &profile,
         rate_hz: 100.0,
-        controller: ControllerSetup {
-            kind: controller.into(),
-            paper_prefilter: false,
-            per_tick_solve: false,
-        },
+        controller: ControllerSetup::new(controller),
         plant: None,
         sim,
         realtime: false,

@@ -167,11 +167,7 @@ fn fly_on(
     config(&mut cfg);
     let sim = Simulator::new(&cfg, &profile, scene).unwrap();
     let mut backends = rig(&sim);
-    let setup = ControllerSetup {
-        kind: "lqg".into(),
-        paper_prefilter: false,
-        per_tick_solve: false,
-    };
+    let setup = ControllerSetup::new("lqg");
     let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
     let mut rec = Recorder::default();
     let result = flight::fly(

@@ -34,11 +34,7 @@ fn fly_to_log(controller: &str, path: &std::path::Path) -> dronecine_runtime::re
     let script = dronecine_grammar::check(SCRIPT, &opts).script.unwrap();
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
-    let setup = ControllerSetup {
-        kind: controller.into(),
-        paper_prefilter: false,
-        per_tick_solve: false,
-    };
+    let setup = ControllerSetup::new(controller);
     let names = vec!["A".to_string()];
     let header = FlightHeader {
         script_name: "walk.psl".into(),
