@@ -55,7 +55,6 @@ codes! {
     DuplicateSetting => "psl::duplicate_setting": "`stage`, `lens` or `drone` is set twice.",
     SetupAfterShots => "psl::setup_after_shots": "A scene set-up line comes after the first shot.",
     OutsideStage => "psl::outside_stage": "A position lies outside the stage volume.",
-    ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
     OverlappingMovement => "psl::overlapping_movement": "Two movements of one actor overlap in time.",
     ThenWithoutShot => "psl::then_without_shot": "A `then` line has no shot before it to continue.",
     ThenAfterPath => "psl::then_after_path": "A `then` move follows a path, which has no composition to move from.",
@@ -87,6 +86,7 @@ codes! {
     Reposition => "compile::reposition": "A cut needs a repositioning flight, inserted before the shot.",
     AngleNotRendered => "compile::angle_not_rendered": "The drone has no gimbal; the camera angle comes from altitude alone or not at all.",
     Unframeable => "compile::unframeable": "No roll-free camera orientation puts the actors at the requested screen positions.",
+    ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
 }
 
 impl fmt::Display for Code {
