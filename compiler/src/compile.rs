@@ -50,10 +50,11 @@ pub fn compile<E>(
     opts: &Options,
     mut sink: impl FnMut(&Sample, &[ActorPose]) -> Result<(), E>,
 ) -> Result<Compiled, E> {
-    let (Some(scene), None) = (&script.scene, unflyable(script)) else {
+    let refused = unflyable(script);
+    let (Some(scene), None) = (&script.scene, &refused) else {
         return Ok(Compiled {
             timings: Vec::new(),
-            diagnostics: unflyable(script).into_iter().collect(),
+            diagnostics: refused.into_iter().collect(),
             samples: 0,
             duration_s: 0.0,
         });

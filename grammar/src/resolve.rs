@@ -468,27 +468,25 @@ impl<'o, 'a> Resolver<'o, 'a> {
 
         // Two actors on one spot: no one stands there, and no framing can tell them apart.
         for (j, b) in actors.iter().enumerate() {
-            let near = actors[..j].iter().find(|a| {
-                let d = [
+            let apart_m = |a: &Actor| {
+                let (dx, dy) = (
                     a.position_m[0] - b.position_m[0],
                     a.position_m[1] - b.position_m[1],
-                ];
-                (d[0] * d[0] + d[1] * d[1]).sqrt() < MIN_APART_M
-            });
-            if let Some(a) = near {
-                let d = [
-                    a.position_m[0] - b.position_m[0],
-                    a.position_m[1] - b.position_m[1],
-                ];
+                );
+                (dx * dx + dy * dy).sqrt()
+            };
+            let near = actors[..j]
+                .iter()
+                .map(|a| (a, apart_m(a)))
+                .find(|&(_, d)| d < MIN_APART_M);
+            if let Some((a, d)) = near {
                 self.err(
                     Diagnostic::error(
                         Code::ActorsOverlap,
                         b.span,
                         format!(
-                            "`{}` starts {:.2} m from `{}`: two actors cannot stand in one place",
-                            b.name,
-                            (d[0] * d[0] + d[1] * d[1]).sqrt(),
-                            a.name
+                            "`{}` starts {d:.2} m from `{}`: two actors cannot stand in one place",
+                            b.name, a.name
                         ),
                     )
                     .with_label(format!("on `{}`'s spot", a.name))
