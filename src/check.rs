@@ -1,10 +1,14 @@
-//! `dronecine check`: parse and resolve scripts, print a summary or the diagnostics.
+//! `dronecine check`: parse and resolve scripts, print a summary or the diagnostics. A script
+//! whose `drone` line names a profile file has that file checked too (its diagnostics point
+//! into the TOML), so a script that passes `check` does not fail `compile` on its profile.
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use dronecine_compiler::profile::{Profile, ProfileError};
 use dronecine_grammar::diag::{self, JsonDiagnostic};
+use dronecine_grammar::script::DroneRef;
 use dronecine_grammar::{Checked, Options, Script, Severity};
 use serde::Serialize;
 
@@ -86,6 +90,44 @@ pub fn check_file(path: &std::path::Path) -> FileResult {
     }
 }
 
+/// The diagnostics of the profile file a checked script names (`drone "mine.toml"`), with
+/// the file's name and text for rendering; `None` when the script names none, or when the
+/// script itself has errors (the profile is checked once the script is).
+pub struct ProfileCheck {
+    pub name: String,
+    pub text: String,
+    pub diagnostics: Vec<dronecine_grammar::Diagnostic>,
+}
+
+pub fn check_profile(path: &std::path::Path, checked: &Checked) -> Option<ProfileCheck> {
+    if checked.has_errors() {
+        return None;
+    }
+    let scene = checked.script.as_ref()?.scene.as_ref()?;
+    let Some(DroneRef::File { path: file }) = &scene.drone else {
+        return None;
+    };
+    let full = files::base_dir(path).join(file);
+    let name = full.display().to_string();
+    let (text, diagnostics) = match Profile::load(&full) {
+        Ok((_, source, warnings)) => (source, warnings),
+        Err(ProfileError::Invalid {
+            source,
+            diagnostics,
+        }) => (source, diagnostics),
+        // Read a moment ago by the script's check, unreadable now: say so.
+        Err(e @ ProfileError::Unreadable { .. }) => (
+            String::new(),
+            e.not_found(Default::default()).into_iter().collect(),
+        ),
+    };
+    (!diagnostics.is_empty()).then_some(ProfileCheck {
+        name,
+        text,
+        diagnostics,
+    })
+}
+
 fn summary_line(name: &str, s: &Script) -> String {
     let actors = s.cast.len();
     let shots = s.timeline.len();
@@ -126,13 +168,15 @@ pub fn run(inputs: &[PathBuf], json: bool, color: bool) -> ExitCode {
     }
     for path in &paths {
         let r = check_file(path);
-        let errors = r
-            .checked
-            .diagnostics
-            .iter()
-            .filter(|d| d.severity == Severity::Error)
-            .count();
-        let warnings = r.checked.diagnostics.len() - errors;
+        let profile = check_profile(path, &r.checked);
+        let all = || {
+            r.checked
+                .diagnostics
+                .iter()
+                .chain(profile.iter().flat_map(|p| &p.diagnostics))
+        };
+        let errors = all().filter(|d| d.severity == Severity::Error).count();
+        let warnings = all().count() - errors;
         if errors > 0 {
             failed += 1;
         }
@@ -151,12 +195,31 @@ pub fn run(inputs: &[PathBuf], json: bool, color: bool) -> ExitCode {
             report
                 .diagnostics
                 .extend(diag::to_json(&r.name, &r.text, &r.checked.diagnostics));
+            if let Some(p) = &profile {
+                report
+                    .diagnostics
+                    .extend(diag::to_json(&p.name, &p.text, &p.diagnostics));
+            }
         } else {
             if !r.checked.diagnostics.is_empty() {
                 let text = diag::render(&r.name, &r.text, &r.checked.diagnostics, color, 100);
                 let _ = stderr.lock().write_all(text.as_bytes());
             }
-            if let Some(s) = &r.checked.script {
+            if let Some(p) = &profile {
+                let text = diag::render(&p.name, &p.text, &p.diagnostics, color, 100);
+                let _ = stderr.lock().write_all(text.as_bytes());
+            }
+            let bad_profile = profile
+                .as_ref()
+                .filter(|p| p.diagnostics.iter().any(|d| d.severity == Severity::Error));
+            if let Some(p) = bad_profile {
+                let _ = writeln!(
+                    stderr.lock(),
+                    "error: the drone profile `{}` of `{}` is not valid",
+                    p.name,
+                    r.name
+                );
+            } else if let Some(s) = &r.checked.script {
                 crate::out::stdout_result(writeln!(stdout.lock(), "{}", summary_line(&r.name, s)));
             }
         }

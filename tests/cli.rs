@@ -108,6 +108,71 @@ fn check_reports_unreadable_and_binary_files_without_panicking() {
     assert!(stderr(&o).contains("psl::empty_script"));
 }
 
+/// `check` checks the profile file a script names, not only that it exists: a script whose
+/// profile `compile` would refuse fails `check` with the profile's own diagnostic (before,
+/// `check` printed the summary and exit 0). A folder named as a profile is called a folder.
+#[test]
+fn check_checks_the_profile_file_a_script_names() {
+    let dir = temp_dir("check-profile");
+    let script = dir.join("s.psl");
+    std::fs::write(
+        &script,
+        "stage 8m x 6m x 3m\ndrone \"mine.toml\"\nactor A height 1.80m at (0, 0) facing 0deg\nMS on A for 2s\n",
+    )
+    .unwrap();
+    let script = script.to_str().unwrap();
+    std::fs::write(dir.join("mine.toml"), profile_text()).unwrap();
+    let o = dronecine(&["check", script]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("s.psl: 1 actor, 1 shot, 2.0 s"));
+
+    std::fs::write(
+        dir.join("mine.toml"),
+        profile_text().replace("tau_vz_s = 1.25", "tau_vz_s = nan"),
+    )
+    .unwrap();
+    let o = dronecine(&["check", script]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("profile::bad_value"), "{e}");
+    assert!(
+        e.contains("mine.toml:21:12"),
+        "points into the profile: {e}"
+    );
+    assert!(
+        e.contains("the drone profile") && e.contains("is not valid"),
+        "{e}"
+    );
+    assert!(stdout(&o).is_empty(), "no summary line for a failed file");
+    let o = dronecine(&["check", "--format", "json", script]);
+    assert_eq!(o.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
+    assert_eq!(v["files"][0]["ok"], false);
+    assert_eq!(v["files"][0]["errors"], 1);
+    let d = &v["diagnostics"][0];
+    assert_eq!(d["code"], "profile::bad_value");
+    assert!(d["file"].as_str().unwrap().ends_with("mine.toml"), "{d}");
+    assert_eq!(
+        (d["line"].as_u64(), d["column"].as_u64()),
+        (Some(21), Some(12))
+    );
+    // As compile says it.
+    let out = dir.join("x.mcap");
+    let o = dronecine(&["compile", script, "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("mine.toml:21:12"), "{}", stderr(&o));
+
+    std::fs::remove_file(dir.join("mine.toml")).unwrap();
+    std::fs::create_dir(dir.join("mine.toml")).unwrap();
+    let o = dronecine(&["check", script]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("`mine.toml` is a folder, not a drone profile file"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn fmt_rewrites_and_check_mode_reports() {
     let dir = temp_dir("fmt");

@@ -707,17 +707,25 @@ impl<'o, 'a> Resolver<'o, 'a> {
             }
             ast::DroneTarget::File(path) => {
                 if let Some(base) = self.opts.base_dir {
-                    if !base.join(path.text).is_file() {
+                    let full = base.join(path.text);
+                    if !full.is_file() {
+                        let folder = full.is_dir();
                         self.err(
                             Diagnostic::error(
                                 Code::FileNotFound,
                                 path.span,
-                                format!("drone profile file `{}` not found", path.text),
+                                if folder {
+                                    format!("`{}` is a folder, not a drone profile file", path.text)
+                                } else {
+                                    format!("drone profile file `{}` not found", path.text)
+                                },
                             )
-                            .with_label(format!("looked in {}", base.join(path.text).display()))
-                            .with_help(
-                                "file names are relative to the script's folder; check the name",
-                            ),
+                            .with_label(format!("looked in {}", full.display()))
+                            .with_help(if folder {
+                                "name the profile's TOML file inside it, as `drone \"profiles/mine.toml\"`"
+                            } else {
+                                "file names are relative to the script's folder; check the name"
+                            }),
                         );
                         return None;
                     }
