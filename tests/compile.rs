@@ -388,3 +388,114 @@ fn a_size_inside_the_safety_distance_is_an_error() {
     ));
     assert!(!c.has_errors(), "{:?}", c.diagnostics);
 }
+
+/// The closest distance between actors `a` and `b` over `[0, end_s]`, by a brute-force scan
+/// of the blocking every 0.1 ms (independent of `Blocking::contacts`' search).
+fn closest_scan(blocking: &Blocking, a: usize, b: usize, end_s: f64) -> (f64, f64) {
+    let mut best = (f64::INFINITY, 0.0);
+    for k in 0..=(end_s * 1e4) as usize {
+        let t = k as f64 * 1e-4;
+        let (p, q) = (
+            blocking.pose(a, t).position_m,
+            blocking.pose(b, t).position_m,
+        );
+        let d = (p[0] - q[0]).hypot(p[1] - q[1]);
+        if d < best.0 {
+            best = (d, t);
+        }
+    }
+    best
+}
+
+/// Walks that take two actors through each other are an error on the walk (the grammar sees
+/// only where actors start: before, such a script compiled with at most a confusing speed or
+/// framing error on the shot), and walks that pass apart, or cross the same spot at
+/// different times, are not.
+#[test]
+fn walks_that_take_actors_through_each_other_are_errors() {
+    let scene = "stage 10m x 8m x 3m\nactor A height 1.80m at (-2, 0) facing 0deg\n\
+                 actor B height 1.70m at (0, 0.4) facing 180deg\n";
+    let collide = |src: &str| {
+        let text = format!("{scene}{src}LS on A and B for 12s\n");
+        let script = script_of(&text);
+        let (c, _, _) = run(&script);
+        let found: Vec<_> = c
+            .diagnostics
+            .iter()
+            .filter(|d| d.code == Code::ActorsCollide)
+            .cloned()
+            .collect();
+        (text, script, found)
+    };
+
+    // A walks through where B stands (0.40 m off A's line: B's centre 0.4 m away, then B
+    // steps onto the line).
+    let (_, _, found) = collide("at 1s A walks to (2, 0) over 4s\n");
+    assert!(found.is_empty(), "0.40 m apart is a pass: {found:?}");
+    let (text2, script2, found2) =
+        collide("at 0s B walks to (0, 0.1) over 1s\nat 1s A walks to (2, 0) over 4s\n");
+    assert_eq!(found2.len(), 1, "{found2:?}");
+    let d = &found2[0];
+    let line = |t: &str, span: dronecine_grammar::Span| t[span.start..span.end].to_string();
+    assert_eq!(line(&text2, d.span), "at 1s A walks to (2, 0) over 4s");
+    assert_eq!(
+        line(&text2, d.related[0].span),
+        "at 0s B walks to (0, 0.1) over 1s",
+        "B stands where its walk left them"
+    );
+    assert!(
+        d.message
+            .starts_with("`A` walks into `B`: 0.10 m apart at 3.0 s"),
+        "{}",
+        d.message
+    );
+    // The closest approach, against a brute-force scan of the blocking.
+    let blocking = Blocking::new(script2.scene.as_ref().unwrap());
+    let (d_scan, t_scan) = closest_scan(&blocking, 0, 1, 12.0);
+    let contact = &blocking.contacts()[0];
+    assert!(
+        (contact.distance_m - d_scan).abs() < 1e-6,
+        "{contact:?} vs {d_scan}"
+    );
+    assert!(
+        (contact.t_s - t_scan).abs() < 1e-3,
+        "{contact:?} vs {t_scan}"
+    );
+
+    // Head on, both walking: the error sits on the later walk, the other's is quoted.
+    let (text, _, found) = collide(
+        "at 0s B walks to (0, 0) over 1s\nat 2s A walks to (1, 0) over 4s\n\
+         at 3s B walks to (-1, 0) over 4s\n",
+    );
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(
+        line(&text, found[0].span),
+        "at 3s B walks to (-1, 0) over 4s"
+    );
+    assert_eq!(
+        line(&text, found[0].related[0].span),
+        "at 2s A walks to (1, 0) over 4s"
+    );
+    assert!(
+        found[0]
+            .message
+            .contains("`B` and `A` walk into each other"),
+        "{}",
+        found[0].message
+    );
+
+    // The same paths, crossing the same spot at different times: no error. So the help's
+    // fix (start the walk when the other is out of the way) works.
+    let (_, _, found) = collide(
+        "at 0s B walks to (0, 0) over 1s\nat 1s B walks to (0, -2) over 2s\n\
+         at 3s A walks to (2, 0) over 4s\n",
+    );
+    assert!(found.is_empty(), "{found:?}");
+    // The threshold: 0.29 m is a collision, 0.31 m a pass.
+    for (y, collides) in [(0.29, true), (0.31, false)] {
+        let (_, _, found) = collide(&format!(
+            "at 0s B walks to (0, {y}) over 1s\nat 1s A walks to (2, 0) over 4s\n"
+        ));
+        assert_eq!(!found.is_empty(), collides, "{y}: {found:?}");
+    }
+}

@@ -5,10 +5,15 @@
 //! short way round. Both follow the quintic `σ(u) = 10u³ − 15u⁴ + 6u⁵` in normalised time,
 //! so speed and acceleration are zero at both ends and the camera that follows an actor never
 //! sees a step. A walk does not turn the actor (turns are written as turns).
+//!
+//! [`Blocking::contacts`] finds the walks that bring two actors within
+//! [`ACTORS_MIN_APART_M`] of each other (the grammar checks only where they start).
 
-use dronecine_grammar::script::{Action, Scene};
+use dronecine_grammar::script::{Action, Scene, ACTORS_MIN_APART_M};
 use dronecine_grammar::vocab::wrap_angle_rad;
+use dronecine_grammar::Span;
 
+use crate::math;
 use crate::reference::ActorPose;
 
 /// Minimum-jerk profile: position, velocity and acceleration factors of `u ∈ [0, 1]`.
@@ -28,6 +33,8 @@ struct Leg {
     start_s: f64,
     end_s: f64,
     kind: LegKind,
+    /// The movement's line in the script.
+    span: Span,
 }
 
 #[derive(Clone, Debug)]
@@ -36,10 +43,30 @@ enum LegKind {
     Turn { from_rad: f64, delta_rad: f64 },
 }
 
+/// Two actors within [`ACTORS_MIN_APART_M`] of each other during a walk: the closest point
+/// of their first such encounter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Contact {
+    /// The actor whose walk brings them together (the later-started walk when both walk).
+    pub walker: usize,
+    /// That walk's line.
+    pub walk_span: Span,
+    pub other: usize,
+    /// The other actor's walk under way at that moment, or the line that put them where they
+    /// stand (their last walk, else their declaration).
+    pub other_span: Span,
+    pub other_walks: bool,
+    /// Script time of the closest approach.
+    pub t_s: f64,
+    pub distance_m: f64,
+}
+
 /// Every actor's poses over time.
 #[derive(Clone, Debug)]
 pub struct Blocking {
     names: Vec<String>,
+    /// Each actor's declaration line.
+    spans: Vec<Span>,
     heights_m: Vec<f64>,
     start: Vec<([f64; 2], f64)>,
     /// Per actor, walks and turns sorted by start (they never overlap per actor).
@@ -68,6 +95,7 @@ impl Blocking {
                             from: pos[i],
                             to: to_m,
                         },
+                        span: m.span,
                     });
                     pos[i] = to_m;
                 }
@@ -80,6 +108,7 @@ impl Blocking {
                             from_rad: facing[i],
                             delta_rad,
                         },
+                        span: m.span,
                     });
                     facing[i] = to_rad;
                 }
@@ -87,6 +116,7 @@ impl Blocking {
         }
         Blocking {
             names: scene.actors.iter().map(|a| a.name.clone()).collect(),
+            spans: scene.actors.iter().map(|a| a.span).collect(),
             heights_m: scene.actors.iter().map(|a| a.height_m).collect(),
             start: scene
                 .actors
@@ -151,6 +181,114 @@ impl Blocking {
             facing_rate_radps: rate,
             height_m: self.heights_m[i],
         }
+    }
+
+    /// The first encounter of each pair of actors closer than [`ACTORS_MIN_APART_M`] during
+    /// a walk, by pair (declaration order). Between the walks' starts and ends each actor
+    /// stands or follows one walk, so each such interval is sampled finely enough that the
+    /// two move at most 1 cm between samples (the distance found is within 5 mm of the
+    /// closest), then the closest sample refined by golden-section search. Standing actors
+    /// keep their distance: the grammar checked where they start, and each walk's end is a
+    /// sample.
+    pub fn contacts(&self) -> Vec<Contact> {
+        let mut out = Vec::new();
+        for a in 0..self.len() {
+            for b in a + 1..self.len() {
+                if let Some(c) = self.first_contact(a, b) {
+                    out.push(c);
+                }
+            }
+        }
+        out
+    }
+
+    fn first_contact(&self, a: usize, b: usize) -> Option<Contact> {
+        let walk_len = |l: &Leg| match l.kind {
+            LegKind::Walk { from, to } => math::hypot(to[0] - from[0], to[1] - from[1]),
+            LegKind::Turn { .. } => 0.0,
+        };
+        let mut times: Vec<f64> = self.walks[a]
+            .iter()
+            .chain(&self.walks[b])
+            .flat_map(|l| [l.start_s, l.end_s])
+            .filter(|t| t.is_finite())
+            .collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        let distance = |t: f64| {
+            let (p, q) = (self.pose(a, t).position_m, self.pose(b, t).position_m);
+            math::hypot(p[0] - q[0], p[1] - q[1])
+        };
+        // The walk of actor `i` under way in (t0, t1), if any.
+        let walking = |i: usize, t0: f64, t1: f64| {
+            self.walks[i]
+                .iter()
+                .find(|l| l.start_s < t1 && l.end_s > t0)
+        };
+        for w in times.windows(2) {
+            let (t0, t1) = (w[0], w[1]);
+            let (wa, wb) = (walking(a, t0, t1), walking(b, t0, t1));
+            // The walker: the walk under way that started last.
+            let (walker, walk, other, other_walk) = match (wa, wb) {
+                (Some(x), Some(y)) if y.start_s > x.start_s => (b, y, a, Some(x)),
+                (Some(x), y) => (a, x, b, y),
+                (None, Some(y)) => (b, y, a, None),
+                (None, None) => continue,
+            };
+            // Peak speed of a minimum-jerk walk: 1.875 · length / duration.
+            let peak =
+                |l: Option<&Leg>| l.map_or(0.0, |l| 1.875 * walk_len(l) / (l.end_s - l.start_s));
+            let (reach_a, reach_b) = (wa.map_or(0.0, walk_len), wb.map_or(0.0, walk_len));
+            if distance(t0) - (reach_a + reach_b) >= ACTORS_MIN_APART_M {
+                continue;
+            }
+            let speed = peak(wa) + peak(wb);
+            let steps = ((t1 - t0) * speed / 0.01).ceil().clamp(8.0, 1e6) as usize;
+            let h = (t1 - t0) / steps as f64;
+            let (k, d) = (0..=steps)
+                .map(|k| (k, distance(t0 + k as f64 * h)))
+                .fold((0, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
+            if !(d < ACTORS_MIN_APART_M) {
+                continue;
+            }
+            // Golden-section search around the closest sample.
+            let (mut lo, mut hi) = (
+                t0 + k.saturating_sub(1) as f64 * h,
+                (t0 + (k + 1) as f64 * h).min(t1),
+            );
+            let g = (5f64.sqrt() - 1.0) / 2.0;
+            for _ in 0..60 {
+                let (m1, m2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+                if distance(m1) <= distance(m2) {
+                    hi = m2;
+                } else {
+                    lo = m1;
+                }
+            }
+            let t = 0.5 * (lo + hi);
+            let (t_s, distance_m) = if distance(t) < d {
+                (t, distance(t))
+            } else {
+                (t0 + k as f64 * h, d)
+            };
+            let other_span = other_walk.map(|l| l.span).unwrap_or_else(|| {
+                self.walks[other]
+                    .iter()
+                    .rev()
+                    .find(|l| l.end_s <= t_s)
+                    .map_or(self.spans[other], |l| l.span)
+            });
+            return Some(Contact {
+                walker,
+                walk_span: walk.span,
+                other,
+                other_span,
+                other_walks: other_walk.is_some(),
+                t_s,
+                distance_m,
+            });
+        }
+        None
     }
 
     /// Every actor's pose at `t_s`, written into `out` (one per actor, declaration order).

@@ -1,7 +1,7 @@
 //! Batch compilation: the director driven by the script's own blocking, sample by sample,
 //! into any sink (MCAP, CSV, previews, tests).
 
-use dronecine_grammar::script::{Script, ShotContent};
+use dronecine_grammar::script::{Script, ShotContent, ACTORS_MIN_APART_M};
 use dronecine_grammar::vocab::CameraAngle;
 use dronecine_grammar::{Code, Diagnostic, Span};
 
@@ -61,6 +61,7 @@ pub fn compile<E>(
     };
     let mut diagnostics = static_warnings(script, profile);
     let blocking = Blocking::new(scene);
+    diagnostics.extend(collisions(&blocking));
     let mut director = Director::new(script, scene, profile);
     let mut poses = blocking.poses(0.0);
     let mut k: u64 = 0;
@@ -127,6 +128,48 @@ pub fn unflyable(script: &Script) -> Option<Diagnostic> {
             )
         }
     }
+}
+
+/// The blocking's walks that bring two actors within [`ACTORS_MIN_APART_M`] of each other
+/// (one error per pair: its first encounter).
+fn collisions(blocking: &Blocking) -> Vec<Diagnostic> {
+    let names = blocking.names();
+    blocking
+        .contacts()
+        .into_iter()
+        .map(|c| {
+            let (walker, other) = (&names[c.walker], &names[c.other]);
+            let what = if c.other_walks {
+                format!("`{walker}` and `{other}` walk into each other")
+            } else {
+                format!("`{walker}` walks into `{other}`")
+            };
+            Diagnostic::error(
+                Code::ActorsCollide,
+                c.walk_span,
+                format!(
+                    "{what}: {:.2} m apart at {:.1} s, where two bodies cannot pass",
+                    c.distance_m, c.t_s
+                ),
+            )
+            .with_label(format!(
+                "{:.2} m from `{other}` at {:.1} s",
+                c.distance_m, c.t_s
+            ))
+            .with_related(
+                c.other_span,
+                if c.other_walks {
+                    format!("`{other}` walks here at the same time")
+                } else {
+                    format!("`{other}` stands where this puts them")
+                },
+            )
+            .with_help(format!(
+                "end the walk elsewhere, or start it when `{other}` is out of the way: actors \
+                 pass at least {ACTORS_MIN_APART_M} m apart (centre to centre)"
+            ))
+        })
+        .collect()
 }
 
 /// Warnings that need no flight: camera angles a drone without a gimbal cannot render.

@@ -87,6 +87,7 @@ codes! {
     AngleNotRendered => "compile::angle_not_rendered": "The drone has no gimbal; the camera angle comes from altitude alone or not at all.",
     Unframeable => "compile::unframeable": "No roll-free camera orientation puts the actors at the requested screen positions.",
     ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
+    ActorsCollide => "compile::actors_collide": "The blocking walks two actors into each other.",
 }
 
 impl fmt::Display for Code {

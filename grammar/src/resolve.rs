@@ -30,9 +30,6 @@ pub struct Options<'o> {
 /// Longest time the language accepts anywhere: a day.
 const MAX_TIME_S: f64 = 86_400.0;
 const EPS_S: f64 = 1e-9;
-/// Two actors' start positions closer than this are one place (two bodies cannot stand
-/// closer, centre to centre).
-const MIN_APART_M: f64 = 0.3;
 
 /// Resolve a parsed file. Returns the script when no diagnostic is an error.
 pub fn resolve<'a>(file: &ast::File<'a>, opts: &Options<'_>) -> (Option<Script>, Vec<Diagnostic>) {
@@ -478,7 +475,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             let near = actors[..j]
                 .iter()
                 .map(|a| (a, apart_m(a)))
-                .find(|&(_, d)| d < MIN_APART_M);
+                .find(|&(_, d)| d < ACTORS_MIN_APART_M);
             if let Some((a, d)) = near {
                 self.err(
                     Diagnostic::error(
@@ -492,7 +489,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     .with_label(format!("on `{}`'s spot", a.name))
                     .with_related(a.span, format!("`{}` stands here", a.name))
                     .with_help(format!(
-                        "move one of them: two actors stand at least {MIN_APART_M} m apart \
+                        "move one of them: two actors stand at least {ACTORS_MIN_APART_M} m apart \
                          (centre to centre)"
                     )),
                 );

@@ -89,6 +89,11 @@ pub enum DroneRef {
     },
 }
 
+/// Two actors closer than this, centre to centre, are in one place: two bodies cannot stand
+/// closer. Declared start positions are checked against it here (`psl::actors_overlap`), the
+/// blocking's walks by the compiler (`compile::actors_collide`).
+pub const ACTORS_MIN_APART_M: f64 = 0.3;
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Actor {
     pub name: String,
