@@ -324,6 +324,17 @@ fn compile_bad_inputs_are_clear_errors_not_panics() {
         outs
     ]))
     .contains("add a shot such as `MS on Ann front for 4s`"));
+    // Both the check's warning and compile's error point where the first shot would go:
+    // after the set-up's last line, not at line 1.
+    let at = format!("{}:3:45", no_shots.display());
+    let o = dronecine(&["check", no_shots.to_str().unwrap()]);
+    assert!(
+        stderr(&o).contains(&at) && stderr(&o).contains("`MS on Ann front for 4s`"),
+        "{}",
+        stderr(&o)
+    );
+    let o = dronecine(&["compile", no_shots.to_str().unwrap(), "-o", outs]);
+    assert!(stderr(&o).contains(&at), "{}", stderr(&o));
     assert!(!out.exists(), "nothing compiled, nothing written");
     let o = dronecine(&["check", empty.to_str().unwrap()]);
     assert!(!stdout(&o).contains("film annotation"), "{}", stdout(&o));

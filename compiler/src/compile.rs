@@ -117,10 +117,16 @@ pub fn unflyable(script: &Script) -> Option<Diagnostic> {
         ),
         (Some(scene), None) => {
             let actor = scene.actors.first().map_or("A", |a| a.name.as_str());
+            // Where the first shot would go: after the set-up's last line.
+            let end = (scene.actors.iter().map(|a| a.span))
+                .chain(scene.blocking.iter().map(|m| m.span))
+                .map(|s| s.end)
+                .max()
+                .unwrap_or(0);
             Some(
                 Diagnostic::error(
                     Code::EmptyScript,
-                    Span::default(),
+                    Span::new(end, end),
                     "the script has no shots: there is nothing to fly",
                 )
                 .with_label("a scene set-up without shots")

@@ -512,14 +512,16 @@ impl<'o, 'a> Resolver<'o, 'a> {
         let duration_s = timeline.last().map(|s| s.end_s).unwrap_or(0.0);
         if timeline.is_empty() && !any_syntax_error && !self.diags.iter().any(Diagnostic::is_error)
         {
-            let span = statements.first().map(|s| s.span()).unwrap_or_default();
+            // Where the first shot would go: after the last line.
+            let end = statements.last().map_or(0, |s| s.span().end);
+            let actor = actors.first().map_or("A", |a| a.name.as_str());
             self.err(
                 Diagnostic::warning(
                     Code::EmptyScript,
-                    Span::new(span.start, span.start),
+                    Span::new(end, end),
                     "the script has no shots",
                 )
-                .with_help("add a shot such as `MS on A front for 4s`"),
+                .with_help(format!("add a shot such as `MS on {actor} front for 4s`")),
             );
         }
 
