@@ -113,8 +113,9 @@ enum Command {
         /// The script.
         #[arg(value_name = "FILE")]
         file: PathBuf,
-        /// The flight log to write [default: flights/<script>-<UTC time>.mcap].
-        #[arg(long, value_name = "FILE")]
+        /// The flight log to write, a new file (a recording is never overwritten), or a folder
+        /// to write the time-stamped one in [default: flights/<script>-<UTC time>.mcap].
+        #[arg(long, value_name = "FILE|DIR")]
         log: Option<PathBuf>,
         /// The simulator's seed (noise, wind, radio loss, the actors' deviations).
         #[arg(long, value_name = "N", default_value_t = 1)]

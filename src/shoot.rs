@@ -113,9 +113,12 @@ pub fn run(a: &Args) -> ExitCode {
         .file_stem()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "flight".into());
-    let log_path = match a.log {
-        Some(p) => p.to_path_buf(),
-        None => default_log_path(&script_name),
+    // `--log DIR` (an existing folder): the time-stamped name, in that folder.
+    let into_dir = a.log.filter(|p| p.is_dir());
+    let mut log_path = match (a.log, into_dir) {
+        (_, Some(dir)) => dir.join(default_log_name(&script_name)),
+        (Some(p), None) => p.to_path_buf(),
+        (None, None) => Path::new("flights").join(default_log_name(&script_name)),
     };
     if let Some(dir) = log_path.parent().filter(|d| !d.as_os_str().is_empty()) {
         if let Err(e) = std::fs::create_dir_all(dir) {
@@ -154,10 +157,26 @@ pub fn run(a: &Args) -> ExitCode {
         flush_period_s: 1.0 - log::BATCH_PERIOD_S - log::POLL_MAX_S,
         ..LogOptions::default()
     };
-    let mut log = match FlightLogWriter::create_with(&log_path, &header, &log_scene, options)
-        .and_then(|w| LogThread::spawn(w, a.rate_hz))
-    {
+    // A flight never overwrites a recording: a `--log` that exists is refused before take-off,
+    // and a default name already taken (two flights in one second) gets `-2`, `-3`, …
+    let created = if a.log.is_some() && into_dir.is_none() {
+        FlightLogWriter::create_new_with(&log_path, &header, &log_scene, options)
+    } else {
+        let (path, created) = first_free(&log_path, |p| {
+            FlightLogWriter::create_new_with(p, &header, &log_scene, options)
+        });
+        log_path = path;
+        created
+    };
+    let mut log = match created.and_then(|w| LogThread::spawn(w, a.rate_hz)) {
         Ok(w) => w,
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            return fail(format!(
+                "the flight log `{}` already exists; a flight does not overwrite a recording\n  \
+                 help: give --log a new name, or leave it out for a time-stamped one in flights/",
+                log_path.display()
+            ))
+        }
         Err(e) => return fail(e),
     };
     // Ctrl-C lands, a second Ctrl-C cuts the motors (the flight loop reads the count).
@@ -234,20 +253,41 @@ pub fn run(a: &Args) -> ExitCode {
     }
 }
 
-/// `flights/<script>-<UTC timestamp>.mcap`.
-fn default_log_path(script: &str) -> PathBuf {
+/// `<script>-<UTC timestamp>.mcap` (in `flights/`, or the folder `--log` names).
+fn default_log_name(script: &str) -> String {
     let secs = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
         .unwrap_or(0);
     let (days, rem) = (secs / 86_400, secs % 86_400);
     let (y, m, d) = civil_from_days(days as i64);
-    PathBuf::from("flights").join(format!(
+    format!(
         "{script}-{y:04}{m:02}{d:02}-{:02}{:02}{:02}.mcap",
         rem / 3600,
         rem / 60 % 60,
         rem % 60
-    ))
+    )
+}
+
+/// `create(base)`, or while that says the file exists, `create` of `base` numbered `-2`,
+/// `-3`, … (`flights/x-20261123-023000-2.mcap`), up to `-999`: the name taken and what
+/// `create` gave.
+fn first_free<T>(
+    base: &Path,
+    mut create: impl FnMut(&Path) -> std::io::Result<T>,
+) -> (PathBuf, std::io::Result<T>) {
+    let stem = base.file_stem().unwrap_or_default().to_string_lossy();
+    let mut path = base.to_path_buf();
+    let mut n = 1;
+    loop {
+        match create(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n < 999 => {
+                n += 1;
+                path = base.with_file_name(format!("{stem}-{n}.mcap"));
+            }
+            r => return (path, r),
+        }
+    }
 }
 
 /// Days since 1970-01-01 → (year, month, day), proleptic Gregorian (Howard Hinnant's
@@ -406,8 +446,9 @@ pub fn render_report_as(
 
 #[cfg(test)]
 mod tests {
-    use super::{civil_from_days, render_report};
+    use super::{civil_from_days, first_free, render_report};
     use dronecine_runtime::report::{Figures, FlightReport, ShotReport};
+    use std::path::Path;
 
     #[test]
     fn unmeasured_figures_print_as_dashes() {
@@ -454,6 +495,35 @@ mod tests {
         assert_eq!(rows.len(), 1, "{text}");
         let cells: Vec<&str> = rows[0].split_whitespace().collect();
         assert_eq!(cells[..6], ["2", "—", "—", "—", "—", "0.0"], "{text}");
+    }
+
+    /// A default log name already taken (two flights in one second) is numbered, never
+    /// overwritten; other errors come back as they are.
+    #[test]
+    fn a_taken_default_log_name_is_numbered() {
+        let dir = std::env::temp_dir().join(format!("dronecine-first-free-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let base = dir.join("x-20261123-023000.mcap");
+        let create = |p: &Path| {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(p)
+        };
+        let (first, r) = first_free(&base, create);
+        assert!(r.is_ok());
+        assert_eq!(first, base);
+        std::fs::write(&base, b"the first flight").unwrap();
+        let (second, r) = first_free(&base, create);
+        assert!(r.is_ok());
+        assert_eq!(second, dir.join("x-20261123-023000-2.mcap"));
+        let (third, _) = first_free(&base, create);
+        assert_eq!(third, dir.join("x-20261123-023000-3.mcap"));
+        assert_eq!(std::fs::read(&base).unwrap(), b"the first flight");
+        let (_, r) = first_free(&dir.join("no/such/dir/y.mcap"), create);
+        assert_eq!(r.unwrap_err().kind(), std::io::ErrorKind::NotFound);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

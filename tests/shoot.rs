@@ -168,6 +168,61 @@ fn shoot_text_report_and_default_log_location() {
         logs[0].starts_with("square-") && logs[0].ends_with(".mcap"),
         "{logs:?}"
     );
+
+    // A flight never overwrites a recording. Two more flights, in the same second or not:
+    // three logs (a default name already taken is numbered `-2`, `-3`).
+    for _ in 0..2 {
+        let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
+            .args(["shoot", "square.psl", "-q", "--seed", "9"])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert_eq!(std::fs::read_dir(dir.join("flights")).unwrap().count(), 3);
+    // An explicit --log that exists is refused before take-off, the file untouched.
+    let first = dir.join("flights").join(&logs[0]);
+    let before = std::fs::read(&first).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
+        .args([
+            "shoot",
+            "square.psl",
+            "-q",
+            "--log",
+            first.to_str().unwrap(),
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("already exists; a flight does not overwrite a recording"),
+        "{e}"
+    );
+    assert!(o.stdout.is_empty(), "nothing flown: {}", stdout(&o));
+    assert_eq!(std::fs::read(&first).unwrap(), before);
+    // `--log DIR`: the time-stamped name, in that folder.
+    std::fs::create_dir(dir.join("day2")).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
+        .args(["shoot", "square.psl", "-q", "--log", "day2"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let day2: Vec<_> = std::fs::read_dir(dir.join("day2"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert!(
+        day2.len() == 1 && day2[0].starts_with("square-") && day2[0].ends_with(".mcap"),
+        "{day2:?}"
+    );
+    assert!(
+        stderr(&o).contains(&format!("flight log: day2/{}", day2[0])),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]

@@ -176,6 +176,34 @@ impl FlightLogWriter {
             .truncate(true)
             .open(path)
             .map_err(|e| annotate(path, e))?;
+        Self::start(file, path, header, scene, options)
+    }
+
+    /// As [`FlightLogWriter::create_with`], but only as a new file: a file already at `path`
+    /// (a previous flight's recording, say) is left alone and the error's kind is
+    /// [`io::ErrorKind::AlreadyExists`]. The check and the creation are one step, so two
+    /// flights started at once cannot both take the name.
+    pub fn create_new_with(
+        path: &Path,
+        header: &FlightHeader,
+        scene: &LogScene,
+        options: LogOptions,
+    ) -> io::Result<FlightLogWriter> {
+        let file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+            .map_err(|e| annotate(path, e))?;
+        Self::start(file, path, header, scene, options)
+    }
+
+    fn start(
+        file: File,
+        path: &Path,
+        header: &FlightHeader,
+        scene: &LogScene,
+        options: LogOptions,
+    ) -> io::Result<FlightLogWriter> {
         let err = |e| annotate(path, e);
         let sync_file = file.try_clone().ok();
         let compression = match options.compression {
