@@ -99,6 +99,52 @@ pub fn run(a: &Args, color: bool) -> ExitCode {
             p.servo.r = numbers::<3>("r", t)?;
             given.push("servo.r");
         }
+        // The profile's own ranges hold for the overrides too.
+        let m = &p.model;
+        let index = |i: usize| format!("[{i}]");
+        let values = [
+            ("model", "tau_roll_s", m.tau_roll_s, "tau"),
+            ("model", "tau_pitch_s", m.tau_pitch_s, "tau"),
+            ("model", "tau_vz_s", m.tau_vz_s, "tau"),
+            (
+                "model",
+                "gain_roll_mps_per_rad",
+                m.gain_roll_mps_per_rad,
+                "gain",
+            ),
+            (
+                "model",
+                "gain_pitch_mps_per_rad",
+                m.gain_pitch_mps_per_rad,
+                "gain",
+            ),
+            ("model", "gain_vz", m.gain_vz, "gain"),
+        ]
+        .into_iter()
+        .map(|(s, k, x, f)| (s, k, String::new(), x, f))
+        .chain(
+            p.servo
+                .q
+                .iter()
+                .enumerate()
+                .map(|(i, &x)| ("servo", "q", index(i), x, "q")),
+        )
+        .chain(
+            p.servo
+                .r
+                .iter()
+                .enumerate()
+                .map(|(i, &x)| ("servo", "r", index(i), x, "r")),
+        );
+        for (section, key, what, x, flag) in values {
+            let overridden = given.iter().any(|g| g.ends_with(flag));
+            if let Some(why) = overridden
+                .then(|| dronecine_compiler::profile::out_of_range(section, key, &what, x))
+                .flatten()
+            {
+                return Err(format!("--{flag}: {why}"));
+            }
+        }
         Ok(given)
     })();
     let given = match overrides {

@@ -156,7 +156,36 @@ fn bad_weights_fail_with_exit_code_1() {
 
     let o = dronecine(&["gains", "--r", "50,-1,5"]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("servo.r[1] = -1"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--r: `r[1]` is -1, outside its range: it must be > 0"),
+        "{}",
+        stderr(&o)
+    );
+    // The overrides are held to the profile's own ranges (before, `--tau 1000,1,1` printed
+    // gains for a model no profile file may have).
+    for (args, says) in [
+        (
+            ["--tau", "1000,1,1"],
+            "--tau: `tau_roll_s` is 1000 s, outside its range: it must be > 0 and ≤ 30 s",
+        ),
+        (
+            ["--gain", "17.5,17.5,0"],
+            "--gain: `gain_vz` is 0, outside its range: it must be > 0 and ≤ 10",
+        ),
+        (
+            ["--q", "1,-1,1,30,30,30"],
+            "--q: `q[1]` is -1, outside its range: it must be ≥ 0",
+        ),
+        (
+            ["--tau", "1,nan,1"],
+            "--tau: `tau_pitch_s` must be a finite number, not NaN",
+        ),
+    ] {
+        let o = dronecine(&["gains", args[0], args[1]]);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+        assert!(stdout(&o).is_empty());
+    }
 
     let o = dronecine(&["gains", "--q", "1,1,1"]);
     assert_eq!(o.status.code(), Some(1));

@@ -529,7 +529,7 @@ const ROOT: SectionSpec = SectionSpec {
             "description",
             Kind::Text,
             "",
-            "\"Parrot AR.Drone 2.0\"",
+            "\"Parrot AR.Drone 2.0, indoor firmware limits\"",
             "a line saying which drone this is",
         )),
         key("model", Kind::Special, "", "", "the plant model"),
@@ -644,7 +644,7 @@ const LIMITS: SectionSpec = SectionSpec {
             "jerk_max_mps3",
             Kind::Num(Range::new(POSITIVE, Hi::Le(100.0))),
             " m/s³",
-            "2.0",
+            "5.0",
             "the jerk bound that keeps the reference smooth",
         ),
     ],
@@ -735,14 +735,14 @@ const SERVO: SectionSpec = SectionSpec {
             "q",
             Kind::List(XYZ6, Range::new(Lo::Ge(0.0), Hi::Any)),
             "",
-            "[1.0, 1.0, 1.0, 10.0, 10.0, 10.0]",
+            "[1.0, 1.0, 1.0, 30.0, 30.0, 30.0]",
             "the LQG state weights on [vx, vy, vz, x, y, z]",
         ),
         key(
             "r",
             Kind::List(&["roll", "pitch", "vz"], Range::new(POSITIVE, Hi::Any)),
             "",
-            "[50.0, 50.0, 5.0]",
+            "[30.0, 30.0, 5.0]",
             "the LQG input weights on [roll, pitch, vz]; they must be positive for the regulator's gain to exist",
         ),
         key(
@@ -756,7 +756,7 @@ const SERVO: SectionSpec = SectionSpec {
             "heading_tau_s",
             Kind::Num(Range::new(POSITIVE, Hi::Le(60.0))),
             " s",
-            "1.0",
+            "0.5",
             "the time in which the heading error falls to heading_gamma of itself",
         ),
         key(
@@ -1189,15 +1189,51 @@ fn parse_float(s: &str) -> Option<f64> {
     s.replace('_', "").parse::<f64>().ok()
 }
 
+/// Why `x` cannot be the value of `[section] key` (its entry `what`, `"[1]"`, for a list), in
+/// the words of the profile's own range check; `None` when it can, or when the key is not a
+/// number. For values that come from elsewhere than a profile file (`dronecine gains --tau`).
+pub fn out_of_range(section: &str, key: &str, what: &str, x: f64) -> Option<String> {
+    let spec = [&ROOT, &MODEL, &LIMITS, &CAMERA, &GIMBAL, &SAFETY, &SERVO]
+        .into_iter()
+        .find(|s| s.name == section)?
+        .keys
+        .iter()
+        .find(|k| k.name == key)?;
+    let range = match spec.kind {
+        Kind::Num(r) | Kind::List(_, r) => r,
+        Kind::Text | Kind::Special => return None,
+    };
+    if !x.is_finite() {
+        return Some(format!("`{key}{what}` must be a finite number, not {x}"));
+    }
+    (!range.contains(x)).then(|| {
+        format!(
+            "`{key}{what}` is {x}{}, outside its range: it must be {}",
+            spec.unit,
+            range.describe(spec.unit)
+        )
+    })
+}
+
+/// `(the AR.Drone 2.0 has `key = value`)` when the built-in profile sets the key (the
+/// example is its value: a test pins it), `(for example `key = value`)` when it does not.
+fn example(spec: &KeySpec) -> String {
+    let set = ARDRONE2_TOML
+        .lines()
+        .any(|l| l.split('=').next().map(str::trim) == Some(spec.name));
+    if set {
+        format!("(the AR.Drone 2.0 has `{} = {}`)", spec.name, spec.example)
+    } else {
+        format!("(for example `{} = {}`)", spec.name, spec.example)
+    }
+}
+
 impl<'s> Reader<'s> {
     fn bad(&mut self, span: Span, message: String, label: String, spec: &KeySpec) {
         let help = if spec.example.is_empty() {
             spec.meaning.to_string()
         } else {
-            format!(
-                "{}: {} (the AR.Drone 2.0 has `{} = {}`)",
-                spec.name, spec.meaning, spec.name, spec.example
-            )
+            format!("{}: {} {}", spec.name, spec.meaning, example(spec))
         };
         self.diags.push(
             Diagnostic::error(Code::ProfileBadValue, span, message)
@@ -1232,10 +1268,7 @@ impl<'s> Reader<'s> {
                         if spec.unit.is_empty() { " none here" } else { spec.unit }
                     )
                 } else {
-                    format!(
-                        "{}: {} (the AR.Drone 2.0 has `{} = {}`)",
-                        spec.name, spec.meaning, spec.name, spec.example
-                    )
+                    format!("{}: {} {}", spec.name, spec.meaning, example(spec))
                 };
                 self.diags.push(
                     Diagnostic::error(
@@ -1285,12 +1318,9 @@ impl<'s> Reader<'s> {
             return true;
         }
         let allowed = range.describe(spec.unit);
-        let mut help = format!(
-            "{}: {} (the AR.Drone 2.0 has `{} = {}`)",
-            spec.name, spec.meaning, spec.name, spec.example
-        );
+        let mut help = format!("{}: {} {}", spec.name, spec.meaning, example(spec));
         if spec.name == "q" {
-            help = "Q weighs the state [vx, vy, vz, x, y, z]; a negative weight rewards errors, so the LQG regulator would not exist (the AR.Drone 2.0 has `q = [1.0, 1.0, 1.0, 10.0, 10.0, 10.0]`)".to_string();
+            help = format!("Q weighs the state [vx, vy, vz, x, y, z]; a negative weight rewards errors, so the LQG regulator would not exist {}", example(spec));
         }
         self.diags.push(
             Diagnostic::error(
@@ -1887,7 +1917,7 @@ impl<'s> Reader<'s> {
                             )
                             .with_label("must be > 0")
                             .with_help(format!(
-                                "with no weight on the {axis} position the LQG regulator is not stabilising: nothing pulls the drone back to the reference along {axis}, and it drifts. Use a positive weight (the AR.Drone 2.0 has 10.0)"
+                                "with no weight on the {axis} position the LQG regulator is not stabilising: nothing pulls the drone back to the reference along {axis}, and it drifts. Use a positive weight {}", example(SERVO.spec("q"))
                             )),
                         );
                     }
@@ -1989,6 +2019,39 @@ fn unknown_key_help(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every example a help line gives as the AR.Drone 2.0's value is the built-in
+    /// profile's value (they had drifted: the help quoted `q = [1, 1, 1, 10, 10, 10]`
+    /// against the profile's 30s); keys the profile leaves out are given "for example".
+    #[test]
+    fn the_help_quotes_the_built_in_profile() {
+        let builtin: toml::Table = toml::from_str(ARDRONE2_TOML).unwrap();
+        let mut checked = 0;
+        for spec in [&ROOT, &MODEL, &LIMITS, &CAMERA, &GIMBAL, &SAFETY, &SERVO] {
+            let table = if spec.name.is_empty() {
+                Some(&builtin)
+            } else {
+                builtin.get(spec.name).and_then(toml::Value::as_table)
+            };
+            for key in spec.keys {
+                if matches!(key.kind, Kind::Special) || key.example.is_empty() {
+                    continue;
+                }
+                let help = example(key);
+                match table.and_then(|t| t.get(key.name)) {
+                    Some(value) => {
+                        let quoted: toml::Table =
+                            toml::from_str(&format!("v = {}", key.example)).unwrap();
+                        assert_eq!(&quoted["v"], value, "[{}] {}", spec.name, key.name);
+                        assert!(help.starts_with("(the AR.Drone 2.0 has"), "{help}");
+                        checked += 1;
+                    }
+                    None => assert!(help.starts_with("(for example"), "{help}"),
+                }
+            }
+        }
+        assert!(checked >= 20, "only {checked} keys compared");
+    }
 
     fn ardrone2() -> Profile {
         Profile::builtin("ardrone2").expect("ardrone2 parses")
