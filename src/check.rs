@@ -91,15 +91,17 @@ pub fn check_file(path: &std::path::Path) -> FileResult {
 }
 
 /// The diagnostics of the profile file a checked script names (`drone "mine.toml"`), with
-/// the file's name and text for rendering; `None` when the script names none, or when the
-/// script itself has errors (the profile is checked once the script is).
-pub struct ProfileCheck {
-    pub name: String,
-    pub text: String,
-    pub diagnostics: Vec<dronecine_grammar::Diagnostic>,
+/// the file's name and text for rendering.
+struct ProfileCheck {
+    name: String,
+    text: String,
+    diagnostics: Vec<dronecine_grammar::Diagnostic>,
 }
 
-pub fn check_profile(path: &std::path::Path, checked: &Checked) -> Option<ProfileCheck> {
+/// The [`ProfileCheck`] of `path`'s script; `None` when the script names no profile file,
+/// when the profile has nothing to say, or when the script itself has errors (the profile is
+/// checked once the script is).
+fn check_profile(path: &std::path::Path, checked: &Checked) -> Option<ProfileCheck> {
     if checked.has_errors() {
         return None;
     }

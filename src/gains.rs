@@ -137,7 +137,7 @@ pub fn run(a: &Args, color: bool) -> ExitCode {
                 .map(|(i, &x)| ("servo", "r", index(i), x, "r")),
         );
         for (section, key, what, x, flag) in values {
-            let overridden = given.iter().any(|g| g.ends_with(flag));
+            let overridden = given.iter().any(|g| g.rsplit('.').next() == Some(flag));
             if let Some(why) = overridden
                 .then(|| dronecine_compiler::profile::out_of_range(section, key, &what, x))
                 .flatten()
