@@ -147,11 +147,15 @@ fn shoot_text_report_and_default_log_location() {
         dir.join("square.psl"),
     )
     .unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
-        .args(["shoot", "square.psl", "-q"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
+    // `dronecine ARGS` run in `dir`.
+    let run_in_dir = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_dronecine"))
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .unwrap()
+    };
+    let o = run_in_dir(&["shoot", "square.psl", "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -172,28 +176,20 @@ fn shoot_text_report_and_default_log_location() {
     // A flight never overwrites a recording. Two more flights, in the same second or not:
     // three logs (a default name already taken is numbered `-2`, `-3`).
     for _ in 0..2 {
-        let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
-            .args(["shoot", "square.psl", "-q", "--seed", "9"])
-            .current_dir(&dir)
-            .output()
-            .unwrap();
+        let o = run_in_dir(&["shoot", "square.psl", "-q", "--seed", "9"]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
     assert_eq!(std::fs::read_dir(dir.join("flights")).unwrap().count(), 3);
     // An explicit --log that exists is refused before take-off, the file untouched.
     let first = dir.join("flights").join(&logs[0]);
     let before = std::fs::read(&first).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
-        .args([
-            "shoot",
-            "square.psl",
-            "-q",
-            "--log",
-            first.to_str().unwrap(),
-        ])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
+    let o = run_in_dir(&[
+        "shoot",
+        "square.psl",
+        "-q",
+        "--log",
+        first.to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
     assert!(
@@ -204,11 +200,7 @@ fn shoot_text_report_and_default_log_location() {
     assert_eq!(std::fs::read(&first).unwrap(), before);
     // `--log DIR`: the time-stamped name, in that folder.
     std::fs::create_dir(dir.join("day2")).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_dronecine"))
-        .args(["shoot", "square.psl", "-q", "--log", "day2"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
+    let o = run_in_dir(&["shoot", "square.psl", "-q", "--log", "day2"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let day2: Vec<_> = std::fs::read_dir(dir.join("day2"))
         .unwrap()

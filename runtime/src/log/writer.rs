@@ -152,6 +152,19 @@ fn annotate(path: &Path, e: io::Error) -> io::Error {
     io::Error::new(e.kind(), format!("cannot write {}: {e}", path.display()))
 }
 
+/// The log's file for writing: a new one (`new`: an existing file is an error), or created
+/// or truncated.
+fn open(path: &Path, new: bool) -> io::Result<File> {
+    let mut o = OpenOptions::new();
+    o.write(true);
+    if new {
+        o.create_new(true);
+    } else {
+        o.create(true).truncate(true);
+    }
+    o.open(path).map_err(|e| annotate(path, e))
+}
+
 impl FlightLogWriter {
     /// Creates (truncating) the log at `path` and writes the header, the schemas and
     /// channels, the `dronecine.flight` metadata, the script attachment and the static scene,
@@ -170,13 +183,7 @@ impl FlightLogWriter {
         scene: &LogScene,
         options: LogOptions,
     ) -> io::Result<FlightLogWriter> {
-        let file = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(path)
-            .map_err(|e| annotate(path, e))?;
-        Self::start(file, path, header, scene, options)
+        Self::start(open(path, false)?, path, header, scene, options)
     }
 
     /// As [`FlightLogWriter::create_with`], but only as a new file: a file already at `path`
@@ -189,12 +196,7 @@ impl FlightLogWriter {
         scene: &LogScene,
         options: LogOptions,
     ) -> io::Result<FlightLogWriter> {
-        let file = OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(path)
-            .map_err(|e| annotate(path, e))?;
-        Self::start(file, path, header, scene, options)
+        Self::start(open(path, true)?, path, header, scene, options)
     }
 
     fn start(
