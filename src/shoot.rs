@@ -94,11 +94,18 @@ pub fn run(a: &Args) -> ExitCode {
             "{}",
             diag::render(&r.name, &r.text, &compiled.diagnostics, a.color, 100)
         );
+        // The same compilation as `compile`'s at this rate: the previews show the same.
+        let rate = if a.rate_hz == compile::DEFAULT_RATE_HZ {
+            String::new()
+        } else {
+            format!(" --rate {}", a.rate_hz)
+        };
         errln!(
-            "error: `{}` cannot be flown by {}; nothing was flown (`dronecine compile --preview` \
-             shows why)",
+            "error: `{}` cannot be flown by {}; nothing was flown\n  help: `dronecine compile {}{rate} \
+             --allow-infeasible -o OUT.mcap --preview DIR` draws the flight it would be",
             r.name,
-            profile.name
+            profile.name,
+            r.name,
         );
         return ExitCode::FAILURE;
     }

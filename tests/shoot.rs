@@ -230,9 +230,30 @@ fn bad_input_is_a_clear_error() {
         "stage 8m x 6m x 3m\ndrone ardrone2\npath square side 4m center (0, 0) altitude 1.5m for 4s\n",
     )
     .unwrap();
-    let o = dronecine(&["shoot", infeasible.to_str().unwrap(), "-q"]);
+    let o = dronecine(&["shoot", infeasible.to_str().unwrap(), "-q", "--rate", "50"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("cannot be flown"), "{}", stderr(&o));
+    // The help's command draws the flight (before, it named `compile --preview` alone,
+    // which writes nothing for such a script, and at compile's own rate).
+    let help = format!(
+        "`dronecine compile {} --rate 50 --allow-infeasible -o OUT.mcap --preview DIR`",
+        infeasible.display()
+    );
+    assert!(stderr(&o).contains(&help), "{}", stderr(&o));
+    let (out, previews) = (dir.join("fast.mcap"), dir.join("fast-previews"));
+    let o = dronecine(&[
+        "compile",
+        infeasible.to_str().unwrap(),
+        "--rate",
+        "50",
+        "--allow-infeasible",
+        "-o",
+        out.to_str().unwrap(),
+        "--preview",
+        previews.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(previews.join("top.png").exists() && out.exists());
 
     let o = dronecine(&["shoot", "shots/square.psl", "--rate", "0", "-q"]);
     assert_eq!(o.status.code(), Some(1));
