@@ -326,6 +326,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
         a.mocap.as_deref(),
         a.rig.as_deref(),
         None,
+        color,
     ) {
         Ok(t) => t,
         Err(e) => return fail(e),

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use dronecine_runtime::natnet::rig::Rig;
+use dronecine_grammar::diag;
+use dronecine_runtime::natnet::rig::{Rig, RigError};
 use dronecine_runtime::url::{ArDroneUrl, NatNetUrl};
 
 /// A real drone and its motion capture.
@@ -15,7 +16,7 @@ pub struct Target {
 
 /// `None` without `--drone` and `--mocap` (the command flies the simulator); the error
 /// message (without `error: `) when only one is given, when `--rig` comes without them, a
-/// URL is malformed or the rig file is bad. `actors`: the scene's actor names in order
+/// URL is malformed or the rig file is bad (its diagnostics printed first, in `color`). `actors`: the scene's actor names in order
 /// (`None` for a command that flies no scene), numbered 2, 3, … when there is no rig file.
 pub fn target(
     command: &str,
@@ -23,6 +24,7 @@ pub fn target(
     mocap: Option<&str>,
     rig: Option<&Path>,
     actors: Option<&[&str]>,
+    color: bool,
 ) -> Result<Option<Target>, String> {
     match (drone, mocap) {
         (None, None) => match rig {
@@ -39,7 +41,18 @@ pub fn target(
             let drone = ArDroneUrl::parse(d).map_err(|e| format!("--drone: {e}"))?;
             let mocap = NatNetUrl::parse(m).map_err(|e| format!("--mocap: {e}"))?;
             let rig = match rig {
-                Some(path) => Rig::load(path).map_err(|e| e.to_string())?,
+                Some(path) => match Rig::load(path) {
+                    Ok(rig) => rig,
+                    Err(RigError::Invalid {
+                        source,
+                        diagnostics,
+                    }) => {
+                        let name = path.display().to_string();
+                        err!("{}", diag::render(&name, &source, &diagnostics, color, 100));
+                        return Err(format!("the rig file `{name}` is not valid"));
+                    }
+                    Err(e) => return Err(e.to_string()),
+                },
                 None => {
                     let names = actors.unwrap_or(&[]);
                     if actors.is_some() {

@@ -76,11 +76,12 @@ pub fn run(a: &Args) -> ExitCode {
     let (script, scene) = (loaded.script(), loaded.scene());
 
     let names: Vec<&str> = scene.actors.iter().map(|x| x.name.as_str()).collect();
-    let target = match crate::hardware::target("shoot", a.drone, a.mocap, a.rig, Some(&names)) {
-        Ok(None) => Target::Sim,
-        Ok(Some(t)) => Target::Hardware(t),
-        Err(e) => return fail(e),
-    };
+    let target =
+        match crate::hardware::target("shoot", a.drone, a.mocap, a.rig, Some(&names), a.color) {
+            Ok(None) => Target::Sim,
+            Ok(Some(t)) => Target::Hardware(t),
+            Err(e) => return fail(e),
+        };
 
     // The compiler's verdict first: a script the drone cannot fly is not flown.
     let opts = Options { rate_hz: a.rate_hz };

@@ -290,6 +290,39 @@ fn bad_input_is_a_clear_error() {
         stderr(&o)
     );
     assert!(!stdout(&o).contains("flight log"), "{}", stdout(&o));
+    // A rig file with three mistakes: all three, each pointing into the file, before any
+    // connection is tried (before, only the first was told).
+    let rig = dir.join("rig.toml");
+    std::fs::write(
+        &rig,
+        "up = \"x\"\ndrone = 1\norgin_m = [0, 0, 0]\n[actors]\nA = 1\n",
+    )
+    .unwrap();
+    let o = dronecine(&[
+        "shoot",
+        "shots/square.psl",
+        "--drone",
+        "ardrone://127.0.0.1",
+        "--mocap",
+        "natnet://127.0.0.1",
+        "--rig",
+        rig.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    for (code, at) in [
+        ("rig::bad_value", "rig.toml:1:6"),
+        ("rig::unknown_key", "rig.toml:3:1"),
+        ("rig::bad_value", "rig.toml:5:5"),
+    ] {
+        assert!(e.contains(code) && e.contains(at), "{code} at {at}: {e}");
+    }
+    assert!(e.contains("did you mean `origin_m`?"), "{e}");
+    assert!(
+        e.contains("the rig file") && e.contains("is not valid"),
+        "{e}"
+    );
     let o = dronecine(&[
         "shoot",
         "shots/square.psl",

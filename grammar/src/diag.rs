@@ -88,6 +88,10 @@ codes! {
     Unframeable => "compile::unframeable": "No roll-free camera orientation puts the actors at the requested screen positions.",
     ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
     ActorsCollide => "compile::actors_collide": "The blocking walks two actors into each other.",
+    RigSyntax => "rig::syntax": "A rig file is not valid TOML.",
+    RigBadValue => "rig::bad_value": "A rig file value has the wrong type or range, or gives two things one rigid body.",
+    RigUnknownKey => "rig::unknown_key": "A rig file has a key dronecine does not know.",
+    RigMissingKey => "rig::missing_key": "A rig file lacks a required key.",
 }
 
 impl fmt::Display for Code {
@@ -379,7 +383,7 @@ mod tests {
     fn codes_are_unique_and_namespaced() {
         let mut seen = std::collections::HashSet::new();
         for c in Code::ALL {
-            let namespaced = ["psl::", "profile::", "compile::"]
+            let namespaced = ["psl::", "profile::", "compile::", "rig::"]
                 .iter()
                 .any(|ns| c.as_str().starts_with(ns));
             assert!(namespaced, "{c}");

@@ -169,7 +169,7 @@ impl NatNetClient {
     {
         let actor_ids = rig
             .actor_ids(actor_names)
-            .map_err(|e| BackendError::Refused(e.0))?;
+            .map_err(|e| BackendError::Refused(e.to_string()))?;
         let server = url
             .command_addr()
             .map_err(|e| link(format!("{url}: {e}")))?;

@@ -15,14 +15,19 @@
 //! A pose goes mocap → world (`natnet::frame::to_world`, by `up`) → stage:
 //! `p_stage = origin_m + Rz(yaw)·p_world`, `heading_stage = wrap(heading + yaw)`.
 //! Ids must be distinct; unknown keys are refused (a misspelt `orgin_m` is an error, not a
-//! silently ignored offset).
+//! silently ignored offset). A bad rig file gets every mistake at once, as diagnostics that
+//! point into the TOML (`rig::syntax`, `rig::bad_value`, `rig::unknown_key`,
+//! `rig::missing_key`), rendered like the script's and the profile's.
 
 use crate::math;
 use std::collections::BTreeMap;
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
+use dronecine_grammar::suggest;
+use dronecine_grammar::{Code, Diagnostic, Span};
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
 
 use crate::backend::BodyPose;
 use crate::frames::wrap_angle_rad;
@@ -39,87 +44,351 @@ pub struct Rig {
     pub yaw_rad: f64,
 }
 
-/// Why a rig file was refused (the message names the file when loaded from one).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct RigError(pub String);
+/// Why a rig was refused.
+#[derive(Debug)]
+pub enum RigError {
+    /// The file cannot be read.
+    Unreadable {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// The text is not a valid rig: the text and its diagnostics (spans into it, at least one
+    /// an error).
+    Invalid {
+        source: String,
+        diagnostics: Vec<Diagnostic>,
+    },
+    /// The rig and the script disagree (an actor without a rigid body).
+    Mismatch(String),
+}
 
 impl fmt::Display for RigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
+        match self {
+            RigError::Unreadable { path, error } => {
+                write!(f, "cannot read the rig file {}: {error}", path.display())
+            }
+            RigError::Invalid { diagnostics, .. } => {
+                let first = diagnostics.iter().find(|d| d.is_error());
+                match first {
+                    Some(d) => write!(f, "not a valid rig: {}", d.message)?,
+                    None => f.write_str("not a valid rig")?,
+                }
+                let more = diagnostics.iter().filter(|d| d.is_error()).count();
+                if more > 1 {
+                    write!(f, " (and {} more mistakes)", more - 1)?;
+                }
+                Ok(())
+            }
+            RigError::Mismatch(m) => f.write_str(m),
+        }
     }
 }
 
 impl std::error::Error for RigError {}
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawRig {
-    up: String,
-    drone: i64,
-    #[serde(default)]
-    actors: BTreeMap<String, i64>,
-    #[serde(default)]
-    origin_m: Option<[f64; 3]>,
-    #[serde(default)]
-    yaw_deg: Option<f64>,
+/// The keys of a rig file, in the order they are documented.
+const KEYS: [&str; 5] = ["up", "drone", "actors", "origin_m", "yaw_deg"];
+/// An example of each key, for the help lines.
+const EXAMPLE: &str = "up = \"y\", drone = 1, origin_m = [0.5, -1.0, 0.0], yaw_deg = 90.0, \
+                       and `[actors]` with one `Name = id` line per actor";
+
+fn sp<T>(v: &Spanned<T>) -> Span {
+    let r = v.span();
+    Span::new(r.start, r.end.max(r.start))
 }
 
-fn id(v: i64, what: &str) -> Result<i32, RigError> {
-    i32::try_from(v).map_err(|_| {
-        RigError(format!(
-            "{what}: rigid-body id {v} is out of range (Motive's streaming ids are 32-bit)"
-        ))
-    })
+/// Reads a rig's keys into diagnostics; `None` for a value that is bad (reported).
+struct Reader {
+    diags: Vec<Diagnostic>,
+}
+
+impl Reader {
+    fn bad(&mut self, span: Span, message: String, label: &str, help: String) {
+        self.diags.push(
+            Diagnostic::error(Code::RigBadValue, span, message)
+                .with_label(label.to_string())
+                .with_help(help),
+        );
+    }
+
+    /// A rigid-body id: an integer Motive can stream (32-bit).
+    fn id(&mut self, what: &str, v: &Spanned<DeValue<'_>>) -> Option<i32> {
+        let parsed = match v.get_ref() {
+            DeValue::Integer(i) => i64::from_str_radix(&i.as_str().replace('_', ""), i.radix())
+                .ok()
+                .map(i32::try_from),
+            _ => None,
+        };
+        match parsed {
+            Some(Ok(id)) => Some(id),
+            Some(Err(_)) | None if matches!(v.get_ref(), DeValue::Integer(_)) => {
+                self.bad(
+                    sp(v),
+                    format!(
+                        "{what}: rigid-body id out of range (Motive's streaming ids are 32-bit)"
+                    ),
+                    "not a 32-bit id",
+                    "use the streaming id Motive shows for the rigid body (1, 2, …)".into(),
+                );
+                None
+            }
+            _ => {
+                self.bad(
+                    sp(v),
+                    format!(
+                        "{what} must be a rigid-body id (an integer), found {}",
+                        kind(v.get_ref())
+                    ),
+                    "expected an integer",
+                    "write the streaming id Motive shows for the rigid body, bare: `drone = 1`"
+                        .into(),
+                );
+                None
+            }
+        }
+    }
+
+    /// A finite number.
+    fn number(&mut self, what: &str, v: &Spanned<DeValue<'_>>) -> Option<f64> {
+        let x = match v.get_ref() {
+            DeValue::Integer(i) => i.as_str().replace('_', "").parse::<f64>().ok(),
+            DeValue::Float(f) => f.as_str().replace('_', "").parse::<f64>().ok(),
+            _ => None,
+        };
+        match x {
+            Some(x) if x.is_finite() => Some(x),
+            Some(_) => {
+                self.bad(
+                    sp(v),
+                    format!("{what} must be a finite number"),
+                    "not finite",
+                    format!("for example {EXAMPLE}"),
+                );
+                None
+            }
+            None => {
+                self.bad(
+                    sp(v),
+                    format!("{what} must be a number, found {}", kind(v.get_ref())),
+                    "expected a number",
+                    format!(
+                        "write numbers bare, the unit is in the key's name; for example {EXAMPLE}"
+                    ),
+                );
+                None
+            }
+        }
+    }
+}
+
+fn kind(v: &DeValue<'_>) -> String {
+    match v {
+        DeValue::String(s) => format!("the text \"{}\"", suggest::shorten(s)),
+        DeValue::Integer(_) => "an integer".into(),
+        DeValue::Float(_) => "a number".into(),
+        DeValue::Boolean(b) => format!("`{b}`"),
+        DeValue::Datetime(_) => "a date".into(),
+        DeValue::Array(_) => "a list".into(),
+        DeValue::Table(_) => "a table".into(),
+    }
+}
+
+/// An empty span after the last non-blank text.
+fn eof_span(src: &str) -> Span {
+    let end = src.trim_end().len();
+    Span::new(end, end)
 }
 
 impl Rig {
-    /// Parses and checks a rig file's text.
+    /// Parses and checks a rig file's text: the rig, or every mistake in it.
     pub fn from_toml(src: &str) -> Result<Rig, RigError> {
-        let raw: RawRig = toml::from_str(src).map_err(|e| RigError(e.to_string()))?;
-        let up = match raw.up.to_ascii_lowercase().as_str() {
-            "y" => UpAxis::Y,
-            "z" => UpAxis::Z,
-            other => {
-                return Err(RigError(format!(
-                    "up = \"{other}\": Motive streams \"y\" (its default) or \"z\" as up"
-                )))
-            }
+        let invalid = |diagnostics: Vec<Diagnostic>| RigError::Invalid {
+            source: src.to_string(),
+            diagnostics,
         };
-        let drone_id = id(raw.drone, "drone")?;
-        let mut actors = BTreeMap::new();
-        let mut seen: BTreeMap<i32, String> = BTreeMap::new();
-        seen.insert(drone_id, "the drone".into());
-        for (name, v) in raw.actors {
-            let i = id(v, &format!("actors.{name}"))?;
-            if let Some(other) = seen.get(&i) {
-                return Err(RigError(format!(
-                    "actors.{name} = {i}: rigid body {i} is already {other}; each body \
-                     tracks one thing"
-                )));
+        let (doc, errors) = DeTable::parse_recoverable(src);
+        if !errors.is_empty() {
+            let diags = errors
+                .iter()
+                .take(20)
+                .map(|e| {
+                    let span = e.span().map_or_else(
+                        || eof_span(src),
+                        |r| {
+                            let (mut a, mut b) = (r.start.min(src.len()), r.end.min(src.len()));
+                            while !src.is_char_boundary(a) {
+                                a -= 1;
+                            }
+                            b = b.max(a);
+                            while !src.is_char_boundary(b) {
+                                b += 1;
+                            }
+                            Span::new(a, b)
+                        },
+                    );
+                    let first = e
+                        .message()
+                        .trim()
+                        .lines()
+                        .next()
+                        .unwrap_or("invalid TOML")
+                        .to_string();
+                    Diagnostic::error(Code::RigSyntax, span, format!("invalid TOML: {first}"))
+                        .with_label(first)
+                        .with_help(format!(
+                            "a rig file is TOML, one `key = value` per line: {EXAMPLE}"
+                        ))
+                })
+                .collect();
+            return Err(invalid(diags));
+        }
+        let mut r = Reader { diags: Vec::new() };
+        let root = doc.get_ref();
+        let get = |key: &str| root.iter().find(|(k, _)| k.get_ref().as_ref() == key);
+
+        for (k, _) in root.iter() {
+            let name = k.get_ref().as_ref();
+            if KEYS.contains(&name) {
+                continue;
             }
-            seen.insert(i, format!("actor `{name}`"));
-            actors.insert(name, i);
+            let guess = suggest::closest(name, KEYS);
+            let help = match guess.first() {
+                Some(g) => format!("did you mean `{g}`? A rig file has {}", KEYS.join(", ")),
+                None => format!("a rig file has {} (for example {EXAMPLE})", KEYS.join(", ")),
+            };
+            r.diags.push(
+                Diagnostic::error(Code::RigUnknownKey, sp(k), format!("unknown key `{name}`"))
+                    .with_label("not a rig key")
+                    .with_help(help),
+            );
         }
-        let origin_m = raw.origin_m.unwrap_or([0.0; 3]);
-        if !origin_m.iter().all(|v| v.is_finite()) {
-            return Err(RigError(format!(
-                "origin_m = {origin_m:?}: the offset must be finite metres"
-            )));
+
+        let up = match get("up") {
+            Some((_, v)) => match v.get_ref() {
+                DeValue::String(t) if t.eq_ignore_ascii_case("y") => Some(UpAxis::Y),
+                DeValue::String(t) if t.eq_ignore_ascii_case("z") => Some(UpAxis::Z),
+                other => {
+                    r.bad(
+                        sp(v),
+                        format!(
+                            "`up` is {}: Motive streams \"y\" (its default) or \"z\" as up",
+                            kind(other)
+                        ),
+                        "\"y\" or \"z\"",
+                        "write `up = \"y\"` unless Motive's streaming settings say Z up".into(),
+                    );
+                    None
+                }
+            },
+            None => None,
+        };
+        let drone = get("drone").and_then(|(_, v)| r.id("`drone`", v).map(|id| (id, sp(v))));
+        for (key, example) in [("up", "up = \"y\""), ("drone", "drone = 1")] {
+            if get(key).is_none() {
+                r.diags.push(
+                    Diagnostic::error(Code::RigMissingKey, eof_span(src), format!("the rig has no `{key}`"))
+                        .with_label(format!("`{key}` is required"))
+                        .with_help(format!("add `{example}` (the drone's streaming id and Motive's up axis are always needed)")),
+                );
+            }
         }
-        let yaw_deg = raw.yaw_deg.unwrap_or(0.0);
-        if !yaw_deg.is_finite() {
-            return Err(RigError(format!("yaw_deg = {yaw_deg}: must be finite")));
+
+        // Actors, each id distinct from the drone's and the others'.
+        let mut actors = BTreeMap::new();
+        let mut seen: Vec<(i32, String, Span)> = Vec::new();
+        if let Some((id, span)) = drone {
+            seen.push((id, "the drone".into(), span));
         }
-        Ok(Rig {
-            up,
-            drone_id,
-            actors,
-            origin_m,
-            yaw_rad: wrap_angle_rad(yaw_deg.to_radians()),
-        })
+        if let Some((_, v)) = get("actors") {
+            match v.get_ref() {
+                DeValue::Table(t) => {
+                    for (k, v) in t.iter() {
+                        let name = k.get_ref().as_ref();
+                        let Some(id) = r.id(&format!("`actors.{name}`"), v) else {
+                            continue;
+                        };
+                        if let Some((_, other, at)) = seen.iter().find(|(i, _, _)| *i == id) {
+                            let d = Diagnostic::error(
+                                Code::RigBadValue,
+                                sp(v),
+                                format!("`actors.{name}` = {id}: rigid body {id} is already {other}"),
+                            )
+                            .with_label(format!("{other}'s body"))
+                            .with_related(*at, format!("{other} is body {id}"))
+                            .with_help("each rigid body tracks one thing: give each actor the id Motive streams for their own body");
+                            r.diags.push(d);
+                            continue;
+                        }
+                        seen.push((id, format!("actor `{name}`"), sp(v)));
+                        actors.insert(name.to_string(), id);
+                    }
+                }
+                other => r.bad(
+                    sp(v),
+                    format!("`actors` must be a table, found {}", kind(other)),
+                    "expected `[actors]`",
+                    "write a section `[actors]` with one `Name = id` line per actor, by the script's names".into(),
+                ),
+            }
+        }
+
+        let origin_m = match get("origin_m") {
+            None => Some([0.0; 3]),
+            Some((_, v)) => match v.get_ref().as_array() {
+                Some(items) if items.len() == 3 => {
+                    let xs: Vec<Option<f64>> = items
+                        .iter()
+                        .enumerate()
+                        .map(|(i, item)| r.number(&format!("`origin_m[{i}]`"), item))
+                        .collect();
+                    match xs[..] {
+                        [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+                        _ => None,
+                    }
+                }
+                _ => {
+                    r.bad(
+                        sp(v),
+                        format!("`origin_m` must be a list of 3 numbers [x, y, z] in metres, found {}", kind(v.get_ref())),
+                        "expected [x, y, z]",
+                        "write where the mocap origin sits on the stage: `origin_m = [0.5, -1.0, 0.0]`".into(),
+                    );
+                    None
+                }
+            },
+        };
+        let yaw_deg = match get("yaw_deg") {
+            None => Some(0.0),
+            Some((_, v)) => r.number("`yaw_deg`", v),
+        };
+
+        r.diags.sort_by_key(|d| (d.span.start, d.span.end));
+        match (up, drone, origin_m, yaw_deg) {
+            (Some(up), Some((drone_id, _)), Some(origin_m), Some(yaw_deg))
+                if r.diags.is_empty() =>
+            {
+                Ok(Rig {
+                    up,
+                    drone_id,
+                    actors,
+                    origin_m,
+                    yaw_rad: wrap_angle_rad(yaw_deg.to_radians()),
+                })
+            }
+            _ => Err(invalid(r.diags)),
+        }
     }
 
-    /// Reads and parses a rig file; errors name the file.
+    /// Reads and parses a rig file.
+    pub fn load(path: &Path) -> Result<Rig, RigError> {
+        let src = std::fs::read_to_string(path).map_err(|error| RigError::Unreadable {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        Rig::from_toml(&src)
+    }
+
     /// The layout `dronecine emulate` streams: the drone is rigid body 1, the actors 2, 3, …
     /// in the script's order, Y up, the mocap's origin at the stage's.
     pub fn numbered<S: AsRef<str>>(actor_names: &[S]) -> Rig {
@@ -136,12 +405,6 @@ impl Rig {
         }
     }
 
-    pub fn load(path: &Path) -> Result<Rig, RigError> {
-        let src = std::fs::read_to_string(path)
-            .map_err(|e| RigError(format!("cannot read the rig file {}: {e}", path.display())))?;
-        Rig::from_toml(&src).map_err(|e| RigError(format!("rig file {}: {e}", path.display())))
-    }
-
     /// The rigid-body ids of `names` (the scene's actors, in its order); an actor without a
     /// body is an error naming it and the bodies the rig has.
     pub fn actor_ids<I>(&self, names: I) -> Result<Vec<i32>, RigError>
@@ -155,7 +418,7 @@ impl Rig {
                 let n = n.as_ref();
                 self.actors.get(n).copied().ok_or_else(|| {
                     let known: Vec<&str> = self.actors.keys().map(String::as_str).collect();
-                    RigError(format!(
+                    RigError::Mismatch(format!(
                         "actor `{n}` has no rigid body in the rig (its [actors] are: {})",
                         if known.is_empty() {
                             "none".to_string()
@@ -209,28 +472,114 @@ mod tests {
         assert!((p.heading_rad - FRAC_PI_2).abs() < 1e-12);
     }
 
+    /// The messages of a refused rig's diagnostics, with the text each points at.
+    fn mistakes(src: &str) -> Vec<(Code, String, String)> {
+        match Rig::from_toml(src) {
+            Err(RigError::Invalid {
+                source,
+                diagnostics,
+            }) => {
+                assert_eq!(source, src);
+                diagnostics
+                    .iter()
+                    .map(|d| {
+                        assert!(d.help.is_some(), "{}: no help", d.message);
+                        (
+                            d.code,
+                            d.message.clone(),
+                            src[d.span.start..d.span.end].to_string(),
+                        )
+                    })
+                    .collect()
+            }
+            other => panic!("{src:?} was not refused: {other:?}"),
+        }
+    }
+
     #[test]
     fn refuses_bad_rigs_with_clear_messages() {
-        for (src, needle) in [
-            ("up = \"x\"\ndrone = 1\n", "\"y\" (its default) or \"z\""),
-            ("drone = 1\n", "up"),
+        for (src, code, needle, at) in [
+            (
+                "up = \"x\"\ndrone = 1\n",
+                Code::RigBadValue,
+                "\"y\" (its default) or \"z\"",
+                "\"x\"",
+            ),
+            ("drone = 1\n", Code::RigMissingKey, "no `up`", ""),
             (
                 "up = \"y\"\ndrone = 1\n[actors]\nA = 1\n",
+                Code::RigBadValue,
                 "already the drone",
+                "1",
             ),
             (
                 "up = \"y\"\ndrone = 1\n[actors]\nA = 2\nB = 2\n",
+                Code::RigBadValue,
                 "already actor `A`",
+                "2",
             ),
-            ("up = \"y\"\ndrone = 1\norgin_m = [0, 0, 0]\n", "orgin_m"),
-            ("up = \"y\"\ndrone = 5000000000\n", "out of range"),
-            ("up = \"y\"\ndrone = 1\nyaw_deg = nan\n", "finite"),
+            (
+                "up = \"y\"\ndrone = 1\norgin_m = [0, 0, 0]\n",
+                Code::RigUnknownKey,
+                "`orgin_m`",
+                "orgin_m",
+            ),
+            (
+                "up = \"y\"\ndrone = 5000000000\n",
+                Code::RigBadValue,
+                "out of range",
+                "5000000000",
+            ),
+            (
+                "up = \"y\"\ndrone = 1\nyaw_deg = nan\n",
+                Code::RigBadValue,
+                "finite",
+                "nan",
+            ),
+            (
+                "up = \"y\"\ndrone = \"1\"\n",
+                Code::RigBadValue,
+                "found the text",
+                "\"1\"",
+            ),
+            (
+                "up = \"y\"\ndrone = 1\norigin_m = [0, 0]\n",
+                Code::RigBadValue,
+                "3 numbers",
+                "[0, 0]",
+            ),
+            (
+                "up = \"y\"\ndrone = 1\nactors = 3\n",
+                Code::RigBadValue,
+                "must be a table",
+                "3",
+            ),
+            (
+                "up = \"y\"\ndrone = = 1\n",
+                Code::RigSyntax,
+                "invalid TOML",
+                "=",
+            ),
         ] {
-            let e = Rig::from_toml(src).unwrap_err().0;
-            assert!(e.contains(needle), "{src:?}: {e}");
+            let found = mistakes(src);
+            assert!(
+                found
+                    .iter()
+                    .any(|(c, m, a)| *c == code && m.contains(needle) && a == at),
+                "{src:?}: {found:?}"
+            );
         }
+        // Every mistake at once, in file order (before, only the first was told).
+        let found = mistakes("up = \"x\"\ndrone = 1\norgin_m = [0, 0, 0]\n[actors]\nA = 1\n");
+        let codes: Vec<Code> = found.iter().map(|f| f.0).collect();
+        assert_eq!(
+            codes,
+            [Code::RigBadValue, Code::RigUnknownKey, Code::RigBadValue],
+            "{found:?}"
+        );
+        assert!(found[1].1.contains("orgin_m"));
         let rig = Rig::from_toml("up = \"y\"\ndrone = 1\n[actors]\nAlice = 2\n").unwrap();
-        let e = rig.actor_ids(["Alice", "Bob"]).unwrap_err().0;
+        let e = rig.actor_ids(["Alice", "Bob"]).unwrap_err().to_string();
         assert!(e.contains("actor `Bob`") && e.contains("Alice"), "{e}");
     }
 }
