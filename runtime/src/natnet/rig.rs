@@ -152,7 +152,13 @@ impl Reader {
     /// A finite number.
     fn number(&mut self, what: &str, v: &Spanned<DeValue<'_>>) -> Option<f64> {
         let x = match v.get_ref() {
-            DeValue::Integer(i) => i.as_str().replace('_', "").parse::<f64>().ok(),
+            DeValue::Integer(i) => {
+                let digits = i.as_str().replace('_', "");
+                i64::from_str_radix(&digits, i.radix())
+                    .ok()
+                    .map(|n| n as f64)
+                    .or_else(|| digits.parse::<f64>().ok())
+            }
             DeValue::Float(f) => f.as_str().replace('_', "").parse::<f64>().ok(),
             _ => None,
         };
@@ -578,6 +584,10 @@ mod tests {
             "{found:?}"
         );
         assert!(found[1].1.contains("orgin_m"));
+        // TOML's other integer forms are numbers too.
+        let rig = Rig::from_toml("up = \"y\"\ndrone = 0x10\nyaw_deg = 0x5A\n").unwrap();
+        assert_eq!(rig.drone_id, 16);
+        assert!((rig.yaw_rad - FRAC_PI_2).abs() < 1e-12);
         let rig = Rig::from_toml("up = \"y\"\ndrone = 1\n[actors]\nAlice = 2\n").unwrap();
         let e = rig.actor_ids(["Alice", "Bob"]).unwrap_err().to_string();
         assert!(e.contains("actor `Bob`") && e.contains("Alice"), "{e}");
