@@ -20,6 +20,7 @@ pub mod reference;
 pub mod size;
 pub mod sphere;
 pub mod steering;
+pub mod toml_text;
 pub mod toric;
 
 /// √(x² + y²) without libm's `hypot` (which guards against overflow at a cost the per-tick

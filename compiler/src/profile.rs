@@ -20,6 +20,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use crate::toml_text::{eof_span, error_span, kind_of, span as sp};
 use dronecine_grammar::suggest::{closest, did_you_mean, or_list};
 use dronecine_grammar::{Code, Diagnostic, LineIndex, Span};
 use serde::{Deserialize, Serialize};
@@ -798,16 +799,6 @@ const SMALL_ANGLE_TILT_DEG: f64 = 30.0;
 // ---------------------------------------------------------------------------------------
 // Reading: a walk over the spanned TOML tree that reports every mistake it meets.
 
-fn sp(r: std::ops::Range<usize>) -> Span {
-    Span::new(r.start, r.end.max(r.start))
-}
-
-/// An empty span just after the last non-blank text of the file.
-fn eof_span(src: &str) -> Span {
-    let end = src.trim_end().len();
-    Span::new(end, end)
-}
-
 fn num(x: f64) -> String {
     if x.is_nan() {
         "nan".to_string()
@@ -914,20 +905,7 @@ const MAX_SYNTAX_DIAGNOSTICS: usize = 20;
 
 /// One TOML error as a diagnostic; `offset` shifts a span found by parsing a single line.
 fn syntax(src: &str, e: &toml::de::Error, offset: usize) -> Diagnostic {
-    let span = match e.span() {
-        Some(r) if r.start + offset <= src.len() => {
-            let mut start = r.start + offset;
-            let mut end = (r.end + offset).clamp(start, src.len());
-            while !src.is_char_boundary(start) {
-                start -= 1;
-            }
-            while !src.is_char_boundary(end) {
-                end += 1;
-            }
-            Span::new(start, end)
-        }
-        _ => eof_span(src),
-    };
+    let span = error_span(src, e, offset);
     if let Some(d) = unit_after_number(src, span.start) {
         return d;
     }
@@ -1173,18 +1151,6 @@ impl<'a, 'i> Section<'a, 'i> {
     }
 }
 
-fn kind_of(v: &DeValue<'_>) -> String {
-    match v {
-        DeValue::String(s) => format!("the text \"{}\"", dronecine_grammar::suggest::shorten(s)),
-        DeValue::Integer(_) => "an integer".to_string(),
-        DeValue::Float(_) => "a number".to_string(),
-        DeValue::Boolean(b) => format!("`{b}`"),
-        DeValue::Datetime(_) => "a date".to_string(),
-        DeValue::Array(_) => "a list".to_string(),
-        DeValue::Table(_) => "a table".to_string(),
-    }
-}
-
 fn parse_float(s: &str) -> Option<f64> {
     s.replace('_', "").parse::<f64>().ok()
 }
@@ -1246,14 +1212,7 @@ impl<'s> Reader<'s> {
     fn number(&mut self, spec: &KeySpec, v: &Value<'_>, what: &str) -> Option<f64> {
         let span = sp(v.span());
         let x = match v.get_ref() {
-            DeValue::Integer(i) => {
-                let digits = i.as_str().replace('_', "");
-                i64::from_str_radix(&digits, i.radix())
-                    .ok()
-                    .map(|n| n as f64)
-                    .or_else(|| parse_float(&digits))
-            }
-            DeValue::Float(f) => parse_float(f.as_str()),
+            n @ (DeValue::Integer(_) | DeValue::Float(_)) => crate::toml_text::number(n),
             DeValue::String(s) => {
                 let t = s.trim();
                 let bare = t

@@ -24,6 +24,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use dronecine_compiler::toml_text::{self, eof_span, error_span, kind_of};
 use dronecine_grammar::suggest;
 use dronecine_grammar::{Code, Diagnostic, Span};
 use toml::de::{DeTable, DeValue};
@@ -94,8 +95,7 @@ const EXAMPLE: &str = "up = \"y\", drone = 1, origin_m = [0.5, -1.0, 0.0], yaw_d
                        and `[actors]` with one `Name = id` line per actor";
 
 fn sp<T>(v: &Spanned<T>) -> Span {
-    let r = v.span();
-    Span::new(r.start, r.end.max(r.start))
+    toml_text::span(v.span())
 }
 
 /// Reads a rig's keys into diagnostics; `None` for a value that is bad (reported).
@@ -138,7 +138,7 @@ impl Reader {
                     sp(v),
                     format!(
                         "{what} must be a rigid-body id (an integer), found {}",
-                        kind(v.get_ref())
+                        kind_of(v.get_ref())
                     ),
                     "expected an integer",
                     "write the streaming id Motive shows for the rigid body, bare: `drone = 1`"
@@ -151,18 +151,7 @@ impl Reader {
 
     /// A finite number.
     fn number(&mut self, what: &str, v: &Spanned<DeValue<'_>>) -> Option<f64> {
-        let x = match v.get_ref() {
-            DeValue::Integer(i) => {
-                let digits = i.as_str().replace('_', "");
-                i64::from_str_radix(&digits, i.radix())
-                    .ok()
-                    .map(|n| n as f64)
-                    .or_else(|| digits.parse::<f64>().ok())
-            }
-            DeValue::Float(f) => f.as_str().replace('_', "").parse::<f64>().ok(),
-            _ => None,
-        };
-        match x {
+        match toml_text::number(v.get_ref()) {
             Some(x) if x.is_finite() => Some(x),
             Some(_) => {
                 self.bad(
@@ -176,7 +165,7 @@ impl Reader {
             None => {
                 self.bad(
                     sp(v),
-                    format!("{what} must be a number, found {}", kind(v.get_ref())),
+                    format!("{what} must be a number, found {}", kind_of(v.get_ref())),
                     "expected a number",
                     format!(
                         "write numbers bare, the unit is in the key's name; for example {EXAMPLE}"
@@ -186,24 +175,6 @@ impl Reader {
             }
         }
     }
-}
-
-fn kind(v: &DeValue<'_>) -> String {
-    match v {
-        DeValue::String(s) => format!("the text \"{}\"", suggest::shorten(s)),
-        DeValue::Integer(_) => "an integer".into(),
-        DeValue::Float(_) => "a number".into(),
-        DeValue::Boolean(b) => format!("`{b}`"),
-        DeValue::Datetime(_) => "a date".into(),
-        DeValue::Array(_) => "a list".into(),
-        DeValue::Table(_) => "a table".into(),
-    }
-}
-
-/// An empty span after the last non-blank text.
-fn eof_span(src: &str) -> Span {
-    let end = src.trim_end().len();
-    Span::new(end, end)
 }
 
 impl Rig {
@@ -219,20 +190,7 @@ impl Rig {
                 .iter()
                 .take(20)
                 .map(|e| {
-                    let span = e.span().map_or_else(
-                        || eof_span(src),
-                        |r| {
-                            let (mut a, mut b) = (r.start.min(src.len()), r.end.min(src.len()));
-                            while !src.is_char_boundary(a) {
-                                a -= 1;
-                            }
-                            b = b.max(a);
-                            while !src.is_char_boundary(b) {
-                                b += 1;
-                            }
-                            Span::new(a, b)
-                        },
-                    );
+                    let span = error_span(src, e, 0);
                     let first = e
                         .message()
                         .trim()
@@ -279,7 +237,7 @@ impl Rig {
                         sp(v),
                         format!(
                             "`up` is {}: Motive streams \"y\" (its default) or \"z\" as up",
-                            kind(other)
+                            kind_of(other)
                         ),
                         "\"y\" or \"z\"",
                         "write `up = \"y\"` unless Motive's streaming settings say Z up".into(),
@@ -332,7 +290,7 @@ impl Rig {
                 }
                 other => r.bad(
                     sp(v),
-                    format!("`actors` must be a table, found {}", kind(other)),
+                    format!("`actors` must be a table, found {}", kind_of(other)),
                     "expected `[actors]`",
                     "write a section `[actors]` with one `Name = id` line per actor, by the script's names".into(),
                 ),
@@ -356,7 +314,7 @@ impl Rig {
                 _ => {
                     r.bad(
                         sp(v),
-                        format!("`origin_m` must be a list of 3 numbers [x, y, z] in metres, found {}", kind(v.get_ref())),
+                        format!("`origin_m` must be a list of 3 numbers [x, y, z] in metres, found {}", kind_of(v.get_ref())),
                         "expected [x, y, z]",
                         "write where the mocap origin sits on the stage: `origin_m = [0.5, -1.0, 0.0]`".into(),
                     );
