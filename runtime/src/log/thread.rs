@@ -14,7 +14,8 @@
 //! with a blocking receiver, 0.66 s polling (0.62 s without a log). In a real-time flight the
 //! writer wakes about 50 times a second and writes a batch at most 20 ms after it is full.
 //!
-//! A third thread, which mostly waits on the disk, syncs the file's data (`sync_data`): every
+//! A third thread, which mostly waits on the disk, syncs the file's data (`sync_data`) when
+//! the writer thread asks it (waking it is a system call: not one the loop makes): every
 //! two seconds of flight when two seconds of wall-clock time have passed since the last sync
 //! (a flight in real time: every two seconds), and every 32 s of flight whatever the clock
 //! says (a simulated flight, thousands of times faster than real time). A power cut loses
@@ -35,12 +36,17 @@
 //! their sum; `shoot` uses 0.25 s + 0.02 s + 0.73 s. A panic of the
 //! loop unwinds through [`Drop`], which hands the last batch over and waits for the writer. A
 //! write error reaches the loop on the next tick after the writer met it (the loop then
-//! lands), and [`LogThread::finish`] returns it.
+//! lands), and [`LogThread::finish`] returns it. The loop learns of it from a flag it reads
+//! each tick, not from the error channel: an empty channel's `try_recv` is a full memory
+//! fence. (Measured on the hour's flight with its log, 20 interleaved runs each, together with
+//! the syncer asked from the writer: no difference, median 0.462 s against 0.466 s.)
 //!
 //! [`LogOptions`]: super::LogOptions
 
 use std::io;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, SyncSender, TryRecvError};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -246,16 +252,41 @@ pub struct LogThread {
     empty: Receiver<Batch>,
     /// The writer thread's errors, as they happen.
     errors: Receiver<io::Error>,
+    /// Set by the writer thread once it has sent an error: the loop reads this flag each tick
+    /// (a plain load of a line nobody writes) rather than the channel, whose empty `try_recv`
+    /// costs a full memory fence.
+    failed: Arc<AtomicBool>,
     batch: Batch,
     /// Flight time of the batch's first tick.
     batch_start_s: Option<f64>,
     max_ticks: usize,
     handle: Option<JoinHandle<io::Result<()>>>,
-    /// Asks the syncer thread to `sync_data` (never blocks: a sync under way absorbs the ask).
-    sync: Option<SyncSender<()>>,
+}
+
+/// The writer thread's side of syncing: asks the syncer thread to `sync_data` (never
+/// blocks: a sync under way absorbs the ask) as batches are written. Asked from the writer,
+/// not the loop: waking the syncer is a system call and a cross-core wake-up.
+struct SyncAsk {
+    tx: Option<SyncSender<()>>,
     /// When a sync was last asked for.
-    last_sync: Option<Instant>,
-    batches_sent: u64,
+    last: Option<Instant>,
+    batches: u64,
+}
+
+impl SyncAsk {
+    /// One more batch written.
+    fn batch_written(&mut self) {
+        self.batches += 1;
+        if self.batches % SYNC_EVERY_BATCHES == 0
+            && (self.batches % SYNC_ANYWAY_BATCHES == 0
+                || self.last.is_none_or(|t| t.elapsed() >= SYNC_PERIOD))
+        {
+            if let Some(tx) = &self.tx {
+                self.last = Some(Instant::now());
+                let _ = tx.try_send(());
+            }
+        }
+    }
 }
 
 impl LogThread {
@@ -288,23 +319,31 @@ impl LogThread {
                 .ok()
                 .map(|_| tx)
         });
+        let sync = SyncAsk {
+            tx: sync,
+            last: None,
+            batches: 0,
+        };
+        let failed = Arc::new(AtomicBool::new(false));
+        let errors = Errors {
+            tx: err_tx,
+            failed: Arc::clone(&failed),
+        };
         let handle = std::thread::Builder::new()
             .name("flight-log".into())
             .spawn(move || {
                 yield_to_the_loop();
-                write_batches(writer, full_rx, empty_tx, err_tx)
+                write_batches(writer, full_rx, empty_tx, errors, sync)
             })?;
         Ok(LogThread {
             full: Some(full_tx),
             empty: empty_rx,
             errors: err_rx,
+            failed,
             batch: Batch::new(max_ticks),
             batch_start_s: None,
             max_ticks,
             handle: Some(handle),
-            sync,
-            last_sync: None,
-            batches_sent: 0,
         })
     }
 
@@ -332,18 +371,7 @@ impl LogThread {
         };
         let batch = std::mem::replace(&mut self.batch, next);
         self.batch_start_s = None;
-        full.send(batch).map_err(|_| self.thread_error())?;
-        self.batches_sent += 1;
-        if self.batches_sent % SYNC_EVERY_BATCHES == 0
-            && (self.batches_sent % SYNC_ANYWAY_BATCHES == 0
-                || self.last_sync.is_none_or(|t| t.elapsed() >= SYNC_PERIOD))
-        {
-            if let Some(sync) = &self.sync {
-                self.last_sync = Some(Instant::now());
-                let _ = sync.try_send(());
-            }
-        }
-        Ok(())
+        full.send(batch).map_err(|_| self.thread_error())
     }
 
     /// The writer thread's error (it stopped).
@@ -362,7 +390,6 @@ impl LogThread {
 
     fn close(&mut self) -> io::Result<()> {
         let handed = self.hand_over();
-        self.sync = None; // the syncer ends after the sync under way, if any
         self.full = None; // the writer sees the channel close, finishes the file and returns
         let joined = match self.handle.take() {
             Some(h) => h
@@ -381,12 +408,10 @@ impl LogThread {
 
 impl FlightSink for LogThread {
     fn tick(&mut self, record: &TickRecord) -> io::Result<()> {
-        match self.errors.try_recv() {
-            Ok(e) => return Err(e),
-            Err(TryRecvError::Empty) => {}
-            Err(TryRecvError::Disconnected) => {
-                return Err(io::Error::other("the flight log's writer thread stopped"))
-            }
+        if self.failed.load(Ordering::Acquire) {
+            // Told once (the writer sets the flag once); the loop lands.
+            self.failed.store(false, Ordering::Relaxed);
+            return Err(self.thread_error());
         }
         let b = &mut self.batch;
         if b.len == b.ticks.len() {
@@ -431,13 +456,15 @@ fn write_batches(
     mut writer: FlightLogWriter,
     full: Receiver<Batch>,
     empty: SyncSender<Batch>,
-    errors: SyncSender<io::Error>,
+    errors: Errors,
+    mut sync: SyncAsk,
 ) -> io::Result<()> {
     let mut failed = false;
     let report = |e: io::Error, failed: &mut bool| {
         if !*failed {
             *failed = true;
-            let _ = errors.try_send(io::Error::new(e.kind(), e.to_string()));
+            let _ = errors.tx.try_send(io::Error::new(e.kind(), e.to_string()));
+            errors.failed.store(true, Ordering::Release);
         }
     };
     let mut idle = POLL_MIN;
@@ -455,17 +482,27 @@ fn write_batches(
             Err(TryRecvError::Disconnected) => break,
         };
         if !failed {
-            if let Err(e) = write_batch(&mut writer, &batch) {
-                report(e, &mut failed);
+            match write_batch(&mut writer, &batch) {
+                Ok(()) => sync.batch_written(),
+                Err(e) => report(e, &mut failed),
             }
         }
         let _ = empty.send(batch);
     }
+    // The syncer ends after the sync under way, if any; `finish` syncs the rest itself.
+    drop(sync);
     if failed {
         // Drop closes what it can; the error was reported.
         return Err(io::Error::other("the flight log could not be written"));
     }
     writer.finish()
+}
+
+/// How the writer thread tells the loop of a write error: the error on the channel, then the
+/// flag the loop reads.
+struct Errors {
+    tx: SyncSender<io::Error>,
+    failed: Arc<AtomicBool>,
 }
 
 /// Lowers the calling thread's scheduling priority by [`LOG_NICE`], so that when the loop,
