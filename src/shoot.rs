@@ -11,11 +11,11 @@ use std::time::Duration;
 use dronecine_compiler::compile::{self, Options};
 use dronecine_compiler::director::Director;
 use dronecine_grammar::diag;
-use dronecine_runtime::flight::{Observer, Progress};
+use dronecine_runtime::flight::{FlightError, Observer, Progress};
 use dronecine_runtime::log::{self, FlightLogWriter, LogOptions, LogScene, LogThread};
 use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase};
 use dronecine_runtime::report::{Figures, FlightReport};
-use dronecine_runtime::session::{self, HardwareFlight, SimFlight};
+use dronecine_runtime::session::{self, HardwareFlight, SessionError, SimFlight};
 use dronecine_runtime::sim::{Effects, SimConfig};
 
 /// Ctrl-C presses during the flight.
@@ -234,6 +234,13 @@ pub fn run(a: &Args) -> ExitCode {
     let finished = log.finish();
     let report = match result {
         Ok(report) => report,
+        Err(e @ SessionError::Flight(FlightError::Log(_))) => {
+            return fail(format!(
+                "{e}\n  help: the log keeps the flight up to the failure (`dronecine replay {}` \
+                 reads it); free space on its disk, or give --log a place that has some",
+                log_path.display()
+            ))
+        }
         Err(e) => {
             errln!("flight log: {}", log_path.display());
             return fail(e);

@@ -341,3 +341,60 @@ fn bad_input_is_a_clear_error() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("garbage.mcap"), "{}", stderr(&o));
 }
+
+/// A disk that fills during the flight (here a file size limit on the process, which makes
+/// writes past it fail with `EFBIG`, as `ENOSPC` would): the drone is landed, `shoot` says
+/// why and exits 1, and the log keeps the flight up to the failure, readable by `replay`.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
+    use std::os::unix::process::CommandExt;
+    const LIMIT_BYTES: u64 = 1_000_000;
+    let dir = temp_dir("full-disk");
+    let log = dir.join("two-actors.mcap");
+    let log_s = log.to_str().unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_dronecine"));
+    cmd.args(["shoot", "shots/two-actors.psl", "--log", log_s, "-q"])
+        .current_dir(common::workspace())
+        .env("NO_COLOR", "1");
+    // SAFETY: between fork and exec the closure only calls `setrlimit` and `signal`, both
+    // async-signal-safe, on the child's own limits and dispositions; it touches no memory
+    // shared with the parent. (An ignored SIGXFSZ stays ignored across exec.)
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: LIMIT_BYTES as libc::rlim_t,
+                rlim_max: LIMIT_BYTES as libc::rlim_t,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let o = cmd.output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("error: the flight log could not be written")
+            && err.contains(log_s)
+            && err.contains("the drone was landed")
+            && err.contains(&format!("dronecine replay {log_s}")),
+        "{err}"
+    );
+    assert_eq!(std::fs::metadata(&log).unwrap().len(), LIMIT_BYTES);
+
+    // What was written is a flight: replay reads it, says it ends early, and reproduces
+    // every command it holds.
+    let o = dronecine(&["replay", log_s, "--report", "json"]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("ends early"), "{err}");
+    let r = report(&o);
+    assert_eq!(r["damage"][0]["cut"], true, "{r}");
+    assert_eq!(r["mismatches"], 0, "{r}");
+    assert!(r["ticks"].as_u64().unwrap() > 100, "{r}");
+    assert_eq!(r["report"]["completed"], false, "{r}");
+}

@@ -147,7 +147,10 @@ impl std::fmt::Display for FlightError {
         match self {
             FlightError::Preflight(m) => write!(f, "pre-flight check failed: {m}"),
             FlightError::Backend(e) => write!(f, "drone backend: {e}"),
-            FlightError::Log(e) => write!(f, "flight log: {e}"),
+            FlightError::Log(e) => write!(
+                f,
+                "the flight log could not be written ({e}): the drone was landed"
+            ),
         }
     }
 }
