@@ -389,6 +389,71 @@ fn a_size_inside_the_safety_distance_is_an_error() {
     assert!(!c.has_errors(), "{:?}", c.diagnostics);
 }
 
+/// A cut from beside B to a wide two-shot of A and B: the repositioning flight's short way
+/// round the pair's midpoint would sweep through B and out of the stage (the first version of
+/// the planner flew it, and the monitor refused the script: 0.28 m from B, 0.38 m outside);
+/// it goes round the other way, inside the stage and clear of both actors all along.
+#[test]
+fn a_repositioning_flight_keeps_inside_the_stage_and_clear_of_every_actor() {
+    let (c, samples, actors) = run(&script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor B height 1.65m at (2.5, 0) facing 180deg\n\
+         MCU on B 34right for 4s\n\
+         cut to LS on A and B screen center for 3s\n",
+    ));
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+    let (start, end) = c.timings[1].reposition.expect("a repositioning flight");
+    let safety = ardrone().safety.actor_distance_m;
+    let mut flown = 0;
+    for (s, poses) in samples.iter().zip(&actors) {
+        let p = s.position_m;
+        assert!(
+            p[0].abs() <= 4.0 && p[1].abs() <= 3.0 && (0.0..=3.0).contains(&p[2]),
+            "outside the stage at {} s: {p:?}",
+            s.t_s
+        );
+        for a in poses {
+            let d = (p[0] - a.position_m[0]).hypot(p[1] - a.position_m[1]);
+            assert!(d >= safety - 0.02, "{d:.2} m from an actor at {} s", s.t_s);
+        }
+        flown += usize::from(s.t_s > start && s.t_s < end);
+    }
+    assert!(flown > 100, "{flown} samples on the repositioning flight");
+}
+
+/// A framing inside an actor's safety distance is one error, with its fix: not also "the
+/// drone falls behind the framing" (it keeps its distance, by design) with a help about the
+/// actors' movements when nobody moves, nor a closeness error on the next shot's
+/// repositioning flight for starting where the first shot left the drone.
+#[test]
+fn a_framing_too_close_is_told_once_not_with_its_consequences() {
+    let (c, _, _) = run(&script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor B height 1.65m at (2.5, 0) facing 180deg\n\
+         ECU on A front for 4s\n\
+         cut to MS on B front for 4s\n",
+    ));
+    let errors: Vec<_> = c.diagnostics.iter().filter(|d| d.is_error()).collect();
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    assert_eq!(errors[0].code, Code::TooClose);
+    assert!(
+        errors[0].message.contains("puts the camera"),
+        "{}",
+        errors[0].message
+    );
+    // Its fix leaves nothing to report.
+    let (c, _, _) = run(&script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor B height 1.65m at (2.5, 0) facing 180deg\n\
+         MS on A front for 4s\n\
+         cut to MS on B front for 4s\n",
+    ));
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+}
+
 /// The closest distance between actors `a` and `b` over `[0, end_s]`, by a brute-force scan
 /// of the blocking every 0.1 ms (independent of `Blocking::contacts`' search).
 fn closest_scan(blocking: &Blocking, a: usize, b: usize, end_s: f64) -> (f64, f64) {

@@ -31,6 +31,7 @@ use crate::framing::{self, FramingError};
 use crate::paths::PathPlan;
 use crate::profile::{Gimbal, Profile};
 use crate::reference::{ActorPose, Sample};
+use crate::route::{self, Keepout, Route};
 use crate::steering::{self, HeadingState, Kinematics, SteerGains, SteerLimits};
 
 /// Time a repositioning flight leaves for the camera to settle on the first framing.
@@ -71,7 +72,7 @@ enum Phase {
         arrive_s: f64,
         from: Vec3,
         from_heading_rad: f64,
-        pivot: Option<Vec3>,
+        route: Route,
     },
     Done,
 }
@@ -99,6 +100,8 @@ pub struct Director {
     gains: SteerGains,
     stage_lo: Vec3,
     stage_hi: Vec3,
+    /// The stage itself, without the margin: where repositioning routes must stay.
+    stage_m: (Vec3, Vec3),
     safety_m: f64,
     profile_name: String,
     phase: Phase,
@@ -241,6 +244,7 @@ impl Director {
             gains: SteerGains::default(),
             stage_lo,
             stage_hi,
+            stage_m: (Vec3::from(lo), Vec3::from(hi)),
             safety_m: profile.safety.actor_distance_m,
             profile_name: profile.name.clone(),
             phase: Phase::NotStarted,
@@ -584,8 +588,14 @@ impl Director {
             (p, h)
         };
         let from = self.state.p;
-        let pivot = self.pivot(to, actors);
-        let path_len = arc_length(&from, &goal, pivot.as_ref());
+        let keep = Keepout {
+            lo: self.stage_m.0,
+            hi: self.stage_m.1,
+            actors,
+            safety_m: self.safety_m,
+        };
+        let route = route::choose(&from, &goal, self.pivot(to, actors), &keep);
+        let path_len = route.length(&from, &goal);
         let dz = (goal.z - from.z).abs();
         let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();
         let speed = self.state.v.norm();
@@ -602,9 +612,9 @@ impl Director {
             let t_yaw = 1.875 * dh / (m * self.limits.yaw_rate_radps);
             let t_stop = speed / self.limits.accel_h_mps2;
             let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(0.5);
-            // The flight curves round the pivot: measure its peaks (centripetal acceleration
-            // included) and stretch it until they fit.
-            let t_fly = fit_duration(&from, &goal, pivot.as_ref(), t0, &self.limits);
+            // The flight may curve round the pivot: measure its peaks (centripetal
+            // acceleration included) and stretch it until they fit.
+            let t_fly = route.fit_duration(&from, &goal, t0, &self.limits);
             t_fly + t_stop + SETTLE_S
         };
         let shot = &self.shots[to];
@@ -668,7 +678,7 @@ impl Director {
             arrive_s: (arrive - SETTLE_S).max(now_s).min(end),
             from,
             from_heading_rad: self.heading.heading_rad,
-            pivot,
+            route,
         };
     }
 
@@ -715,7 +725,7 @@ impl Director {
                 start_s,
                 arrive_s,
                 from,
-                pivot,
+                route,
                 ..
             } => {
                 let goal = self.shot_target(to, 0.0, actors, false);
@@ -725,7 +735,7 @@ impl Director {
                     1.0
                 };
                 let (s, _, _) = min_jerk(u);
-                interpolate_around(&from, &goal, pivot.as_ref(), s)
+                route.at(&from, &goal, s)
             }
             Phase::NotStarted | Phase::Done => self.state.p,
         }
@@ -1025,7 +1035,10 @@ impl Director {
     pub fn finish(mut self) -> (Vec<ShotTiming>, Vec<Diagnostic>) {
         let shots = std::mem::take(&mut self.shots);
         let mut diags = std::mem::take(&mut self.diagnostics);
-        diags.extend(self.monitor.diagnostics(&shots, &self.timings));
+        diags.extend(
+            self.monitor
+                .diagnostics(&shots, &self.timings, &self.too_close),
+        );
         diags.sort_by_key(|d| (d.span.start, d.span.end, d.code));
         // The monitor's closeness report repeats a framing already reported as too close.
         diags.dedup_by(|b, a| {
@@ -1049,74 +1062,6 @@ pub fn extrapolate(a: &ActorPose, dt_s: f64) -> ActorPose {
 }
 
 /// Cylindrical coordinates (radius, angle, height) of `p` about the vertical through `c`.
-fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
-    let d = p - c;
-    (crate::norm_xy(d.x, d.y), math::atan2(d.y, d.x), p.z)
-}
-
-/// The point a fraction `s` of the way from `a` to `b`: around the pivot's vertical in
-/// cylindrical coordinates (so the flight keeps its distance from the actors it turns
-/// around), or in a straight line when there is no pivot or either end is on it.
-pub fn interpolate_around(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>, s: f64) -> Vec3 {
-    if let Some(c) = pivot {
-        let (ra, ta, za) = cylindrical(a, c);
-        let (rb, tb, zb) = cylindrical(b, c);
-        if ra > 0.2 && rb > 0.2 {
-            let r = ra + (rb - ra) * s;
-            let t = ta + wrap_angle_rad(tb - ta) * s;
-            return Vec3::new(
-                c.x + r * math::cos(t),
-                c.y + r * math::sin(t),
-                za + (zb - za) * s,
-            );
-        }
-    }
-    a + (b - a) * s
-}
-
-/// Length of the flight `interpolate_around` makes (sampled).
-fn arc_length(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>) -> f64 {
-    let mut len = 0.0;
-    let mut prev = *a;
-    for k in 1..=32 {
-        let p = interpolate_around(a, b, pivot, k as f64 / 32.0);
-        len += (p - prev).norm();
-        prev = p;
-    }
-    len
-}
-
-/// The shortest duration, from `t0` up, for which the minimum-jerk flight from `a` to `b`
-/// (around `pivot`) keeps its speed and acceleration under 80% of the limits.
-fn fit_duration(a: &Vec3, b: &Vec3, pivot: Option<&Vec3>, t0: f64, limits: &SteerLimits) -> f64 {
-    let mut t = t0;
-    for _ in 0..4 {
-        let n = 64;
-        let h = t / n as f64;
-        let at = |k: i64| {
-            let u = (k as f64 * h / t).clamp(0.0, 1.0);
-            interpolate_around(a, b, pivot, min_jerk(u).0)
-        };
-        let (mut v_max, mut a_max, mut vz_max): (f64, f64, f64) = (0.0, 0.0, 0.0);
-        for k in 0..=n {
-            let (p0, p1, p2) = (at(k - 1), at(k), at(k + 1));
-            let v = (p2 - p0) / (2.0 * h);
-            let acc = (p2 - 2.0 * p1 + p0) / (h * h);
-            v_max = v_max.max(crate::norm_xy(v.x, v.y));
-            vz_max = vz_max.max(v.z.abs());
-            a_max = a_max.max(crate::norm_xy(acc.x, acc.y));
-        }
-        let scale = (v_max / (0.8 * limits.speed_h_mps))
-            .max(vz_max / (0.8 * limits.speed_v_mps))
-            .max((a_max / (0.8 * limits.accel_h_mps2)).sqrt());
-        if scale <= 1.0 {
-            break;
-        }
-        t *= scale * 1.02;
-    }
-    t
-}
-
 /// The point `looking at A` aims at: the centre of A's medium-shot band.
 pub fn look_at_point(actor: &ActorPose) -> Vec3 {
     let (bottom, top) = crate::size::band(Size::MS, actor.height_m);

@@ -45,9 +45,12 @@ struct ShotStats {
     vz: Peak,
     yaw_rate: Peak,
     lag: Peak,
-    /// Deepest intrusion into an actor's safety distance, and whose.
+    /// Deepest intrusion into an actor's safety distance during the shot, and whose…
     intrusion: Peak,
     intruded: Option<usize>,
+    /// …and on the repositioning flight before it.
+    intrusion_on_the_way: Peak,
+    intruded_on_the_way: Option<usize>,
     outside: Peak,
     outside_at: [f64; 3],
 }
@@ -123,12 +126,17 @@ impl Monitor {
             }
             let d = crate::norm_xy(p.x - actor.position_m[0], p.y - actor.position_m[1]);
             let intrusion = self.safety_m - d;
-            if intrusion > st.intrusion.value {
-                st.intrusion = Peak {
+            let (peak, whose) = if in_shot {
+                (&mut st.intrusion, &mut st.intruded)
+            } else {
+                (&mut st.intrusion_on_the_way, &mut st.intruded_on_the_way)
+            };
+            if intrusion > peak.value {
+                *peak = Peak {
                     value: intrusion,
                     t_s: t,
                 };
-                st.intruded = Some(i);
+                *whose = Some(i);
             }
         }
         let mut out: f64 = 0.0;
@@ -141,20 +149,39 @@ impl Monitor {
         }
     }
 
-    /// The diagnostics of everything that exceeded a limit.
-    pub fn diagnostics(&self, shots: &[Shot], timings: &[ShotTiming]) -> Vec<Diagnostic> {
+    /// The diagnostics of everything that exceeded a limit. `held_off[i]`: shot `i`'s framing
+    /// puts the camera inside an actor's safety distance, an error already reported. Its
+    /// consequences are not told again: how far the drone, keeping its distance, stays
+    /// behind that framing, and a repositioning flight after the shot that starts inside the
+    /// actor's distance, where the shot left the drone.
+    pub fn diagnostics(
+        &self,
+        shots: &[Shot],
+        timings: &[ShotTiming],
+        held_off: &[bool],
+    ) -> Vec<Diagnostic> {
         let mut out = Vec::new();
+        let is_held_off = |i: usize| held_off.get(i).copied().unwrap_or(false);
         for (i, (st, shot)) in self.stats.iter().zip(shots).enumerate() {
             let duration = shot.end_s - shot.start_s;
             let retimeable = matches!(shot.content, ShotContent::Path(_))
                 || matches!(&shot.transition, Transition::Move { kind, .. } if *kind != MoveKind::Hold);
+            // When, said from the shot's start; a shot's samples begin with the repositioning
+            // flight inserted before it, if any.
             let at = |t: f64| {
                 let start = timings
                     .iter()
                     .find(|x| x.index == i)
                     .map(|x| x.start_s)
                     .unwrap_or(shot.start_s);
-                format!("{:.1} s into the shot", (t - start).max(0.0))
+                if t < start - 0.005 {
+                    format!(
+                        "on the repositioning flight, {:.1} s before the shot starts",
+                        round_up_1(start - t)
+                    )
+                } else {
+                    format!("{:.1} s into the shot", (t - start).max(0.0))
+                }
             };
             // How much longer a retimeable shot must be for both its speed and its
             // acceleration to fit (speed scales as 1/T, acceleration as 1/T²), with 5% margin.
@@ -212,7 +239,7 @@ impl Monitor {
                     .with_help(help),
                 );
             }
-            if !demand_reported && st.lag.value > TRACKING_TOLERANCE_M {
+            if !demand_reported && !is_held_off(i) && st.lag.value > TRACKING_TOLERANCE_M {
                 demand_reported = true;
                 out.push(
                     Diagnostic::error(
@@ -267,9 +294,15 @@ impl Monitor {
                     }
                 }
             }
-            if st.intrusion.value > 0.02 {
-                let who = st
-                    .intruded
+            let after_held_off = i > 0 && is_held_off(i - 1);
+            let (intrusion, intruded) =
+                if after_held_off || st.intrusion.value >= st.intrusion_on_the_way.value {
+                    (st.intrusion, st.intruded)
+                } else {
+                    (st.intrusion_on_the_way, st.intruded_on_the_way)
+                };
+            if intrusion.value > 0.02 {
+                let who = intruded
                     .and_then(|i| self.names.get(i))
                     .map(String::as_str)
                     .unwrap_or("an actor");
@@ -279,8 +312,8 @@ impl Monitor {
                         shot.span,
                         format!(
                             "the camera comes within {:.2} m of {who} ({}); {} keeps {:.2} m from actors",
-                            self.safety_m - st.intrusion.value,
-                            at(st.intrusion.t_s),
+                            self.safety_m - intrusion.value,
+                            at(intrusion.t_s),
                             self.profile,
                             self.safety_m
                         ),

@@ -17,6 +17,7 @@ pub mod paths;
 pub mod preview;
 pub mod profile;
 pub mod reference;
+pub mod route;
 pub mod size;
 pub mod sphere;
 pub mod steering;

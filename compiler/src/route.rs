@@ -1,0 +1,321 @@
+//! Repositioning routes: how the drone flies from where one shot leaves it to where the next
+//! one starts (a `cut to`, when the drone cannot jump).
+//!
+//! A route is a curve from `a` to `b` parametrised by `s` in [0, 1] (the director runs `s`
+//! on a minimum-jerk clock). By default it turns round the vertical through the actors the
+//! next shot frames (the pivot), in cylindrical coordinates, the short way: the radius and
+//! the angle change together, so the camera keeps its distance from those actors. That arc
+//! can still cross the stage's walls, or pass through an actor who is not at the pivot (two
+//! actors: the pivot is between them). [`choose`] therefore tries, in this order, the arc the
+//! short way, the arc the long way and the straight line, and flies the first that keeps
+//! inside the stage and out of every actor's safety cylinder, as far as its two ends allow;
+//! when none does, the one that intrudes least. Steering still applies on top (containment
+//! and separation), but a route that stays clear does not lean on it.
+//!
+//! The route is chosen once, when the flight starts, against the actors as they stand; its
+//! end `b` follows the next shot's framing as the actors move.
+
+use crate::camera::Vec3;
+use crate::math;
+use crate::reference::ActorPose;
+use crate::steering::SteerLimits;
+use dronecine_grammar::vocab::wrap_angle_rad;
+use std::f64::consts::PI;
+
+/// Below this distance from the pivot's vertical an end has no useful angle: the arc is
+/// flown as a straight line.
+const MIN_RADIUS_M: f64 = 0.2;
+/// The long way round is a candidate only when the short way turns at least this much (a
+/// smaller turn the long way is nearly a full circle).
+const MIN_TURN_FOR_LONG_WAY_RAD: f64 = 0.5;
+/// Points at which a route's clearance is checked.
+const CHECKS: usize = 64;
+/// Intrusions (into an actor's cylinder or through a wall) up to this count as clear: the
+/// steering's containment and separation push the camera back from a route that only grazes
+/// them (the short arcs of `shots/scene.psl` come 0.021 m into a wall or a cylinder and are
+/// flown clear of both). A deeper intrusion is flown as is only when no other route is clearer.
+const TOLERANCE_M: f64 = 0.1;
+
+/// The shape of a repositioning flight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Route {
+    Straight,
+    /// Round the vertical through `pivot`, the short way or the long way.
+    Around {
+        pivot: Vec3,
+        long_way: bool,
+    },
+}
+
+fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
+    let d = p - c;
+    (crate::norm_xy(d.x, d.y), math::atan2(d.y, d.x), p.z)
+}
+
+impl Route {
+    /// The point a fraction `s` of the way from `a` to `b`.
+    pub fn at(&self, a: &Vec3, b: &Vec3, s: f64) -> Vec3 {
+        if let Route::Around { pivot: c, long_way } = self {
+            let (ra, ta, za) = cylindrical(a, c);
+            let (rb, tb, zb) = cylindrical(b, c);
+            if ra > MIN_RADIUS_M && rb > MIN_RADIUS_M {
+                let short = wrap_angle_rad(tb - ta);
+                let turn = if *long_way {
+                    short - 2.0 * PI * short.signum()
+                } else {
+                    short
+                };
+                let r = ra + (rb - ra) * s;
+                let t = ta + turn * s;
+                return Vec3::new(
+                    c.x + r * math::cos(t),
+                    c.y + r * math::sin(t),
+                    za + (zb - za) * s,
+                );
+            }
+        }
+        a + (b - a) * s
+    }
+
+    /// The route's length from `a` to `b` (sampled).
+    pub fn length(&self, a: &Vec3, b: &Vec3) -> f64 {
+        let mut len = 0.0;
+        let mut prev = *a;
+        for k in 1..=32 {
+            let p = self.at(a, b, k as f64 / 32.0);
+            len += (p - prev).norm();
+            prev = p;
+        }
+        len
+    }
+
+    /// The shortest duration, from `t0` up, for which the minimum-jerk flight along the
+    /// route keeps its speed and acceleration (centripetal included) under 80% of the limits.
+    pub fn fit_duration(&self, a: &Vec3, b: &Vec3, t0: f64, limits: &SteerLimits) -> f64 {
+        let mut t = t0;
+        for _ in 0..4 {
+            let n = 64;
+            let h = t / n as f64;
+            let at = |k: i64| {
+                let u = (k as f64 * h / t).clamp(0.0, 1.0);
+                self.at(a, b, crate::blocking::min_jerk(u).0)
+            };
+            let (mut v_max, mut a_max, mut vz_max): (f64, f64, f64) = (0.0, 0.0, 0.0);
+            for k in 0..=n {
+                let (p0, p1, p2) = (at(k - 1), at(k), at(k + 1));
+                let v = (p2 - p0) / (2.0 * h);
+                let acc = (p2 - 2.0 * p1 + p0) / (h * h);
+                v_max = v_max.max(crate::norm_xy(v.x, v.y));
+                vz_max = vz_max.max(v.z.abs());
+                a_max = a_max.max(crate::norm_xy(acc.x, acc.y));
+            }
+            let scale = (v_max / (0.8 * limits.speed_h_mps))
+                .max(vz_max / (0.8 * limits.speed_v_mps))
+                .max((a_max / (0.8 * limits.accel_h_mps2)).sqrt());
+            if scale <= 1.0 {
+                break;
+            }
+            t *= scale * 1.02;
+        }
+        t
+    }
+}
+
+/// Where a route may go: inside the box `[lo, hi]` (the stage: steering's containment keeps
+/// the camera off the walls' margin, as it does in shots) and outside
+/// each actor's safety cylinder (radius `safety_m` round the body's vertical, up to
+/// `safety_m` above the head).
+pub struct Keepout<'a> {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub actors: &'a [ActorPose],
+    pub safety_m: f64,
+}
+
+impl Keepout<'_> {
+    /// How far `p` is into a wall or an actor's cylinder (0 when clear).
+    pub fn intrusion_m(&self, p: &Vec3) -> f64 {
+        let mut worst: f64 = 0.0;
+        for i in 0..3 {
+            worst = worst.max(self.lo[i] - p[i]).max(p[i] - self.hi[i]);
+        }
+        for a in self.actors {
+            let [x, y, z] = a.position_m;
+            if p.z > z + a.height_m + self.safety_m {
+                continue;
+            }
+            worst = worst.max(self.safety_m - crate::norm_xy(p.x - x, p.y - y));
+        }
+        worst
+    }
+
+    /// The deepest intrusion along `route` from `a` to `b`.
+    fn route_intrusion_m(&self, route: &Route, a: &Vec3, b: &Vec3) -> f64 {
+        (0..=CHECKS)
+            .map(|k| self.intrusion_m(&route.at(a, b, k as f64 / CHECKS as f64)))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The route from `a` to `b` (see the module doc): round `pivot` if there is one, the short
+/// way unless that intrudes where another route does not.
+pub fn choose(a: &Vec3, b: &Vec3, pivot: Option<Vec3>, keep: &Keepout) -> Route {
+    let Some(pivot) = pivot else {
+        return Route::Straight;
+    };
+    let short = Route::Around {
+        pivot,
+        long_way: false,
+    };
+    let (_, ta, _) = cylindrical(a, &pivot);
+    let (_, tb, _) = cylindrical(b, &pivot);
+    let long_way_too = wrap_angle_rad(tb - ta).abs() >= MIN_TURN_FOR_LONG_WAY_RAD;
+    let long = Route::Around {
+        pivot,
+        long_way: true,
+    };
+    let candidates = [
+        Some(short),
+        long_way_too.then_some(long),
+        Some(Route::Straight),
+    ];
+    // No route is clearer than its ends.
+    let ends = keep.intrusion_m(a).max(keep.intrusion_m(b));
+    let mut best: Option<(Route, f64)> = None;
+    for route in candidates.into_iter().flatten() {
+        let intrusion = keep.route_intrusion_m(&route, a, b);
+        if intrusion <= ends + TOLERANCE_M {
+            return route;
+        }
+        if best.is_none_or(|(_, least)| intrusion < least) {
+            best = Some((route, intrusion));
+        }
+    }
+    best.map_or(short, |(route, _)| route)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn actor(x: f64, y: f64) -> ActorPose {
+        ActorPose {
+            position_m: [x, y, 0.0],
+            velocity_mps: [0.0; 3],
+            facing_rad: 0.0,
+            facing_rate_radps: 0.0,
+            height_m: 1.8,
+        }
+    }
+
+    /// `stage 8m x 6m x 3m`.
+    fn stage() -> (Vec3, Vec3) {
+        (Vec3::new(-4.0, -3.0, 0.0), Vec3::new(4.0, 3.0, 3.0))
+    }
+
+    #[test]
+    fn arcs_keep_their_ends_and_turn_the_way_asked() {
+        let c = Vec3::new(0.0, 0.0, 0.0);
+        let (a, b) = (Vec3::new(2.0, 0.0, 1.0), Vec3::new(0.0, 3.0, 1.5));
+        for long_way in [false, true] {
+            let r = Route::Around { pivot: c, long_way };
+            assert!((r.at(&a, &b, 0.0) - a).norm() < 1e-12);
+            assert!((r.at(&a, &b, 1.0) - b).norm() < 1e-12);
+            // Halfway: radius 2.5, angle 45° the short way, −135° the long way.
+            let m = r.at(&a, &b, 0.5);
+            let want = if long_way { -0.75 * PI } else { 0.25 * PI };
+            assert!((crate::norm_xy(m.x, m.y) - 2.5).abs() < 1e-12);
+            assert!(wrap_angle_rad(math::atan2(m.y, m.x) - want).abs() < 1e-12);
+            assert!((m.z - 1.25).abs() < 1e-12);
+        }
+        // The long way is longer: three quarters of a turn against one.
+        let short = Route::Around {
+            pivot: c,
+            long_way: false,
+        };
+        let long = Route::Around {
+            pivot: c,
+            long_way: true,
+        };
+        assert!(long.length(&a, &b) > 2.5 * short.length(&a, &b));
+    }
+
+    #[test]
+    fn the_short_arc_is_kept_when_it_is_clear() {
+        let (lo, hi) = stage();
+        let actors = [actor(0.0, 0.0)];
+        let keep = Keepout {
+            lo,
+            hi,
+            actors: &actors,
+            safety_m: 0.5,
+        };
+        let (a, b) = (Vec3::new(1.5, 0.0, 1.5), Vec3::new(-1.5, 0.3, 1.5));
+        let r = choose(&a, &b, Some(Vec3::zeros()), &keep);
+        assert_eq!(
+            r,
+            Route::Around {
+                pivot: Vec3::zeros(),
+                long_way: false
+            }
+        );
+        assert_eq!(keep.route_intrusion_m(&r, &a, &b), 0.0);
+        // Without a pivot: a straight line.
+        assert_eq!(choose(&a, &b, None, &keep), Route::Straight);
+    }
+
+    /// Two actors, the pivot between them: the short arc from beside B out to a wide framing
+    /// sweeps through B and out of the stage; the long way round is clear.
+    #[test]
+    fn an_arc_through_an_actor_or_a_wall_goes_the_other_way() {
+        let (lo, hi) = stage();
+        let actors = [actor(0.0, 0.0), actor(2.5, 0.0)];
+        let keep = Keepout {
+            lo,
+            hi,
+            actors: &actors,
+            safety_m: 0.5,
+        };
+        let pivot = Vec3::new(1.25, 0.0, 0.0);
+        let (a, b) = (Vec3::new(2.2, 0.6, 1.2), Vec3::new(-2.7, -2.5, 1.1));
+        let short = Route::Around {
+            pivot,
+            long_way: false,
+        };
+        assert!(keep.route_intrusion_m(&short, &a, &b) > 0.2);
+        let r = choose(&a, &b, Some(pivot), &keep);
+        assert_eq!(
+            r,
+            Route::Around {
+                pivot,
+                long_way: true
+            }
+        );
+        assert!(keep.route_intrusion_m(&r, &a, &b) <= TOLERANCE_M);
+    }
+
+    #[test]
+    fn when_nothing_is_clear_the_least_intrusion_wins() {
+        // A stage too narrow for any arc, an actor near the straight line: the straight line
+        // comes 0.2 m into the actor's cylinder, the arcs leave the stage by metres.
+        let lo = Vec3::new(-4.0, -0.6, 0.0);
+        let hi = Vec3::new(4.0, 0.6, 3.0);
+        let actors = [actor(0.0, 0.3)];
+        let keep = Keepout {
+            lo,
+            hi,
+            actors: &actors,
+            safety_m: 0.5,
+        };
+        let (a, b) = (Vec3::new(-3.0, 0.0, 1.5), Vec3::new(3.0, 0.0, 1.5));
+        let pivot = Vec3::new(0.0, 0.3, 0.0);
+        for long_way in [false, true] {
+            let arc = Route::Around { pivot, long_way };
+            assert!(keep.route_intrusion_m(&arc, &a, &b) > 2.0);
+        }
+        let r = choose(&a, &b, Some(pivot), &keep);
+        assert_eq!(r, Route::Straight);
+        let i = keep.route_intrusion_m(&r, &a, &b);
+        assert!((i - 0.2).abs() < 1e-9, "{i}");
+    }
+}
