@@ -303,29 +303,28 @@ pub fn run(a: &Args) -> ExitCode {
 }
 
 fn summary(name: &str, script: &Script, profile: &Profile, c: &Compiled, rate_hz: f64) -> String {
-    let repositions: Vec<&ShotTiming> = c
+    let flights: Vec<f64> = c
         .timings
         .iter()
-        .filter(|t| t.reposition.is_some())
-        .collect();
-    let flying: f64 = repositions
-        .iter()
         .filter_map(|t| t.reposition.map(|(a, b)| b - a))
-        .sum();
+        .collect();
+    let shots = script.timeline.len();
+    let repositioning = match flights.len() {
+        0 => "no repositioning flight".to_string(),
+        n => format!(
+            "{n} repositioning {}, {:.1} s",
+            if n == 1 { "flight" } else { "flights" },
+            // Summed from +0.0 (an empty `sum()` of floats is −0.0).
+            flights.iter().fold(0.0, |a, b| a + b)
+        ),
+    };
     format!(
-        "{name}: {} shots for {}, {:.1} s of reference ({:.1} s as written; {} repositioning \
-         {} {:.1} s), {} samples at {} Hz",
-        script.timeline.len(),
+        "{name}: {shots} {} for {}, {:.1} s of reference ({:.1} s as written; {repositioning}), \
+         {} samples at {} Hz",
+        if shots == 1 { "shot" } else { "shots" },
         profile.name,
         c.duration_s,
         script.duration_s,
-        repositions.len(),
-        if repositions.len() == 1 {
-            "flight,"
-        } else {
-            "flights,"
-        },
-        flying,
         c.samples,
         rate_hz
     )

@@ -269,7 +269,10 @@ fn compile_writes_mcap_csv_and_previews() {
         assert!(prev.join(format!("{f}.png")).exists(), "{f}.png");
     }
     assert!(
-        stdout(&o).contains("1001 samples at 50 Hz"),
+        stdout(&o).contains(
+            "square.psl: 1 shot for ardrone2, 20.0 s of reference (20.0 s as written; no \
+             repositioning flight), 1001 samples at 50 Hz"
+        ),
         "{}",
         stdout(&o)
     );
