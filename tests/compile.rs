@@ -6,7 +6,7 @@ mod common;
 
 use dronecine_compiler::blocking::Blocking;
 use dronecine_compiler::camera::{CameraPose, Lens, Vec3};
-use dronecine_compiler::compile::{compile, Compiled, Options};
+use dronecine_compiler::compile::{compile, Compiled, Options, FRAMING_TOLERANCE};
 use dronecine_compiler::director::Director;
 use dronecine_compiler::framing;
 use dronecine_compiler::profile::Profile;
@@ -452,6 +452,89 @@ fn a_framing_too_close_is_told_once_not_with_its_consequences() {
          cut to MS on B front for 4s\n",
     ));
     assert!(!c.has_errors(), "{:?}", c.diagnostics);
+}
+
+/// A hold whose actors land away from their screen points is a warning on the shot, with
+/// the RMS screen distance that the test's own re-solve and projection find. Here B stands
+/// right behind A (each faces the other, the profiles ask for the camera on their line): the
+/// first version of `compile` wrote the shot without a word, B hidden behind A.
+#[test]
+fn a_hold_that_misses_its_screen_points_is_a_warning_with_the_figure() {
+    let script = script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor B height 1.65m at (2.5, 0) facing 180deg\n\
+         MS on B front MS A back for 3s\n",
+    );
+    let (c, _, _) = run(&script);
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+    let off: Vec<_> = c
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == Code::FramingOff)
+        .collect();
+    assert_eq!(off.len(), 1, "{:?}", c.diagnostics);
+    assert!(!off[0].is_error());
+    assert_eq!(off[0].span, script.timeline[0].span);
+    let rms_said: f64 = off[0]
+        .message
+        .split("; ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("an RMS figure: {}", off[0].message));
+    let errs = hold_framing_errors(&script);
+    let rms = (errs.iter().map(|e| e.2 * e.2 + e.3 * e.3).sum::<f64>() / errs.len() as f64).sqrt();
+    assert!(rms > FRAMING_TOLERANCE);
+    assert!(
+        (rms - rms_said).abs() <= 0.006,
+        "said {rms_said}, measured {rms}"
+    );
+
+    // The shipped two-actor scenes hold their framing: no warning.
+    for name in ["two-actors.psl", "two-heights.psl"] {
+        let (_, checked) = common::check_path(&common::workspace().join("shots").join(name));
+        let (c, _, _) = run(&checked.script.unwrap());
+        assert!(
+            !c.diagnostics.iter().any(|d| d.code == Code::FramingOff),
+            "{name}: {:?}",
+            c.diagnostics
+        );
+    }
+}
+
+/// Over a shoulder with the level camera: the foreground actor's chest is aimed at from its
+/// own height but the altitude serves the background actor, so the foreground lands near the
+/// top of the frame. The warning says so, and its fix (the same size for both) holds.
+#[test]
+fn an_over_the_shoulder_off_in_height_gets_the_fix_that_works() {
+    let src = |line: &str| {
+        format!(
+            "stage 8m x 6m x 3m\ndrone ardrone2\n\
+             actor Bob height 1.82m at (1.5, 0.5) facing 180deg\n\
+             actor Alice height 1.66m at (-0.5, 0.5) facing 0deg\n\
+             {line}\n"
+        )
+    };
+    let (c, _, _) = run(&script_of(&src(
+        "MS on Bob 34backright LS on Alice 34left screen right for 4s",
+    )));
+    let d = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == Code::FramingOff)
+        .unwrap_or_else(|| panic!("{:?}", c.diagnostics));
+    assert!(d.message.starts_with("Bob lands at"), "{}", d.message);
+    let help = d.help.as_deref().unwrap();
+    assert!(help.contains("the same size for both"), "{help}");
+    let (c, _, _) = run(&script_of(&src(
+        "MS on Bob 34backright MS on Alice 34left screen right for 4s",
+    )));
+    assert!(
+        !c.diagnostics.iter().any(|d| d.code == Code::FramingOff),
+        "{:?}",
+        c.diagnostics
+    );
 }
 
 /// The closest distance between actors `a` and `b` over `[0, end_s]`, by a brute-force scan

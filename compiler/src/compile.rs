@@ -64,6 +64,7 @@ pub fn compile<E>(
     diagnostics.extend(collisions(&blocking));
     let mut director = Director::new(script, scene, profile);
     let mut poses = blocking.poses(0.0);
+    let mut framing = FramingCheck::new(script.timeline.len());
     let mut k: u64 = 0;
     let mut last_t = 0.0;
     // Guard against a timeline that never ends (it always does: every phase has an end).
@@ -75,12 +76,15 @@ pub fn compile<E>(
         if director.finished() || k > limit {
             break;
         }
+        framing.see(&director, &sample, &poses);
         sink(&sample, &poses)?;
         last_t = t;
         k += 1;
     }
     let (timings, mut flown) = director.finish();
+    let off = framing.diagnostics(script, &flown);
     diagnostics.append(&mut flown);
+    diagnostics.extend(off);
     diagnostics.sort_by_key(|d| (d.span.start, d.span.end, d.code));
     Ok(Compiled {
         timings,
@@ -272,3 +276,146 @@ mod tests {
         assert!(unflyable(&flyable).is_none());
     }
 }
+
+/// Where each hold puts its actors on screen, against where the script puts them: the
+/// reference's own camera (its position, heading and pitch) projecting each framed actor's
+/// aim point, tick by tick, as `shoot` measures its framing error on set.
+struct FramingCheck {
+    shots: Vec<HoldFraming>,
+    targets: Vec<crate::framing::ScreenTarget>,
+}
+
+#[derive(Clone, Debug, Default)]
+struct HoldFraming {
+    sum_sq: f64,
+    n: u64,
+    worst: Option<Miss>,
+}
+
+/// A hold's worst tick.
+#[derive(Clone, Copy, Debug)]
+struct Miss {
+    /// Screen distance (infinite behind the camera).
+    distance: f64,
+    actor: usize,
+    /// Where the actor landed on screen (`None`: behind the camera)…
+    got: Option<[f64; 2]>,
+    /// …and where the script puts it.
+    want: [f64; 2],
+    t_s: f64,
+}
+
+impl FramingCheck {
+    fn new(shots: usize) -> FramingCheck {
+        FramingCheck {
+            shots: vec![HoldFraming::default(); shots],
+            targets: Vec::new(),
+        }
+    }
+
+    fn see(&mut self, director: &Director, sample: &Sample, actors: &[ActorPose]) {
+        let camera = crate::camera::CameraPose {
+            position_m: crate::camera::Vec3::from(sample.position_m),
+            heading_rad: sample.heading_rad,
+            pitch_rad: sample.camera_pitch_rad,
+        }
+        .frame();
+        if !director.hold_targets(actors, &camera.position_m, &mut self.targets) {
+            return;
+        }
+        let Some(hold) = self.shots.get_mut(sample.shot) else {
+            return;
+        };
+        for target in &self.targets {
+            let got = camera.project(director.lens(), &target.point_m);
+            let d = got.map_or(f64::INFINITY, |g| {
+                (g[0] - target.screen[0]).hypot(g[1] - target.screen[1])
+            });
+            hold.sum_sq += if d.is_finite() { d * d } else { BEHIND_SQ };
+            hold.n += 1;
+            if hold.worst.is_none_or(|w| d > w.distance) {
+                hold.worst = Some(Miss {
+                    distance: d,
+                    actor: target.actor,
+                    got,
+                    want: target.screen,
+                    t_s: sample.t_s,
+                });
+            }
+        }
+    }
+
+    /// A warning on each hold whose actors land, RMS over the hold, more than
+    /// [`FRAMING_TOLERANCE`] from their screen points; none on a shot that already has an
+    /// error (its framing's failure is that error's consequence).
+    fn diagnostics(&self, script: &Script, flown: &[Diagnostic]) -> Vec<Diagnostic> {
+        let names = script
+            .scene
+            .as_ref()
+            .map(|s| s.actors.iter().map(|a| a.name.as_str()).collect::<Vec<_>>())
+            .unwrap_or_default();
+        let mut out = Vec::new();
+        for (hold, shot) in self.shots.iter().zip(&script.timeline) {
+            let Some(Miss {
+                distance: worst,
+                actor,
+                got,
+                want,
+                t_s,
+            }) = hold.worst
+            else {
+                continue;
+            };
+            let rms = (hold.sum_sq / hold.n as f64).sqrt();
+            let failed = flown.iter().any(|d| d.is_error() && d.span == shot.span);
+            if !(rms > FRAMING_TOLERANCE) || failed {
+                continue;
+            }
+            let who = names.get(actor).copied().unwrap_or("an actor");
+            let message = match got {
+                Some(g) => format!(
+                    "{who} lands at ({:.2}, {:.2}) on screen, {worst:.2} from ({:.2}, {:.2}) \
+                     where this shot puts them (at {t_s:.1} s; {rms:.2} RMS over the hold)",
+                    g[0], g[1], want[0], want[1]
+                ),
+                None => format!(
+                    "{who} is behind the camera at {t_s:.1} s, not at ({:.2}, {:.2}) on screen \
+                     ({rms:.2} RMS over the hold)",
+                    want[0], want[1]
+                ),
+            };
+            let off_in_height =
+                got.is_some_and(|g| (g[1] - want[1]).abs() > (g[0] - want[0]).abs());
+            let help = if off_in_height {
+                // Camera-math §4: without roll, one actor's screen height is aimed exactly and
+                // the other's follows from the geometry. (Writing the height it lands at
+                // moves the solve's screen points and need not frame at all.)
+                "the camera has no roll: two actors land at their screen heights only when it \
+                 sees their aim points at the same elevation; frame them at more similar \
+                 distances (the same size for both, say `MS … MS …` rather than `MS … LS …`)"
+                    .to_string()
+            } else {
+                "no camera position puts the actors at these screen points with these sizes and \
+                 profiles: move the screen points, change a size, or choose profiles that agree \
+                 (the camera must be on the side each profile names)"
+                    .to_string()
+            };
+            out.push(
+                Diagnostic::warning(Code::FramingOff, shot.span, message)
+                    .with_label(format!("{who} off their screen point"))
+                    .with_help(help),
+            );
+        }
+        out
+    }
+}
+
+/// The RMS screen distance (the frame spans 2 in x and y; the thirds are 1/3 from the centre)
+/// above which a hold's framing is reported as off. The shipped two-actor scenes hold 0.008
+/// (`two-actors.psl`) and 0.067 (`two-heights.psl`: actors of different heights under a level
+/// camera, camera-math §4).
+pub const FRAMING_TOLERANCE: f64 = 0.1;
+
+/// A framed actor behind the camera counts as this squared screen distance (as `shoot`'s
+/// report counts it).
+const BEHIND_SQ: f64 = 8.0;

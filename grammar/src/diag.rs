@@ -86,6 +86,7 @@ codes! {
     Reposition => "compile::reposition": "A cut needs a repositioning flight, inserted before the shot.",
     AngleNotRendered => "compile::angle_not_rendered": "The drone has no gimbal; the camera angle comes from altitude alone or not at all.",
     Unframeable => "compile::unframeable": "No roll-free camera orientation puts the actors at the requested screen positions.",
+    FramingOff => "compile::framing_off": "A hold's actors land away from the screen points the script gives them.",
     ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
     ActorsCollide => "compile::actors_collide": "The blocking walks two actors into each other.",
     RigSyntax => "rig::syntax": "A rig file is not valid TOML.",
