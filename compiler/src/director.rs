@@ -1061,7 +1061,6 @@ pub fn extrapolate(a: &ActorPose, dt_s: f64) -> ActorPose {
     }
 }
 
-/// Cylindrical coordinates (radius, angle, height) of `p` about the vertical through `c`.
 /// The point `looking at A` aims at: the centre of A's medium-shot band.
 pub fn look_at_point(actor: &ActorPose) -> Vec3 {
     let (bottom, top) = crate::size::band(Size::MS, actor.height_m);

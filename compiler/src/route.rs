@@ -47,6 +47,7 @@ pub enum Route {
     },
 }
 
+/// Cylindrical coordinates (radius, angle, height) of `p` about the vertical through `c`.
 fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
     let d = p - c;
     (crate::norm_xy(d.x, d.y), math::atan2(d.y, d.x), p.z)
