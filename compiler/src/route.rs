@@ -209,6 +209,16 @@ mod tests {
         }
     }
 
+    /// Between `lo` and `hi`, 0.5 m from each of `actors`.
+    fn keepout(lo: Vec3, hi: Vec3, actors: &[ActorPose]) -> Keepout<'_> {
+        Keepout {
+            lo,
+            hi,
+            actors,
+            safety_m: 0.5,
+        }
+    }
+
     /// `stage 8m x 6m x 3m`.
     fn stage() -> (Vec3, Vec3) {
         (Vec3::new(-4.0, -3.0, 0.0), Vec3::new(4.0, 3.0, 3.0))
@@ -245,12 +255,7 @@ mod tests {
     fn the_short_arc_is_kept_when_it_is_clear() {
         let (lo, hi) = stage();
         let actors = [actor(0.0, 0.0)];
-        let keep = Keepout {
-            lo,
-            hi,
-            actors: &actors,
-            safety_m: 0.5,
-        };
+        let keep = keepout(lo, hi, &actors);
         let (a, b) = (Vec3::new(1.5, 0.0, 1.5), Vec3::new(-1.5, 0.3, 1.5));
         let r = choose(&a, &b, Some(Vec3::zeros()), &keep);
         assert_eq!(
@@ -271,12 +276,7 @@ mod tests {
     fn an_arc_through_an_actor_or_a_wall_goes_the_other_way() {
         let (lo, hi) = stage();
         let actors = [actor(0.0, 0.0), actor(2.5, 0.0)];
-        let keep = Keepout {
-            lo,
-            hi,
-            actors: &actors,
-            safety_m: 0.5,
-        };
+        let keep = keepout(lo, hi, &actors);
         let pivot = Vec3::new(1.25, 0.0, 0.0);
         let (a, b) = (Vec3::new(2.2, 0.6, 1.2), Vec3::new(-2.7, -2.5, 1.1));
         let short = Route::Around {
@@ -302,12 +302,7 @@ mod tests {
         let lo = Vec3::new(-4.0, -0.6, 0.0);
         let hi = Vec3::new(4.0, 0.6, 3.0);
         let actors = [actor(0.0, 0.3)];
-        let keep = Keepout {
-            lo,
-            hi,
-            actors: &actors,
-            safety_m: 0.5,
-        };
+        let keep = keepout(lo, hi, &actors);
         let (a, b) = (Vec3::new(-3.0, 0.0, 1.5), Vec3::new(3.0, 0.0, 1.5));
         let pivot = Vec3::new(0.0, 0.3, 0.0);
         for long_way in [false, true] {
