@@ -398,3 +398,62 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
     assert!(r["ticks"].as_u64().unwrap() > 100, "{r}");
     assert_eq!(r["report"]["completed"], false, "{r}");
 }
+
+/// What the director finds against the live actors during a flight is told as it arises, as
+/// events in the log (and on the terminal): each repositioning flight, and a framing it
+/// cannot solve, which leaves the drone holding where it is for the rest of the shot. The
+/// first version kept these to itself: in `scene.psl` the reverse over-the-shoulder shot
+/// (shot 5) does not solve against the simulated actors, and the flight said only
+/// "completed", with a missing framing figure.
+#[test]
+fn shoot_tells_what_the_director_finds_on_set() {
+    let dir = temp_dir("director-events");
+    let log = dir.join("scene.mcap");
+    let log_s = log.to_str().unwrap();
+    let o = dronecine(&[
+        "shoot",
+        "shots/scene.psl",
+        "--log",
+        log_s,
+        "--report",
+        "json",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = report(&o);
+    let bytes = std::fs::read(&log).unwrap();
+    let text = String::from_utf8_lossy(&bytes);
+    // The `/events` messages (JSON objects) the director's findings became.
+    let events: Vec<&str> = text
+        .match_indices(r#""kind":"compile::"#)
+        .map(|(i, _)| {
+            let start = text[..i].rfind('{').unwrap_or(i);
+            let end = text[i..].find('}').map_or(text.len(), |j| i + j + 1);
+            &text[start..end]
+        })
+        .collect();
+    assert!(
+        events
+            .iter()
+            .any(|e| e.contains("compile::reposition") && e.contains("\"message\":\"shot ")),
+        "{events:#?}"
+    );
+    // Every hold the flight has no framing figure for was told as an error event.
+    let mut missing = 0;
+    for (i, s) in r["shots"].as_array().unwrap().iter().enumerate() {
+        let label = s["label"].as_str().unwrap();
+        let hold = label.contains(" for ") && !label.contains("path");
+        if hold && s["rms_framing_error"].is_null() {
+            missing += 1;
+            let told = format!("\"message\":\"shot {}: ", i + 1);
+            assert!(
+                events
+                    .iter()
+                    .any(|e| e.contains(&told) && e.contains(r#""level":"error""#)),
+                "shot {} ({label}) has no framing figure and no event: {events:#?}",
+                i + 1
+            );
+        }
+    }
+    assert!(missing > 0, "the seeded flight has its unsolved shot: {r}");
+}

@@ -273,6 +273,13 @@ impl Director {
         &self.lens
     }
 
+    /// The diagnostics of planning and flying so far, in the order they arose (repositioning
+    /// flights, framings that cannot be solved or come too close), without the monitor's
+    /// limit checks, which [`Director::finish`] adds. `shoot` tells each as it arises.
+    pub fn diagnostics_so_far(&self) -> &[Diagnostic] {
+        &self.diagnostics
+    }
+
     /// Whether the last shot has ended.
     pub fn finished(&self) -> bool {
         matches!(self.phase, Phase::Done)

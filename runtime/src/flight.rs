@@ -617,10 +617,26 @@ impl<'s, 'b> Flight<'s, 'b> {
             self.mocap.action(action_s);
             self.event(action_s, "info", "action", "action!".into());
             let mut current: Option<usize> = None;
+            let mut told = 0;
             loop {
                 t = self.wait_tick(t + self.period_s)?;
                 let script_t = t - action_s;
                 let sample = director.step(script_t, &self.actors.poses);
+                // What the director found against the live actors, told as it arises: a
+                // framing it cannot solve leaves the drone holding where it is for the rest
+                // of the shot, which the report alone would show only as a missing figure.
+                while let Some(d) = director.diagnostics_so_far().get(told) {
+                    told += 1;
+                    let shot = (self.setup.script.timeline.iter())
+                        .position(|s| s.span == d.span)
+                        .map_or(String::new(), |i| format!("shot {}: ", i + 1));
+                    let (level, kind, message) = (
+                        if d.is_error() { "error" } else { "warning" },
+                        d.code.as_str(),
+                        format!("{shot}{}", d.message),
+                    );
+                    self.event(t, level, kind, message);
+                }
                 if current != Some(sample.shot) {
                     current = Some(sample.shot);
                     self.event(
