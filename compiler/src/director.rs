@@ -51,8 +51,6 @@ enum Plan {
     Path(PathPlan),
     /// A path not planned yet (it is planned when the drone starts toward it).
     PathPending,
-    /// Nothing to fly (the shot failed to solve); the camera holds where it is.
-    Nothing,
 }
 
 /// Where the timeline is.
@@ -923,14 +921,16 @@ impl Director {
         }
     }
 
-    /// Record a framing failure once per shot and hold position.
+    /// Record a framing failure once per shot and hold position this tick. The plan is
+    /// kept: the next tick solves again, against the actors as they are then (on set, live
+    /// poses that miss a solvable framing by a few centimetres for a moment must not cost
+    /// the rest of the shot).
     fn fail(&mut self, index: usize, e: framing::FramingError) -> Vec3 {
         if !self.warned[index] {
             self.warned[index] = true;
             self.diagnostics
                 .push(framing_diagnostic(&e, self.shots[index].span));
         }
-        self.plans[index] = Plan::Nothing;
         self.state.p
     }
 
@@ -1009,7 +1009,7 @@ impl Director {
                     }
                 };
             }
-            Plan::PathPending | Plan::Nothing => None,
+            Plan::PathPending => None,
         };
         match visual {
             Some((v, kept)) => {
