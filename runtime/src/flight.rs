@@ -29,6 +29,7 @@ use dronecine_compiler::director::Director;
 use dronecine_compiler::framing::ScreenTarget;
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::script::{Scene, Script};
+use dronecine_grammar::Code;
 use serde::Serialize;
 
 use crate::backend::{BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame};
@@ -630,11 +631,19 @@ impl<'s, 'b> Flight<'s, 'b> {
                     let shot = (self.setup.script.timeline.iter())
                         .position(|s| s.span == d.span)
                         .map_or(String::new(), |i| format!("shot {}: ", i + 1));
-                    let (level, kind, message) = (
-                        if d.is_error() { "error" } else { "warning" },
-                        d.code.as_str(),
-                        format!("{shot}{}", d.message),
-                    );
+                    // A repositioning flight is the plan working as written: logged, not
+                    // printed over the progress display.
+                    let level = match (d.is_error(), d.code) {
+                        (true, _) => "error",
+                        (false, Code::Reposition) => "info",
+                        (false, _) => "warning",
+                    };
+                    let held = if d.code == Code::Unframeable {
+                        "; the drone holds where it is until it solves"
+                    } else {
+                        ""
+                    };
+                    let (kind, message) = (d.code.as_str(), format!("{shot}{}{held}", d.message));
                     self.event(t, level, kind, message);
                 }
                 if current != Some(sample.shot) {
