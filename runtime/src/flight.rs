@@ -624,8 +624,8 @@ impl<'s, 'b> Flight<'s, 'b> {
                 let script_t = t - action_s;
                 let sample = director.step(script_t, &self.actors.poses);
                 // What the director found against the live actors, told as it arises: a
-                // framing it cannot solve leaves the drone holding where it is for the rest
-                // of the shot, which the report alone would show only as a missing figure.
+                // framing it cannot solve holds the drone where it is until it solves, which
+                // the report alone would show only as a thinner framing figure.
                 while let Some(d) = director.diagnostics_so_far().get(told) {
                     told += 1;
                     let shot = (self.setup.script.timeline.iter())
