@@ -314,15 +314,17 @@ impl FramingCheck {
     }
 
     fn see(&mut self, director: &Director, sample: &Sample, actors: &[ActorPose]) {
+        let position_m = crate::camera::Vec3::from(sample.position_m);
+        if !director.hold_targets(actors, &position_m, &mut self.targets) {
+            return;
+        }
+        // The camera's axes only in holds (a sine and a cosine each).
         let camera = crate::camera::CameraPose {
-            position_m: crate::camera::Vec3::from(sample.position_m),
+            position_m,
             heading_rad: sample.heading_rad,
             pitch_rad: sample.camera_pitch_rad,
         }
         .frame();
-        if !director.hold_targets(actors, &camera.position_m, &mut self.targets) {
-            return;
-        }
         let Some(hold) = self.shots.get_mut(sample.shot) else {
             return;
         };
