@@ -422,32 +422,27 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let r = report(&o);
-    let bytes = std::fs::read(&log).unwrap();
-    let text = String::from_utf8_lossy(&bytes);
-    // The `/events` messages (JSON objects) the director's findings became.
-    let events: Vec<&str> = text
-        .match_indices(r#""kind":"compile::"#)
-        .map(|(i, _)| {
-            let start = text[..i].rfind('{').unwrap_or(i);
-            let end = text[i..].find('}').map_or(text.len(), |j| i + j + 1);
-            &text[start..end]
-        })
-        .collect();
+    // The flight's events, read back by the log reader.
+    let events = dronecine_runtime::log::FlightLog::open(&log)
+        .unwrap()
+        .events;
     assert!(
         events
             .iter()
-            .any(|e| e.contains("compile::reposition") && e.contains("\"message\":\"shot ")),
+            .any(|e| e.kind == "compile::reposition" && e.message.starts_with("shot ")),
         "{events:#?}"
     );
     let unsolved: Vec<_> = events
         .iter()
-        .filter(|e| e.contains("compile::unframeable"))
+        .filter(|e| e.kind == "compile::unframeable")
         .collect();
     assert_eq!(unsolved.len(), 1, "told once: {events:#?}");
     assert!(
-        unsolved[0].contains(r#""level":"error""#)
-            && unsolved[0].contains(r#""message":"shot 5: this composition cannot be framed"#),
-        "{}",
+        unsolved[0].level == "error"
+            && unsolved[0]
+                .message
+                .starts_with("shot 5: this composition cannot be framed"),
+        "{:?}",
         unsolved[0]
     );
     let shot5 = &r["shots"][4];
