@@ -279,8 +279,14 @@ fn finish(
     }
     let mut p = fit.apply(prev);
     p.description = format!("{} ({note})", prev.description);
-    if let Err(e) = crate::files::write_atomic(output, &p.to_toml()) {
-        return fail(format!("cannot write `{}`: {e}", output.display()));
+    let toml = p.to_toml();
+    if let Err(e) = crate::files::write_atomic(output, &toml) {
+        // The fit is not lost with the file: it is printed, to be saved by hand.
+        errln!("{toml}");
+        return fail(format!(
+            "cannot write `{}`: {e}; the fitted profile is printed above, to save by hand",
+            output.display()
+        ));
     }
     outln!("wrote {}", output.display());
     ExitCode::SUCCESS
@@ -335,6 +341,10 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
         Ok(p) => p,
         Err(c) => return c,
     };
+    // Before the flight: minutes of tests are not flown for a profile with nowhere to go.
+    if let Err(e) = crate::files::prepare_output(&a.output, "-o") {
+        return fail(e);
+    }
     // Ctrl-C lands, a second Ctrl-C cuts the motors (the calibration reads the count).
     if let Err(e) = ctrlc::set_handler(|| {
         INTERRUPTS.fetch_add(1, Ordering::Relaxed);
@@ -447,6 +457,10 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
             ))
         }
     };
+    // Before the fit, which may take a while on a long flight.
+    if let Err(e) = crate::files::prepare_output(&a.output, "-o") {
+        return fail(e);
+    }
     // The fit uses what could be read; its segments never span a gap (identify splits them
     // where ticks are missing).
     for line in crate::replay::damage_warnings(&a.log, &log) {

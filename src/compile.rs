@@ -214,6 +214,12 @@ pub fn run(a: &Args) -> ExitCode {
         stage: scene.stage,
         actor_names: &actor_names,
     };
+    if let Err(e) = crate::files::prepare_output(a.out, "-o").and_then(|()| {
+        a.csv
+            .map_or(Ok(()), |c| crate::files::prepare_output(c, "--csv"))
+    }) {
+        return fail(e);
+    }
     let mut mcap = match McapWriter::create(a.out, &info) {
         Ok(w) => w,
         Err(e) => return fail(e),

@@ -1,4 +1,5 @@
-//! Finding and reading scripts named on the command line.
+//! Finding and reading scripts named on the command line, and preparing the files the
+//! commands write.
 
 use std::path::{Path, PathBuf};
 
@@ -55,4 +56,49 @@ pub fn write_atomic(path: &Path, text: &str) -> std::io::Result<()> {
     std::fs::rename(&tmp, path).inspect_err(|_| {
         let _ = std::fs::remove_file(&tmp);
     })
+}
+
+/// Makes ready for `path` to be written by the option `flag` (`-o`, `--csv`): its folder is
+/// created if missing (as `shoot --log` creates its folder), and a path that names a folder
+/// is refused. Called before the work that the file will hold, so that a calibration flight
+/// or a compilation is never done for an output that cannot be written.
+pub fn prepare_output(path: &Path, flag: &str) -> Result<(), String> {
+    if path.is_dir() {
+        return Err(format!(
+            "{flag} `{}` is a folder: name a file in it, such as `{}`",
+            path.display(),
+            path.join("out").display()
+        ));
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            format!(
+                "cannot create the folder `{}` for {flag} `{}`: {e}",
+                dir.display(),
+                path.display()
+            )
+        })?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::prepare_output;
+
+    #[test]
+    fn an_output_gets_its_folder_and_a_folder_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let deep = dir.path().join("a/b/out.mcap");
+        prepare_output(&deep, "-o").unwrap();
+        assert!(dir.path().join("a/b").is_dir());
+        assert!(!deep.exists(), "only the folder is made");
+        let e = prepare_output(dir.path(), "-o").unwrap_err();
+        assert!(e.contains("is a folder"), "{e}");
+        // A folder where a parent should be is a clear error, not a panic.
+        std::fs::write(dir.path().join("file"), "x").unwrap();
+        let e = prepare_output(&dir.path().join("file/out.mcap"), "--csv").unwrap_err();
+        assert!(e.starts_with("cannot create the folder"), "{e}");
+        assert!(e.contains("--csv"), "{e}");
+    }
 }

@@ -47,7 +47,8 @@ fn calibrates_a_different_plant_on_the_ideal_simulator_and_writes_it() {
     (plant.limits.speed_max_mps, plant.limits.accel_max_mps2) = (speed, accel);
     let plant_file = dir.join("plant.toml");
     std::fs::write(&plant_file, plant.to_toml()).unwrap();
-    let out_file = dir.join("out.toml");
+    // In a folder that does not exist yet: calibrate makes it (before the flight).
+    let out_file = dir.join("profiles/out.toml");
     let report = dir.join("report");
     let o = dronecine(&[
         "calibrate",
@@ -289,6 +290,30 @@ fn bad_arguments_exit_1() {
             text(&o.stderr).contains(says),
             "{args:?}: {}",
             text(&o.stderr)
+        );
+    }
+}
+
+/// An output that cannot be written is refused before the flight, not after minutes of
+/// tests (before, a missing folder was found only when the fitted profile was written).
+#[test]
+fn an_output_that_cannot_be_written_is_refused_before_the_flight() {
+    let dir = temp_dir("calibrate-out");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let under_a_file = file.join("out.toml");
+    for out in [under_a_file.as_path(), dir.path()] {
+        let o = dronecine(&["calibrate", "--axis", "yaw", "-o", out.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+        let e = text(&o.stderr);
+        assert!(
+            e.contains("cannot create the folder") || e.contains("is a folder"),
+            "{e}"
+        );
+        assert!(
+            !text(&o.stdout).contains("K_psi"),
+            "no test was flown: {}",
+            text(&o.stdout)
         );
     }
 }

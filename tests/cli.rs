@@ -245,8 +245,9 @@ fn help_version_and_completions() {
 #[test]
 fn compile_writes_mcap_csv_and_previews() {
     let dir = temp_dir("compile-ok");
-    let out = dir.join("square.mcap");
-    let csv = dir.join("square.csv");
+    // Folders that do not exist yet are made, as `shoot --log` makes its own.
+    let out = dir.join("out/square.mcap");
+    let csv = dir.join("tables/square.csv");
     let prev = dir.join("preview");
     let o = dronecine(&[
         "compile",
@@ -341,19 +342,26 @@ fn compile_bad_inputs_are_clear_errors_not_panics() {
     assert!(!out.exists(), "nothing compiled, nothing written");
     let o = dronecine(&["check", empty.to_str().unwrap()]);
     assert!(!stdout(&o).contains("film annotation"), "{}", stdout(&o));
-    // An unwritable output path.
-    let o = dronecine(&[
-        "compile",
-        "shots/square.psl",
-        "-o",
-        "/nonexistent-dir/x.mcap",
-    ]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(
-        stderr(&o).contains("/nonexistent-dir/x.mcap"),
-        "{}",
-        stderr(&o)
-    );
+    // Unwritable output paths: under a file (its folder cannot be made), a folder itself.
+    let file = dir.join("a-file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let under_a_file = file.join("x.mcap");
+    for (args, says) in [
+        (
+            vec!["-o", under_a_file.to_str().unwrap()],
+            "cannot create the folder",
+        ),
+        (vec!["-o", dir.to_str().unwrap()], "is a folder"),
+        (
+            vec!["-o", outs, "--csv", under_a_file.to_str().unwrap()],
+            "for --csv",
+        ),
+    ] {
+        let o = dronecine(&[&["compile", "shots/square.psl"], &args[..]].concat());
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+        assert!(!out.exists(), "{args:?}: nothing written");
+    }
     // A bad TOML value: the diagnostic points into the profile.
     std::fs::write(
         dir.join("mine.toml"),
