@@ -167,11 +167,25 @@ pub fn load_scene(path: &Path, color: bool, what: &str, shots: bool) -> Result<L
         return Err(ExitCode::FAILURE);
     }
     let script = r.checked.script.as_ref().expect("checked above");
-    let refused = compile::unflyable(script).filter(|_| shots || script.scene.is_none());
+    let refused = match compile::unflyable(script) {
+        Some(d) if shots => Some(d),
+        // Without shots to fly, only the scene is needed: its help names no shot.
+        Some(mut d) if script.scene.is_none() => {
+            d.label = Some("no scene set-up".into());
+            d.help = Some(
+                "write a scene set-up (`stage 8m x 6m x 3m`, `drone ardrone2`, `actor A height \
+                 1.80m at (0, 0) facing 0deg`); shots are not needed here"
+                    .into(),
+            );
+            Some(d)
+        }
+        _ => None,
+    };
     let (Some(scene), None) = (&script.scene, &refused) else {
         let d: Vec<_> = refused.into_iter().collect();
         err!("{}", diag::render(&r.name, &r.text, &d, color, 100));
-        errln!("error: `{}` has nothing to fly; nothing was {what}", r.name);
+        let has = if shots { "nothing to fly" } else { "no scene" };
+        errln!("error: `{}` has {has}; nothing was {what}", r.name);
         return Err(ExitCode::FAILURE);
     };
     let base = crate::files::base_dir(path);

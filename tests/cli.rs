@@ -485,3 +485,22 @@ fn closed_pipes_and_full_disks_are_not_panics() {
         );
     }
 }
+
+/// `emulate --script` needs only the scene (stage, actors, blocking): a script without one is
+/// refused for that, with a help that asks for a set-up and no shot (it asked for a shot, as
+/// `compile` and `shoot` do).
+#[test]
+fn emulate_refuses_a_script_without_a_scene_for_what_it_lacks() {
+    let dir = temp_dir("emulate-bad");
+    let empty = dir.join("empty.psl");
+    std::fs::write(&empty, "# nothing yet\n").unwrap();
+    for script in [empty.to_str().unwrap(), "shots/annotation.psl"] {
+        let o = dronecine(&["emulate", "ardrone", "--script", script]);
+        assert_eq!(o.status.code(), Some(1), "{script}");
+        let e = stderr(&o);
+        assert!(e.contains("no scene set-up"), "{script}: {e}");
+        assert!(e.contains("shots are not needed here"), "{script}: {e}");
+        assert!(e.contains("has no scene; nothing was emulated"), "{e}");
+        assert!(!e.contains("a shot"), "{script}: {e}");
+    }
+}
