@@ -429,14 +429,21 @@ pub fn render_report_as(
         "  position error  RMS {rms} cm, max {max} cm; heading error RMS {heading}°; framing \
          error RMS {framing}; saturated {saturated}% of ticks"
     );
+    let count = |n: u64, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
     if r.failsafes + r.faults + r.deadline_misses > 0 {
-        let count = |n: u64, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
         let _ = writeln!(
             s,
             "  {}, {}, {} (see the log's /events)",
             count(r.failsafes, "failsafe"),
             count(r.faults, "controller fault"),
             count(r.deadline_misses, "missed deadline")
+        );
+    }
+    if r.director_errors > 0 {
+        let _ = writeln!(
+            s,
+            "  {} against the live actors (see the log's /events)",
+            count(r.director_errors, "director error")
         );
     }
     let _ = writeln!(
@@ -494,11 +501,25 @@ mod tests {
             failsafes: 0,
             faults: 0,
             deadline_misses: 0,
+            director_errors: 0,
             latency_mean_s: None,
             latency_max_s: None,
             shots: vec![shot(0, measured), shot(1, blind)],
         };
         let text = render_report(&r, "ardrone2", "lqg");
+        assert!(!text.contains("director error"), "{text}");
+        let two = render_report(
+            &FlightReport {
+                director_errors: 2,
+                ..r.clone()
+            },
+            "ardrone2",
+            "lqg",
+        );
+        assert!(
+            two.contains("  2 director errors against the live actors (see the log's /events)"),
+            "{two}"
+        );
         assert!(
             text.contains(
                 "RMS 1.2 cm, max 5.0 cm; heading error RMS 0.57°; framing error RMS \

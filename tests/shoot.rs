@@ -450,4 +450,16 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         shot5["rms_framing_error"].is_number(),
         "shot 5 is flown and measured once its framing solves again: {shot5}"
     );
+    // The report counts it (a flight that says "completed" with good figures had a framing
+    // it could not solve for a while), and the replay counts it again from the log.
+    assert_eq!(r["director_errors"], 1, "{r}");
+    let o = dronecine(&["replay", log_s, "--report", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(report(&o)["report"]["director_errors"], 1);
+    let o = dronecine(&["replay", log_s]);
+    assert!(
+        stdout(&o).contains("1 director error against the live actors"),
+        "{}",
+        stdout(&o)
+    );
 }

@@ -352,6 +352,7 @@ struct Flight<'s, 'b> {
     failsafes: u64,
     faults: u64,
     deadline_misses: u64,
+    director_errors: u64,
     hovering: bool,
     /// The first interrupt was handled (landing).
     interrupted: bool,
@@ -416,6 +417,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             controller_started: false,
             metrics: Metrics::new(setup.script.timeline.len()),
             failsafes: 0,
+            director_errors: 0,
             faults: 0,
             deadline_misses: 0,
             hovering: false,
@@ -433,6 +435,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             kind: kind.to_string(),
             message,
         };
+        self.director_errors += u64::from(e.is_director_error());
         self.observer.event(&e);
         if let Err(err) = self.sink.event(&e) {
             self.log_error.get_or_insert(err);
@@ -787,6 +790,7 @@ impl<'s, 'b> Flight<'s, 'b> {
                 completed,
                 flight_time_s: t - take_off_s,
                 failsafes: self.failsafes,
+                director_errors: self.director_errors,
                 faults: self.faults,
                 deadline_misses: self.deadline_misses,
             },

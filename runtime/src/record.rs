@@ -110,3 +110,12 @@ pub struct Event {
     pub kind: String,
     pub message: String,
 }
+
+impl Event {
+    /// An error the director raised against the live actors during the shots (a framing it
+    /// could not solve, …): its kind is the compiler's diagnostic code. The flight's report
+    /// counts these, and `replay` counts them again from the log, by this one rule.
+    pub fn is_director_error(&self) -> bool {
+        self.level == "error" && self.kind.starts_with("compile::")
+    }
+}

@@ -115,6 +115,7 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
             _ => 0.0,
         },
         failsafes: count("failsafe"),
+        director_errors: log.events.iter().filter(|e| e.is_director_error()).count() as u64,
         faults: count("fault"),
         deadline_misses: count("deadline_missed"),
     };

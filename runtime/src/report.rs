@@ -58,6 +58,9 @@ pub struct FlightReport {
     pub failsafes: u64,
     pub faults: u64,
     pub deadline_misses: u64,
+    /// Errors the director raised against the live actors (a framing it could not solve
+    /// holds the drone until it solves): each is an event on the log's `/events`.
+    pub director_errors: u64,
     /// From a mocap frame reaching the computer to the command leaving it, over the shots'
     /// ticks with a new frame (0 in the simulator, where both happen at the tick).
     pub latency_mean_s: Option<f64>,
@@ -209,6 +212,7 @@ impl Metrics {
                 .map_or(0.0, |t0| self.total.last_t_s - t0),
             figures: self.total.figures(),
             failsafes: counts.failsafes,
+            director_errors: counts.director_errors,
             faults: counts.faults,
             deadline_misses: counts.deadline_misses,
             latency_mean_s: (self.latency.2 > 0).then(|| self.latency.0 / self.latency.2 as f64),
@@ -239,6 +243,7 @@ pub struct Counts {
     pub completed: bool,
     pub flight_time_s: f64,
     pub failsafes: u64,
+    pub director_errors: u64,
     pub faults: u64,
     pub deadline_misses: u64,
 }
