@@ -524,7 +524,9 @@ fn a_hold_that_misses_its_screen_points_is_a_warning_with_the_figure() {
 
 /// Over a shoulder with the level camera: the foreground actor's chest is aimed at from its
 /// own height but the altitude serves the background actor, so the foreground lands near the
-/// top of the frame. The warning says so, and its fix (the same size for both) holds.
+/// top of the frame. The warning says so, and names a size for the foreground whose band
+/// centres near the background's aim point; that fix holds: nothing is off, on screen, in
+/// size or in profile.
 #[test]
 fn an_over_the_shoulder_off_in_height_gets_the_fix_that_works() {
     let src = |line: &str| {
@@ -545,15 +547,112 @@ fn an_over_the_shoulder_off_in_height_gets_the_fix_that_works() {
         .unwrap_or_else(|| panic!("{:?}", c.diagnostics));
     assert!(d.message.starts_with("Bob lands at"), "{}", d.message);
     let help = d.help.as_deref().unwrap();
-    assert!(help.contains("the same size for both"), "{help}");
-    let (c, _, _) = run(&script_of(&src(
-        "MS on Bob 34backright MS on Alice 34left screen right for 4s",
-    )));
-    assert!(
-        !c.diagnostics.iter().any(|d| d.code == Code::FramingOff),
-        "{:?}",
-        c.diagnostics
+    let size = help
+        .split("write Bob's size as ")
+        .nth(1)
+        .and_then(|r| r.split(':').next())
+        .unwrap_or_else(|| panic!("a size to write: {help}"));
+    let fixed = format!("{size} on Bob 34backright LS on Alice 34left screen right for 4s");
+    let (c, _, _) = run(&script_of(&src(&fixed)));
+    assert!(c.diagnostics.is_empty(), "{fixed}: {:?}", c.diagnostics);
+}
+
+/// Over a shoulder, the same size for both actors (the fix the screen warning's help first
+/// gave) puts both on their screen points but films another shot: the camera keeps the
+/// background actor's size, so it comes as close to Alice as Bob's MS asked, and Bob, over
+/// 2 m away, is framed two sizes wider and seen from the front. Only the screen points were checked then, and the shot
+/// compiled without a word; now his size and his side are reported, with the figures.
+#[test]
+fn an_over_the_shoulder_that_films_another_shot_says_so() {
+    let script = script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\n\
+         actor Bob height 1.82m at (1.5, 0.5) facing 180deg\n\
+         actor Alice height 1.66m at (-0.5, 0.5) facing 0deg\n\
+         MS on Bob 34backright MS on Alice 34left screen right for 4s\n",
     );
+    let (c, samples, actors) = run(&script);
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+    assert!(!c.diagnostics.iter().any(|d| d.code == Code::FramingOff));
+    let find = |code: Code, who: &str| {
+        c.diagnostics
+            .iter()
+            .find(|d| d.code == code && d.message.starts_with(who))
+            .unwrap_or_else(|| panic!("{code:?} on {who}: {:?}", c.diagnostics))
+    };
+    // The figures, against the test's own measure of the hold's last sample.
+    let (s, poses) = (samples.last().unwrap(), actors.last().unwrap());
+    let bob = poses[0].position_m;
+    let dist = (s.position_m[0] - bob[0]).hypot(s.position_m[1] - bob[1]);
+    assert!(dist > 2.0, "Bob {dist} m away");
+    // The first number after `after` in `text`.
+    let number_after = |text: &str, after: &str| -> f64 {
+        text.split(after)
+            .nth(1)
+            .and_then(|r| r.split(|c: char| !(c.is_ascii_digit() || c == '.')).next())
+            .and_then(|x| x.parse().ok())
+            .unwrap_or_else(|| panic!("a number after `{after}`: {text}"))
+    };
+    let size = find(Code::SizeOff, "Bob");
+    assert!(size.message.contains("not as the MS"), "{}", size.message);
+    let framed = size.message["Bob is framed as an ".len()..]
+        .split(' ')
+        .next()
+        .and_then(dronecine_grammar::vocab::Size::parse)
+        .unwrap_or_else(|| panic!("a size: {}", size.message));
+    assert!(
+        framed as usize >= dronecine_grammar::vocab::Size::MS as usize + 2,
+        "{}",
+        size.message
+    );
+    let said = number_after(&size.message, &format!("{} (", framed.as_str()));
+    assert!(
+        (said - dist).abs() < 0.06,
+        "said {said} m, measured {dist} m"
+    );
+    let bearing = (s.position_m[1] - bob[1]).atan2(s.position_m[0] - bob[0]) - 180f64.to_radians();
+    let off = dronecine_grammar::vocab::wrap_angle_rad(bearing + 135f64.to_radians())
+        .abs()
+        .to_degrees();
+    let profile = find(Code::ProfileOff, "Bob");
+    assert!(
+        profile
+            .message
+            .starts_with("Bob is seen from the front side")
+            && profile.message.contains("° from the 34backright"),
+        "{}",
+        profile.message
+    );
+    let said = number_after(&profile.message, "(front), ");
+    assert!((said - off).abs() < 1.0, "said {said}°, measured {off}°");
+    // The screen-only view of the old check: both actors on their points.
+    let errs = hold_framing_errors(&script);
+    let rms = (errs.iter().map(|e| e.2 * e.2 + e.3 * e.3).sum::<f64>() / errs.len() as f64).sqrt();
+    assert!(rms < FRAMING_TOLERANCE, "{rms}");
+}
+
+/// The shipped scenes that frame two actors in one framing, and the single-actor ones, have
+/// nothing to report in size or profile; only over-the-shoulder shots are checked.
+#[test]
+fn sizes_and_profiles_are_checked_over_the_shoulder_only() {
+    for (name, script) in shipped() {
+        let (c, _, _) = run(&script);
+        let off: Vec<_> = c
+            .diagnostics
+            .iter()
+            .filter(|d| matches!(d.code, Code::SizeOff | Code::ProfileOff))
+            .collect();
+        if name == "scene.psl" {
+            // Its reverse over-the-shoulder shot: Alice 2.3 m away, an LS, not the MS written.
+            assert_eq!(off.len(), 1, "{off:?}");
+            assert!(
+                off[0].message.starts_with("Alice is framed as an LS"),
+                "{}",
+                off[0].message
+            );
+        } else {
+            assert!(off.is_empty(), "{name}: {off:?}");
+        }
+    }
 }
 
 /// The closest distance between actors `a` and `b` over `[0, end_s]`, by a brute-force scan

@@ -65,6 +65,7 @@ pub fn compile<E>(
     let mut director = Director::new(script, scene, profile);
     let mut poses = blocking.poses(0.0);
     let mut framing = FramingCheck::new(script.timeline.len());
+    let mut framed_as = crate::framed_as::FramedAs::new(script);
     let mut k: u64 = 0;
     let mut last_t = 0.0;
     // Guard against a timeline that never ends (it always does: every phase has an end).
@@ -76,15 +77,35 @@ pub fn compile<E>(
         if director.finished() || k > limit {
             break;
         }
-        framing.see(&director, &sample, &poses);
+        if framing.see(&director, &sample, &poses) {
+            framed_as.see(sample.shot, &sample.position_m, &poses);
+        }
         sink(&sample, &poses)?;
         last_t = t;
         k += 1;
     }
+    let lens = *director.lens();
     let (timings, mut flown) = director.finish();
-    let off = framing.diagnostics(script, &flown);
+    let heights_m: Vec<f64> = scene.actors.iter().map(|a| a.height_m).collect();
+    let off = framing.diagnostics(script, &flown, |shot, actor| {
+        framed_as.level_fix(
+            script,
+            shot,
+            actor,
+            &lens,
+            &profile.camera.gimbal,
+            &heights_m,
+        )
+    });
+    // A shot with an error is not reported again through its consequences.
+    let failed = |i: usize| {
+        let span = script.timeline[i].span;
+        flown.iter().any(|d| d.is_error() && d.span == span)
+    };
+    let shapes = framed_as.diagnostics(script, &lens, &profile.camera.gimbal, &heights_m, failed);
     diagnostics.append(&mut flown);
     diagnostics.extend(off);
+    diagnostics.extend(shapes);
     diagnostics.sort_by_key(|d| (d.span.start, d.span.end, d.code));
     Ok(Compiled {
         timings,
@@ -313,10 +334,11 @@ impl FramingCheck {
         }
     }
 
-    fn see(&mut self, director: &Director, sample: &Sample, actors: &[ActorPose]) {
+    /// Measures a tick; true if it is a hold's (after its settling).
+    fn see(&mut self, director: &Director, sample: &Sample, actors: &[ActorPose]) -> bool {
         let position_m = crate::camera::Vec3::from(sample.position_m);
         if !director.hold_targets(actors, &position_m, &mut self.targets) {
-            return;
+            return false;
         }
         // The camera's axes only in holds (a sine and a cosine each).
         let camera = crate::camera::CameraPose {
@@ -326,7 +348,7 @@ impl FramingCheck {
         }
         .frame();
         let Some(hold) = self.shots.get_mut(sample.shot) else {
-            return;
+            return true;
         };
         for target in &self.targets {
             let got = camera.project(director.lens(), &target.point_m);
@@ -345,19 +367,25 @@ impl FramingCheck {
                 });
             }
         }
+        true
     }
 
     /// A warning on each hold whose actors land, RMS over the hold, more than
     /// [`FRAMING_TOLERANCE`] from their screen points; none on a shot that already has an
     /// error (its framing's failure is that error's consequence).
-    fn diagnostics(&self, script: &Script, flown: &[Diagnostic]) -> Vec<Diagnostic> {
+    fn diagnostics(
+        &self,
+        script: &Script,
+        flown: &[Diagnostic],
+        level_fix: impl Fn(usize, usize) -> Option<crate::framed_as::LevelFix>,
+    ) -> Vec<Diagnostic> {
         let names = script
             .scene
             .as_ref()
             .map(|s| s.actors.iter().map(|a| a.name.as_str()).collect::<Vec<_>>())
             .unwrap_or_default();
         let mut out = Vec::new();
-        for (hold, shot) in self.shots.iter().zip(&script.timeline) {
+        for (index, (hold, shot)) in self.shots.iter().zip(&script.timeline).enumerate() {
             let Some(Miss {
                 distance: worst,
                 actor,
@@ -391,11 +419,27 @@ impl FramingCheck {
             let help = if off_in_height {
                 // Camera-math §4: without roll, one actor's screen height is aimed exactly and
                 // the other's follows from the geometry. (Writing the height it lands at
-                // moves the solve's screen points and need not frame at all.)
-                "the camera has no roll: two actors land at their screen heights only when it \
-                 sees their aim points at the same elevation; frame them at more similar \
-                 distances (the same size for both, say `MS … MS …` rather than `MS … LS …`)"
-                    .to_string()
+                // moves the solve's screen points and need not frame at all.) The same size
+                // for both is no fix over a shoulder: the camera keeps the background's size,
+                // so it would come as close to the background actor as to the foreground one
+                // asked (`compile::size_off`).
+                let why = "the camera has no roll: two actors land at their screen heights only \
+                           when it sees their aim points (the centres of their framed bands) at \
+                           the same elevation";
+                match level_fix(index, actor) {
+                    Some(fix) => format!(
+                        "{why}; write {who}'s size as {}: its band centres at {:.2} m, near \
+                         {}'s {:.2} m",
+                        fix.size.as_str(),
+                        fix.centre_m,
+                        names.get(fix.other).copied().unwrap_or("the other actor"),
+                        fix.other_centre_m
+                    ),
+                    None => format!(
+                        "{why}; give the actors sizes whose bands centre at about the same \
+                         height, or accept the offset"
+                    ),
+                }
             } else {
                 "no camera position puts the actors at these screen points with these sizes and \
                  profiles: move the screen points, change a size, or choose profiles that agree \

@@ -10,6 +10,7 @@ pub mod camera;
 pub mod compile;
 pub mod director;
 pub mod feasibility;
+pub mod framed_as;
 pub mod framing;
 pub mod math;
 pub mod output;

@@ -93,6 +93,8 @@ codes! {
     RigBadValue => "rig::bad_value": "A rig file value has the wrong type or range, or gives two things one rigid body.",
     RigUnknownKey => "rig::unknown_key": "A rig file has a key dronecine does not know.",
     RigMissingKey => "rig::missing_key": "A rig file lacks a required key.",
+    SizeOff => "compile::size_off": "An over-the-shoulder hold frames an actor two or more sizes from the one the script names.",
+    ProfileOff => "compile::profile_off": "An over-the-shoulder hold sees an actor from a side far from the profile the script names.",
 }
 
 impl fmt::Display for Code {
