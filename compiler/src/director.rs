@@ -96,9 +96,10 @@ pub struct Director {
     gimbal: Gimbal,
     limits: SteerLimits,
     gains: SteerGains,
+    /// The stage less the profile's margin: where the director keeps its target.
     stage_lo: Vec3,
     stage_hi: Vec3,
-    /// The stage itself, without the margin: where repositioning routes must stay.
+    /// The stage itself: a target beyond it is left there, for the checks that refuse it.
     stage_m: (Vec3, Vec3),
     safety_m: f64,
     profile_name: String,
@@ -443,11 +444,21 @@ impl Director {
             Some((t0, v0, _)) if t_s > t0 => (v_t - v0) / (t_s - t0),
             _ => Vec3::zeros(),
         };
-        let goal = Kinematics {
-            p: target,
-            v: v_t,
-            a: a_t,
-        };
+        // A target in the stage's margin is kept on its inner edge: containment's spring
+        // alone let a framing near a wall (or a solve that jumps there against live actors)
+        // take the reference to the wall itself, where a few centimetres of tracking error
+        // land the drone (the stage failsafe). A target beyond the stage is left there:
+        // compile refuses it and the flight's pre-flight check and failsafe catch it.
+        let goal = contained(
+            Kinematics {
+                p: target,
+                v: v_t,
+                a: a_t,
+            },
+            (&self.stage_lo, &self.stage_hi),
+            (&self.stage_m.0, &self.stage_m.1),
+        );
+        let target = goal.p;
 
         if first || dt <= 0.0 {
             // The first shot starts framed: on its target, moving with it (never faster than
@@ -594,8 +605,8 @@ impl Director {
         };
         let from = self.state.p;
         let keep = Keepout {
-            lo: self.stage_m.0,
-            hi: self.stage_m.1,
+            lo: self.stage_lo,
+            hi: self.stage_hi,
             actors,
             safety_m: self.safety_m,
         };
@@ -1055,6 +1066,27 @@ impl Director {
     }
 }
 
+/// `goal` held inside the box `inner`, on the axes where it is inside `outer` but not `inner`
+/// (in the band between them): there its position is put on the inner box's face and the
+/// velocity and acceleration that would carry it further out are dropped. Beyond `outer`, and
+/// inside `inner`, it is left as it is.
+fn contained(mut goal: Kinematics, inner: (&Vec3, &Vec3), outer: (&Vec3, &Vec3)) -> Kinematics {
+    let ((lo, hi), (out_lo, out_hi)) = (inner, outer);
+    for i in 0..3 {
+        let p = goal.p[i];
+        if p < lo[i] && p >= out_lo[i] {
+            goal.p[i] = lo[i];
+            goal.v[i] = goal.v[i].max(0.0);
+            goal.a[i] = goal.a[i].max(0.0);
+        } else if p > hi[i] && p <= out_hi[i] {
+            goal.p[i] = hi[i];
+            goal.v[i] = goal.v[i].min(0.0);
+            goal.a[i] = goal.a[i].min(0.0);
+        }
+    }
+    goal
+}
+
 /// An actor moved on by its velocity and turn rate over `dt_s`.
 pub fn extrapolate(a: &ActorPose, dt_s: f64) -> ActorPose {
     ActorPose {
@@ -1100,4 +1132,45 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
     )
     .with_label("no camera position gives this framing")
     .with_help(help)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stage 8 × 6 × 3 m less a 0.3 m margin, inside the stage itself.
+    fn boxes() -> ((Vec3, Vec3), (Vec3, Vec3)) {
+        (
+            (Vec3::new(-3.7, -2.7, 0.3), Vec3::new(3.7, 2.7, 2.7)),
+            (Vec3::new(-4.0, -3.0, 0.0), Vec3::new(4.0, 3.0, 3.0)),
+        )
+    }
+
+    fn goal(p: [f64; 3], v: [f64; 3]) -> Kinematics {
+        Kinematics {
+            p: Vec3::from(p),
+            v: Vec3::from(v),
+            a: Vec3::from(v),
+        }
+    }
+
+    #[test]
+    fn a_target_in_the_margin_is_kept_on_its_edge_and_one_beyond_the_stage_is_not() {
+        let ((lo, hi), (out_lo, out_hi)) = boxes();
+        let contain = |g| contained(g, (&lo, &hi), (&out_lo, &out_hi));
+        // Inside: untouched.
+        let g = goal([1.0, 2.0, 1.5], [0.3, 0.4, -0.1]);
+        assert_eq!(contain(g).p, g.p);
+        assert_eq!(contain(g).v, g.v);
+        // In the band along y (and below the floor's margin): on the edge, no outward motion;
+        // the inward motion and the other axes kept.
+        let c = contain(goal([1.0, 2.9, 0.1], [0.3, 0.4, 0.2]));
+        assert_eq!(c.p, Vec3::new(1.0, 2.7, 0.3));
+        assert_eq!(c.v, Vec3::new(0.3, 0.0, 0.2));
+        let c = contain(goal([1.0, 2.9, 1.0], [0.3, -0.4, 0.0]));
+        assert_eq!(c.v.y, -0.4, "moving back in");
+        // Beyond the wall: left there, for compile's and the flight's checks to refuse.
+        let c = contain(goal([4.5, 2.9, 1.0], [0.0; 3]));
+        assert_eq!(c.p, Vec3::new(4.5, 2.7, 1.0));
+    }
 }

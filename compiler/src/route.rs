@@ -126,8 +126,9 @@ impl Route {
     }
 }
 
-/// Where a route may go: inside the box `[lo, hi]` (the stage: steering's containment keeps
-/// the camera off the walls' margin, as it does in shots) and outside
+/// Where a route may go: inside the box `[lo, hi]` (the director gives the stage less the
+/// profile's `stage_margin_m`, where it keeps its target: a route that hugged a wall took the
+/// reference there, and a few centimetres of tracking error then landed the drone) and outside
 /// each actor's safety cylinder (radius `safety_m` round the body's vertical, up to
 /// `safety_m` above the head).
 pub struct Keepout<'a> {
