@@ -765,3 +765,37 @@ fn walks_that_take_actors_through_each_other_are_errors() {
         assert_eq!(!found.is_empty(), collides, "{y}: {found:?}");
     }
 }
+
+/// A framing that puts the camera beyond the stage's wall is an error that says so, and the
+/// reference does not follow it: the director keeps its target inside the stage less the
+/// profile's margin (the flight's stage failsafe would land a drone sent to the wall).
+#[test]
+fn a_framing_beyond_the_wall_is_refused_and_not_followed() {
+    let script = script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (2.5, 0) facing 0deg\n\
+         FS on A front for 3s\n",
+    );
+    let (c, samples, _) = run(&script);
+    let d = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == Code::LeavesStage)
+        .unwrap_or_else(|| panic!("{:?}", c.diagnostics));
+    assert!(d.is_error());
+    assert!(
+        d.message.starts_with("this framing puts the camera")
+            && d.message.contains("outside the stage"),
+        "{}",
+        d.message
+    );
+    let margin = ardrone().safety.stage_margin_m;
+    let x_max = samples
+        .iter()
+        .map(|s| s.position_m[0])
+        .fold(f64::MIN, f64::max);
+    assert!(
+        x_max <= 4.0 - margin + 1e-9,
+        "the reference reached x = {x_max}"
+    );
+}

@@ -99,8 +99,10 @@ pub struct Director {
     /// The stage less the profile's margin: where the director keeps its target.
     stage_lo: Vec3,
     stage_hi: Vec3,
-    /// The stage itself: a target beyond it is left there, for the checks that refuse it.
-    stage_m: (Vec3, Vec3),
+    /// The target of the last step as solved, before it was kept inside the stage.
+    raw_target: Vec3,
+    /// A framing failed to solve during this step (the target, or its look-ahead).
+    failed_now: bool,
     safety_m: f64,
     profile_name: String,
     phase: Phase,
@@ -243,7 +245,8 @@ impl Director {
             gains: SteerGains::default(),
             stage_lo,
             stage_hi,
-            stage_m: (Vec3::from(lo), Vec3::from(hi)),
+            raw_target: Vec3::zeros(),
+            failed_now: false,
             safety_m: profile.safety.actor_distance_m,
             profile_name: profile.name.clone(),
             phase: Phase::NotStarted,
@@ -287,6 +290,13 @@ impl Director {
     /// The timeline as flown so far.
     pub fn timings(&self) -> &[ShotTiming] {
         &self.timings
+    }
+
+    /// Where the last [`Director::step`]'s target is as solved: its reference is kept inside
+    /// the stage less its margin, this is not (the flight's pre-flight check refuses a first
+    /// framing outside the stage with it).
+    pub fn solved_target_m(&self) -> Vec3 {
+        self.raw_target
     }
 
     /// The framing held at the last [`Director::step`]: each framed actor's aim point and the
@@ -416,6 +426,7 @@ impl Director {
         if let Some(framing::Visual::Blend { from, to, .. }) = self.visual.take() {
             self.blend_spare = Some((from, to));
         }
+        self.failed_now = false;
         let target = self.target(t_s, actors, true);
         let v_t = match self.held_one_actor() {
             // A one-actor hold moves rigidly with its actor: the exact velocity (camera-math
@@ -440,23 +451,30 @@ impl Director {
                 (target_ahead - target) / EPS_S
             }
         };
+        // A framing that did not solve, now or a moment ahead, holds the camera: no
+        // feed-forward (its look-ahead difference would be the jump between where the camera
+        // is and a framing solved a millisecond later, hundreds of metres a second; on
+        // `scene.psl`'s reverse shot, against live actors, it carried the reference through the
+        // stage's wall). Nor on the tick after, whose difference would start from the hold.
+        let v_t = if self.failed_now { Vec3::zeros() } else { v_t };
         let a_t = match self.last_target {
-            Some((t0, v0, _)) if t_s > t0 => (v_t - v0) / (t_s - t0),
+            Some((t0, v0, _)) if t_s > t0 && !self.failed_now => (v_t - v0) / (t_s - t0),
             _ => Vec3::zeros(),
         };
-        // A target in the stage's margin is kept on its inner edge: containment's spring
-        // alone let a framing near a wall (or a solve that jumps there against live actors)
-        // take the reference to the wall itself, where a few centimetres of tracking error
-        // land the drone (the stage failsafe). A target beyond the stage is left there:
-        // compile refuses it and the flight's pre-flight check and failsafe catch it.
+        // The target is kept inside the stage less its margin: containment's spring alone
+        // let a framing near a wall (or a solve that jumps there, or beyond, against live
+        // actors) take the reference to the wall, where a few centimetres of tracking error
+        // land the drone (the stage failsafe). The monitor sees the target as solved: a
+        // framing beyond the stage is still compile's error, and the pre-flight check's.
+        self.raw_target = target;
         let goal = contained(
             Kinematics {
                 p: target,
                 v: v_t,
                 a: a_t,
             },
-            (&self.stage_lo, &self.stage_hi),
-            (&self.stage_m.0, &self.stage_m.1),
+            &self.stage_lo,
+            &self.stage_hi,
         );
         let target = goal.p;
 
@@ -502,7 +520,7 @@ impl Director {
             );
         }
         self.pitch_rad = pitch_target;
-        self.last_target = Some((t_s, v_t, heading_target));
+        self.last_target = (!self.failed_now).then_some((t_s, v_t, heading_target));
         self.last_t_s = t_s;
 
         let sample = Sample {
@@ -516,7 +534,8 @@ impl Director {
             shot: self.shot_index(),
         };
         let in_shot = matches!(self.phase, Phase::Shot { .. });
-        self.monitor.record(&sample, &goal, actors, in_shot);
+        self.monitor
+            .record(&sample, &goal, &self.raw_target, actors, in_shot);
         sample
     }
 
@@ -937,6 +956,7 @@ impl Director {
     /// poses that miss a solvable framing by a few centimetres for a moment must not cost
     /// the rest of the shot).
     fn fail(&mut self, index: usize, e: framing::FramingError) -> Vec3 {
+        self.failed_now = true;
         if !self.warned[index] {
             self.warned[index] = true;
             self.diagnostics
@@ -1066,19 +1086,17 @@ impl Director {
     }
 }
 
-/// `goal` held inside the box `inner`, on the axes where it is inside `outer` but not `inner`
-/// (in the band between them): there its position is put on the inner box's face and the
-/// velocity and acceleration that would carry it further out are dropped. Beyond `outer`, and
-/// inside `inner`, it is left as it is.
-fn contained(mut goal: Kinematics, inner: (&Vec3, &Vec3), outer: (&Vec3, &Vec3)) -> Kinematics {
-    let ((lo, hi), (out_lo, out_hi)) = (inner, outer);
+/// `goal` held inside the box `[lo, hi]`: on an axis where its position is outside, the
+/// position is put on the box's face and the velocity and acceleration that would carry it
+/// further out are dropped.
+fn contained(mut goal: Kinematics, lo: &Vec3, hi: &Vec3) -> Kinematics {
     for i in 0..3 {
         let p = goal.p[i];
-        if p < lo[i] && p >= out_lo[i] {
+        if p < lo[i] {
             goal.p[i] = lo[i];
             goal.v[i] = goal.v[i].max(0.0);
             goal.a[i] = goal.a[i].max(0.0);
-        } else if p > hi[i] && p <= out_hi[i] {
+        } else if p > hi[i] {
             goal.p[i] = hi[i];
             goal.v[i] = goal.v[i].min(0.0);
             goal.a[i] = goal.a[i].min(0.0);
@@ -1155,22 +1173,22 @@ mod tests {
     }
 
     #[test]
-    fn a_target_in_the_margin_is_kept_on_its_edge_and_one_beyond_the_stage_is_not() {
-        let ((lo, hi), (out_lo, out_hi)) = boxes();
-        let contain = |g| contained(g, (&lo, &hi), (&out_lo, &out_hi));
+    fn a_target_outside_the_margin_is_kept_on_its_edge() {
+        let ((lo, hi), _) = boxes();
+        let contain = |g| contained(g, &lo, &hi);
         // Inside: untouched.
         let g = goal([1.0, 2.0, 1.5], [0.3, 0.4, -0.1]);
         assert_eq!(contain(g).p, g.p);
         assert_eq!(contain(g).v, g.v);
-        // In the band along y (and below the floor's margin): on the edge, no outward motion;
-        // the inward motion and the other axes kept.
+        // In the margin along y (and below the floor's margin): on the edge, no outward
+        // motion; the inward motion and the other axes kept.
         let c = contain(goal([1.0, 2.9, 0.1], [0.3, 0.4, 0.2]));
         assert_eq!(c.p, Vec3::new(1.0, 2.7, 0.3));
         assert_eq!(c.v, Vec3::new(0.3, 0.0, 0.2));
         let c = contain(goal([1.0, 2.9, 1.0], [0.3, -0.4, 0.0]));
         assert_eq!(c.v.y, -0.4, "moving back in");
-        // Beyond the wall: left there, for compile's and the flight's checks to refuse.
+        // Beyond the wall too.
         let c = contain(goal([4.5, 2.9, 1.0], [0.0; 3]));
-        assert_eq!(c.p, Vec3::new(4.5, 2.7, 1.0));
+        assert_eq!(c.p, Vec3::new(3.7, 2.7, 1.0));
     }
 }

@@ -53,6 +53,9 @@ struct ShotStats {
     intruded_on_the_way: Option<usize>,
     outside: Peak,
     outside_at: [f64; 3],
+    /// The deepest point outside was the framing's (the target as solved), which the
+    /// director does not follow out of the stage.
+    outside_framing: bool,
 }
 
 /// Per-shot peaks of everything checked.
@@ -101,7 +104,16 @@ impl Monitor {
         crate::norm_xy(x, y) / self.gain
     }
 
-    pub fn record(&mut self, s: &Sample, goal: &Kinematics, actors: &[ActorPose], in_shot: bool) {
+    /// One sample, the goal the steering chased and the target as solved (`solved`: before
+    /// the director kept it inside the stage).
+    pub fn record(
+        &mut self,
+        s: &Sample,
+        goal: &Kinematics,
+        solved: &Vec3,
+        actors: &[ActorPose],
+        in_shot: bool,
+    ) {
         let Some(st) = self.stats.get_mut(s.shot) else {
             return;
         };
@@ -139,13 +151,18 @@ impl Monitor {
                 *whose = Some(i);
             }
         }
-        let mut out: f64 = 0.0;
-        for i in 0..3 {
-            out = out.max(self.lo[i] - p[i]).max(p[i] - self.hi[i]);
-        }
-        if out > st.outside.value {
-            st.outside = Peak { value: out, t_s: t };
-            st.outside_at = s.position_m;
+        let outside = |q: &Vec3| {
+            (0..3).fold(0.0f64, |out, i| {
+                out.max(self.lo[i] - q[i]).max(q[i] - self.hi[i])
+            })
+        };
+        for (q, framing) in [(p, false), (*solved, true)] {
+            let out = outside(&q);
+            if out > st.outside.value {
+                st.outside = Peak { value: out, t_s: t };
+                st.outside_at = q.into();
+                st.outside_framing = framing;
+            }
         }
     }
 
@@ -324,13 +341,27 @@ impl Monitor {
             }
             if st.outside.value > 0.02 {
                 let p = st.outside_at;
+                let what = if st.outside_framing {
+                    "this framing puts the camera"
+                } else {
+                    "the camera leaves the stage by"
+                };
+                let how_far = if st.outside_framing {
+                    format!("{:.2} m outside the stage", st.outside.value)
+                } else {
+                    format!("{:.2} m", st.outside.value)
+                };
+                let held = if st.outside_framing {
+                    "; the drone would be held inside, off its framing"
+                } else {
+                    ""
+                };
                 out.push(
                     Diagnostic::error(
                         Code::LeavesStage,
                         shot.span,
                         format!(
-                            "the camera leaves the stage by {:.2} m at ({:.2}, {:.2}, {:.2}) ({})",
-                            st.outside.value,
+                            "{what} {how_far} at ({:.2}, {:.2}, {:.2}) ({}){held}",
                             p[0],
                             p[1],
                             p[2],

@@ -544,15 +544,18 @@ impl<'s, 'b> Flight<'s, 'b> {
                 telemetry.battery_percent, self.setup.safety.battery_land_percent
             )));
         }
-        let first = self.first_framing();
+        // Where the first framing is as solved (the director's reference is kept inside the
+        // stage, off a framing that is not).
+        let solved: [f64; 3] = self.probe().1.into();
         let stage = self.setup.scene.stage;
-        if !inside(&stage, &first.position_m, 0.0) {
+        if !inside(&stage, &solved, 0.0) {
             return Err(FlightError::Preflight(format!(
                 "the first framing puts the drone at ({:.2}, {:.2}, {:.2}) m, outside the \
                  stage: move the actors or change the first shot",
-                first.position_m[0], first.position_m[1], first.position_m[2]
+                solved[0], solved[1], solved[2]
             )));
         }
+        let first = self.first_framing();
 
         // Take-off.
         let take_off_s = t;
@@ -969,8 +972,15 @@ impl<'s, 'b> Flight<'s, 'b> {
 
     /// The first shot's framing against the actors as they stand now.
     fn first_framing(&self) -> Sample {
+        self.probe().0
+    }
+
+    /// The first framing against the actors as they stand now: the director's first sample,
+    /// and its target as solved.
+    fn probe(&self) -> (Sample, Vec3) {
         let mut probe = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
-        probe.step(0.0, &self.actors.poses)
+        let sample = probe.step(0.0, &self.actors.poses);
+        (sample, probe.solved_target_m())
     }
 
     fn failsafe(&mut self, t: f64, message: &str) {
