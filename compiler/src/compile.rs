@@ -355,7 +355,7 @@ impl FramingCheck {
             let d = got.map_or(f64::INFINITY, |g| {
                 (g[0] - target.screen[0]).hypot(g[1] - target.screen[1])
             });
-            hold.sum_sq += if d.is_finite() { d * d } else { BEHIND_SQ };
+            hold.sum_sq += framing_miss_sq(got, target.screen);
             hold.n += 1;
             if hold.worst.is_none_or(|w| d > w.distance) {
                 hold.worst = Some(Miss {
@@ -462,6 +462,26 @@ impl FramingCheck {
 /// camera, camera-math §4).
 pub const FRAMING_TOLERANCE: f64 = 0.1;
 
-/// A framed actor behind the camera counts as this squared screen distance (as `shoot`'s
-/// report counts it).
-const BEHIND_SQ: f64 = 8.0;
+/// The most one framed actor's miss counts, squared: the frame's diagonal (the frame spans 2
+/// in x and y). An actor off the frame is off it however far its projection lands (near the
+/// camera's plane it lands hundreds of frames away, and one such tick made a whole flight's
+/// RMS 10), and an actor behind the camera counts as much.
+pub const FRAMING_MISS_MAX_SQ: f64 = 8.0;
+
+/// The squared screen distance that the framing error counts for an actor that lands at `got`
+/// (`None`: behind the camera) where the script puts it at `want`, at most
+/// [`FRAMING_MISS_MAX_SQ`]; NaN stays NaN (the caller leaves such a tick out). `compile`'s
+/// check and `shoot`'s report both count misses with it.
+pub fn framing_miss_sq(got: Option<[f64; 2]>, want: [f64; 2]) -> f64 {
+    match got {
+        Some(g) => {
+            let sq = (g[0] - want[0]).powi(2) + (g[1] - want[1]).powi(2);
+            if sq.is_nan() {
+                sq
+            } else {
+                sq.min(FRAMING_MISS_MAX_SQ)
+            }
+        }
+        None => FRAMING_MISS_MAX_SQ,
+    }
+}

@@ -12,6 +12,7 @@
 //!   camera counts as √8 (corner to opposite corner);
 //! - saturated fraction: ticks where the controller clamped a set-point, over controlled ticks.
 
+use dronecine_compiler::compile::{framing_miss_sq, FRAMING_MISS_MAX_SQ};
 use serde::Serialize;
 
 use crate::control::{TickFault, TickInput, TickOutput};
@@ -107,9 +108,6 @@ pub struct Metrics {
     latency: (f64, f64, u64),
 }
 
-/// The framing error of an actor behind the camera, squared.
-const BEHIND_SQ: f64 = 8.0;
-
 impl Metrics {
     pub fn new(shots: usize) -> Metrics {
         Metrics {
@@ -172,9 +170,9 @@ impl Metrics {
                 acc.sq_heading += h * h;
             }
             for f in framing {
-                let sq = match (f.screen, f.requested) {
-                    (Some(s), Some(r)) => (s[0] - r[0]).powi(2) + (s[1] - r[1]).powi(2),
-                    _ => BEHIND_SQ,
+                let sq = match f.requested {
+                    Some(r) => framing_miss_sq(f.screen, r),
+                    None => FRAMING_MISS_MAX_SQ,
                 };
                 if sq.is_finite() {
                     acc.framing_n += 1;
@@ -431,6 +429,27 @@ mod tests {
         let r = m.report(&[], Counts::default());
         assert!(
             (r.figures.rms_framing_error.unwrap() - ((0.25 + 8.0) / 2.0f64).sqrt()).abs() < 1e-12
+        );
+        // An actor near the camera's plane projects hundreds of frames away: off the frame,
+        // it counts as the frame's diagonal, as one behind the camera does (one such tick
+        // made a whole flight's RMS 10).
+        let far = [FramingRecord {
+            actor: 0,
+            screen: Some([600.0, -2.0]),
+            requested: Some([0.0, 0.0]),
+        }];
+        m.record(
+            Phase::Shots,
+            Some(0),
+            &input(0.02, 0.0, 0.0, true),
+            &Ok(TickOutput::default()),
+            &far,
+            None,
+        );
+        let r = m.report(&[], Counts::default());
+        assert!(
+            (r.figures.rms_framing_error.unwrap() - ((0.25 + 8.0 + 8.0) / 3.0f64).sqrt()).abs()
+                < 1e-12
         );
     }
 }
