@@ -128,10 +128,8 @@ pub fn run(a: &Args) -> ExitCode {
         (Some(p), None) => p.to_path_buf(),
         (None, None) => Path::new("flights").join(default_log_name(&script_name)),
     };
-    if let Some(dir) = log_path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if let Err(e) = std::fs::create_dir_all(dir) {
-            return fail(format!("cannot create `{}`: {e}", dir.display()));
-        }
+    if let Err(e) = crate::files::prepare_output(&log_path, "--log") {
+        return fail(e);
     }
     let actor_names: Vec<String> = scene.actors.iter().map(|x| x.name.clone()).collect();
     let heights: Vec<f64> = scene.actors.iter().map(|x| x.height_m).collect();

@@ -86,23 +86,16 @@ pub fn compile<E>(
     }
     let lens = *director.lens();
     let (timings, mut flown) = director.finish();
-    let heights_m: Vec<f64> = scene.actors.iter().map(|a| a.height_m).collect();
+    let gimbal = &profile.camera.gimbal;
     let off = framing.diagnostics(script, &flown, |shot, actor| {
-        framed_as.level_fix(
-            script,
-            shot,
-            actor,
-            &lens,
-            &profile.camera.gimbal,
-            &heights_m,
-        )
+        framed_as.level_fix(script, shot, actor, &lens, gimbal)
     });
     // A shot with an error is not reported again through its consequences.
     let failed = |i: usize| {
         let span = script.timeline[i].span;
         flown.iter().any(|d| d.is_error() && d.span == span)
     };
-    let shapes = framed_as.diagnostics(script, &lens, &profile.camera.gimbal, &heights_m, failed);
+    let shapes = framed_as.diagnostics(script, &lens, gimbal, failed);
     diagnostics.append(&mut flown);
     diagnostics.extend(off);
     diagnostics.extend(shapes);

@@ -1156,14 +1156,6 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
 mod tests {
     use super::*;
 
-    /// The stage 8 × 6 × 3 m less a 0.3 m margin, inside the stage itself.
-    fn boxes() -> ((Vec3, Vec3), (Vec3, Vec3)) {
-        (
-            (Vec3::new(-3.7, -2.7, 0.3), Vec3::new(3.7, 2.7, 2.7)),
-            (Vec3::new(-4.0, -3.0, 0.0), Vec3::new(4.0, 3.0, 3.0)),
-        )
-    }
-
     fn goal(p: [f64; 3], v: [f64; 3]) -> Kinematics {
         Kinematics {
             p: Vec3::from(p),
@@ -1174,7 +1166,8 @@ mod tests {
 
     #[test]
     fn a_target_outside_the_margin_is_kept_on_its_edge() {
-        let ((lo, hi), _) = boxes();
+        // The stage 8 × 6 × 3 m less a 0.3 m margin.
+        let (lo, hi) = (Vec3::new(-3.7, -2.7, 0.3), Vec3::new(3.7, 2.7, 2.7));
         let contain = |g| contained(g, &lo, &hi);
         // Inside: untouched.
         let g = goal([1.0, 2.0, 1.5], [0.3, 0.4, -0.1]);

@@ -340,34 +340,18 @@ impl Monitor {
                 );
             }
             if st.outside.value > 0.02 {
-                let p = st.outside_at;
-                let what = if st.outside_framing {
-                    "this framing puts the camera"
+                let (p, by, when) = (st.outside_at, st.outside.value, at(st.outside.t_s));
+                let at_p = format!("at ({:.2}, {:.2}, {:.2}) ({when})", p[0], p[1], p[2]);
+                let message = if st.outside_framing {
+                    format!(
+                        "this framing puts the camera {by:.2} m outside the stage {at_p}; the \
+                         drone would be held inside, off its framing"
+                    )
                 } else {
-                    "the camera leaves the stage by"
-                };
-                let how_far = if st.outside_framing {
-                    format!("{:.2} m outside the stage", st.outside.value)
-                } else {
-                    format!("{:.2} m", st.outside.value)
-                };
-                let held = if st.outside_framing {
-                    "; the drone would be held inside, off its framing"
-                } else {
-                    ""
+                    format!("the camera leaves the stage by {by:.2} m {at_p}")
                 };
                 out.push(
-                    Diagnostic::error(
-                        Code::LeavesStage,
-                        shot.span,
-                        format!(
-                            "{what} {how_far} at ({:.2}, {:.2}, {:.2}) ({}){held}",
-                            p[0],
-                            p[1],
-                            p[2],
-                            at(st.outside.t_s)
-                        ),
-                    )
+                    Diagnostic::error(Code::LeavesStage, shot.span, message)
                     .with_label("outside the flight volume")
                     .with_help("make the stage larger, or move the path or the framing inside it (a tighter size brings the camera closer)"),
                 );

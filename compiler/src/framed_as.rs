@@ -51,15 +51,16 @@ pub struct FramedAs {
     /// By timeline index: the actors as the hold of a shot of several framings last saw them
     /// (for [`FramedAs::level_fix`]'s re-solve).
     poses: Vec<Option<Vec<ActorPose>>>,
+    /// The scene's actors' names and heights, by index.
+    names: Vec<String>,
+    heights_m: Vec<f64>,
 }
 
 impl FramedAs {
     pub fn new(script: &Script) -> FramedAs {
-        let names: Vec<&str> = script
-            .scene
-            .as_ref()
-            .map(|s| s.actors.iter().map(|a| a.name.as_str()).collect())
-            .unwrap_or_default();
+        let actors = script.scene.as_ref().map_or(&[][..], |s| &s.actors[..]);
+        let names: Vec<String> = actors.iter().map(|a| a.name.clone()).collect();
+        let heights_m = actors.iter().map(|a| a.height_m).collect();
         let shots: Vec<Vec<Asked>> = script
             .timeline
             .iter()
@@ -84,7 +85,17 @@ impl FramedAs {
             })
             .collect();
         let poses = vec![None; shots.len()];
-        FramedAs { shots, poses }
+        FramedAs {
+            shots,
+            poses,
+            names,
+            heights_m,
+        }
+    }
+
+    /// Actor `i`'s name, or `or`.
+    fn name<'a>(&'a self, i: usize, or: &'a str) -> &'a str {
+        self.names.get(i).map_or(or, String::as_str)
     }
 
     /// One tick of the hold of `shot`, the camera at `camera_m`.
@@ -120,20 +131,15 @@ impl FramedAs {
 
     /// A warning for each actor of each hold framed two sizes or more off, or seen from a
     /// side more than [`PROFILE_OFF_RAD`] from its profile; none on a shot that already has
-    /// an error or whose screen points are already reported off (`skip`).
+    /// an error (`skip`).
     pub fn diagnostics(
         &self,
         script: &Script,
         lens: &Lens,
         gimbal: &Gimbal,
-        heights_m: &[f64],
         skip: impl Fn(usize) -> bool,
     ) -> Vec<Diagnostic> {
-        let names: Vec<&str> = script
-            .scene
-            .as_ref()
-            .map(|s| s.actors.iter().map(|a| a.name.as_str()).collect())
-            .unwrap_or_default();
+        let heights_m = &self.heights_m;
         let mut out = Vec::new();
         for (index, (asked, shot)) in self.shots.iter().zip(&script.timeline).enumerate() {
             if skip(index) {
@@ -145,7 +151,7 @@ impl FramedAs {
                 .filter(|a| a.n > 0)
                 .find(|a| framed_size(a, lens, heights_m) == Some(a.size));
             for a in asked.iter().filter(|a| a.n > 0) {
-                let who = names.get(a.actor).copied().unwrap_or("an actor");
+                let who = self.name(a.actor, "an actor");
                 let distance_m = a.sum_distance_m / a.n as f64;
                 if let Some(got) = framed_size(a, lens, heights_m) {
                     if (got as usize).abs_diff(a.size as usize) >= SIZE_STEPS_OFF {
@@ -158,7 +164,7 @@ impl FramedAs {
                         let rule = match kept {
                             Some(k) => format!(
                                 "the camera keeps {}'s {}, and ",
-                                names.get(k.actor).copied().unwrap_or("the other actor"),
+                                self.name(k.actor, "the other actor"),
                                 k.size.as_str()
                             ),
                             None => String::new(),
@@ -250,18 +256,14 @@ impl FramedAs {
         lens: &Lens,
         gimbal: &Gimbal,
     ) -> bool {
-        let (Some(Some(poses)), Some(shot), Some(scene)) = (
+        let (Some(Some(poses)), Some(shot), Some(name)) = (
             self.poses.get(shot),
             script.timeline.get(shot),
-            &script.scene,
+            self.names.get(actor),
         ) else {
             return false;
         };
         let ShotContent::Composition(comp) = &shot.content else {
-            return false;
-        };
-        let names: Vec<&str> = scene.actors.iter().map(|a| a.name.as_str()).collect();
-        let Some(name) = names.get(actor) else {
             return false;
         };
         let mut fixed = comp.clone();
@@ -270,7 +272,7 @@ impl FramedAs {
                 f.size = size;
             }
         }
-        crate::framing::solve(&fixed, &names, poses, lens, gimbal).is_ok()
+        crate::framing::solve(&fixed, &self.names, poses, lens, gimbal).is_ok()
     }
 
     /// The [`LevelFix`] for `actor` in `shot`, if a size does better than the script's.
@@ -281,8 +283,8 @@ impl FramedAs {
         actor: usize,
         lens: &Lens,
         gimbal: &Gimbal,
-        heights_m: &[f64],
     ) -> Option<LevelFix> {
+        let heights_m = &self.heights_m;
         let asked = self.shots.get(shot)?;
         let this = asked.iter().find(|a| a.actor == actor && a.n > 0)?;
         let other = asked.iter().find(|a| a.actor != actor)?;
@@ -301,15 +303,14 @@ impl FramedAs {
             })
             .collect();
         candidates.sort_by(|x, y| gap(*x).total_cmp(&gap(*y)));
-        candidates.into_iter().find_map(|size| {
-            self.solves_with(script, shot, actor, size, lens, gimbal)
-                .then_some(())?;
-            Some(LevelFix {
-                size,
-                centre_m: centre(size, actor)?,
-                other: other.actor,
-                other_centre_m,
-            })
+        let size = candidates
+            .into_iter()
+            .find(|&size| self.solves_with(script, shot, actor, size, lens, gimbal))?;
+        Some(LevelFix {
+            size,
+            centre_m: centre(size, actor)?,
+            other: other.actor,
+            other_centre_m,
         })
     }
 }

@@ -546,7 +546,8 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
         // Where the first framing is as solved (the director's reference is kept inside the
         // stage, off a framing that is not).
-        let solved: [f64; 3] = self.probe().1.into();
+        let (first, solved) = self.probe();
+        let solved: [f64; 3] = solved.into();
         let stage = self.setup.scene.stage;
         if !inside(&stage, &solved, 0.0) {
             return Err(FlightError::Preflight(format!(
@@ -555,7 +556,6 @@ impl<'s, 'b> Flight<'s, 'b> {
                 solved[0], solved[1], solved[2]
             )));
         }
-        let first = self.first_framing();
 
         // Take-off.
         let take_off_s = t;
