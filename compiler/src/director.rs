@@ -495,7 +495,15 @@ impl Director {
             );
             let extra = steering::separation(&self.state.p, &self.axes, self.safety_m, 3.0)
                 + steering::containment(&self.state.p, &self.stage_lo, &self.stage_hi, 4.0);
-            self.state = steering::step(&self.state, &goal, extra, &self.limits, &self.gains, dt);
+            self.state = steering::step(
+                &self.state,
+                &goal,
+                extra,
+                (&self.stage_lo, &self.stage_hi),
+                &self.limits,
+                &self.gains,
+                dt,
+            );
         }
 
         // Orientation at the camera's actual position.

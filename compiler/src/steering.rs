@@ -7,8 +7,10 @@
 //! feed-forward: `v_des = v_T + truncate(k_p·(p_T − p))` capped at the speed limit (the
 //! desired speed falls with the distance to the target, so the camera arrives without
 //! overshoot), `a_des = a_T + k_v·(v_des − v)` plus separation from the actors' safety
-//! cylinders and stage containment, capped at the acceleration limit. When the camera sits on
-//! a smooth, feasible target the feed-forward terms keep it there exactly.
+//! cylinders and stage containment, capped at the acceleration limit. Near the stage's walls
+//! (less its margin) the speed toward each wall is capped at what the camera can brake from
+//! before it, and the target's acceleration toward it is dropped ([`brake_for_walls`]). When
+//! the camera sits on a smooth, feasible target the feed-forward terms keep it there exactly.
 //!
 //! Heading is steered the same way one order down (rate and rate-of-rate limits), with the
 //! error wrapped to (−π, π] so the camera never turns the long way round.
@@ -95,6 +97,7 @@ pub fn step(
     state: &Kinematics,
     target: &Kinematics,
     extra: Vec3,
+    walls: (&Vec3, &Vec3),
     limits: &SteerLimits,
     gains: &SteerGains,
     dt_s: f64,
@@ -107,11 +110,12 @@ pub fn step(
     let closing = truncate(gains.k_p * e, brake);
     let v_des = target.v + closing;
     let v_des = truncate_hv(v_des, limits.speed_h_mps, limits.speed_v_mps);
+    let (v_des, a_ff, capped) = brake_for_walls(v_des, target.a, &state.p, walls, limits);
     // The velocity the camera reaches if its acceleration is taken to zero at full jerk:
     // steering on it instead of on v keeps a jerk-limited camera from overshooting.
     let v_pred = state.v + state.a * (state.a.norm() / (2.0 * limits.jerk_mps3));
-    let a_des = target.a + gains.k_v * (v_des - v_pred) + extra;
-    let a_des = truncate_hv(a_des, limits.accel_h_mps2, limits.accel_v_mps2);
+    let a_des = a_ff + gains.k_v * (v_des - v_pred) + extra;
+    let a_des = truncate_accel(a_des, capped, limits);
     let jerk = truncate((a_des - state.a) / dt_s, limits.jerk_mps3);
     let (dt2, dt3) = (dt_s * dt_s, dt_s * dt_s * dt_s);
     Kinematics {
@@ -119,6 +123,71 @@ pub fn step(
         v: state.v + state.a * dt_s + jerk * (dt2 / 2.0),
         a: state.a + jerk * dt_s,
     }
+}
+
+/// The desired velocity `v` and the target's acceleration `a` (the feed-forward) near the
+/// faces of the box `walls` (`[lo, hi]`): the speed toward each face is capped at what the
+/// camera can still brake from before it (the arrival law's `√(2·0.4·a·d)`, `d` the
+/// distance to that face; zero on or beyond it), and where the cap binds, the target's
+/// acceleration toward that face is dropped; the third value marks the axes where it binds.
+/// Arrival brakes on the distance to the target, which along a wall can be metres while the
+/// wall is centimetres away, and follows the target's acceleration wherever it goes: a camera
+/// chasing a target that slides toward the stage's margin at 0.7 m/s and stops there
+/// (`scene.psl`'s reverse shot, seeds 4 and 12) reached the margin at 0.8 m/s and coasted
+/// out of the stage.
+pub fn brake_for_walls(
+    mut v: Vec3,
+    mut a: Vec3,
+    p: &Vec3,
+    walls: (&Vec3, &Vec3),
+    limits: &SteerLimits,
+) -> (Vec3, Vec3, [bool; 3]) {
+    let (lo, hi) = walls;
+    let mut capped = [false; 3];
+    for i in 0..3 {
+        let accel = if i == 2 {
+            limits.accel_v_mps2
+        } else {
+            limits.accel_h_mps2
+        };
+        let allowed = |room: f64| (2.0 * 0.4 * accel * room.max(0.0)).sqrt();
+        if v[i] >= 0.0 {
+            let cap = allowed(hi[i] - p[i]);
+            if v[i] >= cap {
+                v[i] = cap;
+                a[i] = a[i].min(0.0);
+                capped[i] = true;
+            }
+        }
+        if v[i] <= 0.0 {
+            let cap = allowed(p[i] - lo[i]);
+            if v[i] <= -cap {
+                v[i] = -cap;
+                a[i] = a[i].max(0.0);
+                capped[i] = true;
+            }
+        }
+    }
+    (v, a, capped)
+}
+
+/// [`truncate_hv`] for an acceleration, except that when exactly one horizontal axis is
+/// braking for a wall (`capped`, from [`brake_for_walls`]) that axis has the first call on
+/// the horizontal limit and the other gets what is left. Scaling both alike let a camera
+/// speeding up along a wall brake from it at a third of its limit.
+fn truncate_accel(a: Vec3, capped: [bool; 3], limits: &SteerLimits) -> Vec3 {
+    let h = limits.accel_h_mps2;
+    let z = a.z.clamp(-limits.accel_v_mps2, limits.accel_v_mps2);
+    let (first, other) = match (capped[0], capped[1]) {
+        (true, false) => (0, 1),
+        (false, true) => (1, 0),
+        _ => return truncate_hv(a, h, limits.accel_v_mps2),
+    };
+    let mut out = Vec3::new(0.0, 0.0, z);
+    out[first] = a[first].clamp(-h, h);
+    let left = (h * h - out[first] * out[first]).max(0.0).sqrt();
+    out[other] = a[other].clamp(-left, left);
+    out
 }
 
 /// One tick of heading steering toward `target_rad` turning at `target_rate_radps`.
@@ -178,6 +247,9 @@ pub fn containment(p: &Vec3, lo: &Vec3, hi: &Vec3, stiffness: f64) -> Vec3 {
 mod tests {
     use super::*;
 
+    /// No walls within reach.
+    const OPEN: (&Vec3, &Vec3) = (&Vec3::new(-1e9, -1e9, -1e9), &Vec3::new(1e9, 1e9, 1e9));
+
     fn limits() -> SteerLimits {
         SteerLimits {
             speed_h_mps: 1.8,
@@ -202,7 +274,7 @@ mod tests {
         let dt = 0.01;
         let mut prev = s;
         for k in 0..2000 {
-            s = step(&s, &target, Vec3::zeros(), &lim, &gains, dt);
+            s = step(&s, &target, Vec3::zeros(), OPEN, &lim, &gains, dt);
             assert!(
                 s.v.x.hypot(s.v.y) <= lim.speed_h_mps + 1e-9,
                 "tick {k}: {:?}",
@@ -238,10 +310,81 @@ mod tests {
         let mut s = at(0.0);
         let mut worst: f64 = 0.0;
         for k in 1..3000 {
-            s = step(&s, &at(k as f64 * dt - dt), Vec3::zeros(), &lim, &gains, dt);
+            s = step(
+                &s,
+                &at(k as f64 * dt - dt),
+                Vec3::zeros(),
+                OPEN,
+                &lim,
+                &gains,
+                dt,
+            );
             worst = worst.max((s.p - at(k as f64 * dt).p).norm());
         }
         assert!(worst < 2e-3, "{worst}");
+    }
+
+    /// The furthest past the face y = `face` that a camera gets when it chases a target
+    /// sliding toward that face at 0.7 m/s (and along it at 0.5 m/s, speeding up), held on
+    /// the face once it gets there, as the director keeps its target inside the stage less
+    /// its margin.
+    fn overshoot_past(face: f64, walls: (&Vec3, &Vec3)) -> f64 {
+        let lim = limits();
+        let gains = SteerGains::default();
+        let dt = 0.01;
+        let at = |t: f64| {
+            let y = 1.0 + 0.7 * t;
+            let (vx, ax) = (0.5 + 0.3 * t, 0.3);
+            let p = Vec3::new(0.5 * t + 0.15 * t * t, y.min(face), 1.0);
+            let on_face = y >= face;
+            Kinematics {
+                p,
+                v: Vec3::new(vx, if on_face { 0.0 } else { 0.7 }, 0.0),
+                a: Vec3::new(ax, 0.0, 0.0),
+            }
+        };
+        let mut s = at(0.0);
+        let mut furthest = f64::NEG_INFINITY;
+        for k in 1..800 {
+            s = step(
+                &s,
+                &at(k as f64 * dt),
+                Vec3::zeros(),
+                walls,
+                &lim,
+                &gains,
+                dt,
+            );
+            furthest = furthest.max(s.p.y - face);
+        }
+        furthest
+    }
+
+    #[test]
+    fn a_camera_brakes_for_a_wall_its_target_slides_against() {
+        let face = 2.7;
+        let (lo, hi) = (Vec3::new(-50.0, -50.0, 0.0), Vec3::new(50.0, face, 3.0));
+        let braked = overshoot_past(face, (&lo, &hi));
+        let free = overshoot_past(face, OPEN);
+        // 5 cm with these limits (a jerk of 2 m/s³; 2 cm at the AR.Drone's 5 m/s³)…
+        assert!(braked < 0.06, "{braked}");
+        // …where braking on the distance to the target alone (metres ahead along the wall)
+        // ran 0.42 m on.
+        assert!(free > 0.3, "{free}");
+        // Away from the walls nothing changes.
+        let v = Vec3::new(0.9, -0.4, 0.2);
+        let a = Vec3::new(0.1, 0.2, -0.3);
+        assert_eq!(
+            brake_for_walls(v, a, &Vec3::new(0.0, 0.0, 1.0), (&lo, &hi), &limits()),
+            (v, a, [false; 3])
+        );
+        // On a face, nothing more toward it; away from it, anything.
+        let on = Vec3::new(0.0, face, 1.0);
+        let (v_on, a_on, capped) = brake_for_walls(v, -a, &on, (&lo, &hi), &limits());
+        assert_eq!((v_on.y, capped), (-0.4, [false; 3]));
+        assert_eq!(a_on, -a);
+        let (v_on, a_on, capped) = brake_for_walls(-v, a, &on, (&lo, &hi), &limits());
+        assert_eq!((v_on.y, a_on.y, capped), (0.0, 0.0, [false, true, false]));
     }
 
     #[test]
