@@ -799,3 +799,75 @@ fn a_framing_beyond_the_wall_is_refused_and_not_followed() {
         "the reference reached x = {x_max}"
     );
 }
+
+/// A framing that solves now but not a moment ahead (live actors at the edge of what the
+/// composition can frame) gives the camera no feed-forward: the look-ahead difference would
+/// be the jump between where the camera is held and the framing solved now, hundreds of
+/// metres a second, and it carried the camera away from its framing at full speed (on
+/// `scene.psl`'s reverse shot, seed 2, a framing error of 10.0; the flight no longer meets
+/// that edge, so it is made here). An over-the-shoulder shot whose background actor is
+/// framed from the toric circle's farthest point: B stands just inside the spacing it can be
+/// framed at, walking toward A (as a tracker's velocity says), so that a millisecond ahead
+/// it cannot. The camera, which was framing the pair from further apart, goes to the new
+/// framing and stays on it.
+#[test]
+fn a_framing_that_fails_a_moment_ahead_gives_no_feed_forward() {
+    let script = script_of(
+        "stage 10m x 8m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor B height 1.65m at (3, 0) facing 180deg\n\
+         MS on B 34backright LS on A 34left screen right for 12s\n",
+    );
+    let scene = script.scene.as_ref().unwrap();
+    let poses = |spacing_m: f64, toward_mps: f64| {
+        let mut p = Blocking::new(scene).poses(0.0);
+        p[1].position_m = [spacing_m, 0.0, 0.0];
+        p[1].velocity_mps = [-toward_mps, 0.0, 0.0];
+        p
+    };
+    let frames = |spacing_m: f64| {
+        let mut d = Director::new(&script, scene, &ardrone());
+        d.step(0.0, &poses(spacing_m, 0.0));
+        d.diagnostics_so_far().is_empty()
+    };
+    // The closest spacing it frames B at (to 0.1 mm).
+    let (mut lo, mut hi) = (0.3, 3.0);
+    assert!(frames(hi) && !frames(lo));
+    while hi - lo > 1e-4 {
+        let mid = (lo + hi) / 2.0;
+        if frames(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let edge_m = hi;
+    let mut d = Director::new(&script, scene, &ardrone());
+    let mut k = 0;
+    let mut t = || {
+        k += 1;
+        f64::from(k - 1) / 100.0
+    };
+    for _ in 0..200 {
+        d.step(t(), &poses(edge_m + 0.5, 0.0));
+    }
+    let mut fastest: f64 = 0.0;
+    let mut last = None;
+    for _ in 0..800 {
+        // 1 m/s toward A: a millisecond ahead B is 1 mm closer, past the edge.
+        let s = d.step(t(), &poses(edge_m, 1.0));
+        fastest = fastest.max(Vec3::from(s.velocity_mps).norm());
+        last = Some(s);
+    }
+    assert!(
+        d.diagnostics_so_far()
+            .iter()
+            .any(|x| x.code == Code::Unframeable),
+        "the look-ahead never failed: {:?}",
+        d.diagnostics_so_far()
+    );
+    let off = (Vec3::from(last.unwrap().position_m) - d.solved_target_m()).norm();
+    // 0.2 mm after 8 s at most 0.7 m/s; 6.9 m away at 1.44 m/s with the feed-forward.
+    assert!(off < 0.02, "{off} m from its framing");
+    assert!(fastest < 1.0, "{fastest} m/s");
+}

@@ -400,12 +400,17 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
 }
 
 /// What the director finds against the live actors during a flight is told as it arises, as
-/// events in the log (and on the terminal): each repositioning flight, and a framing it
-/// cannot solve. In `scene.psl` the reverse over-the-shoulder shot (shot 5) does not solve
-/// against the simulated actors for a moment. The first version kept that to itself and
-/// gave up the shot: the drone held where it was to the end of it and the flight said only
-/// "completed", with no framing figure for the shot. Now the event is in the log, and the
-/// director solves again on the next ticks: the shot is flown and measured.
+/// events in the log (and on the terminal): each repositioning flight, and an error such as a
+/// framing that takes the camera too close to an actor. The first version kept such findings
+/// to itself and the flight said only "completed". On seed 4, `scene.psl`'s shot 2 (a framing
+/// that follows Alice as she stops) takes the camera 0.49 m from Bob at a moment, where the
+/// drone keeps 0.50 m: told once, counted in the report, and counted again by the replay.
+///
+/// The scene's reverse over-the-shoulder shot (shot 5) used to be that finding on all seeds
+/// but a few: against live actors standing a few centimetres closer than blocked, its
+/// background actor's size was out of the toric circle's reach and the shot was held,
+/// unframed, for moments. It is now framed from the circle's farthest point: no director
+/// error on the default seed, and the shot is measured.
 #[test]
 fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
     let dir = temp_dir("director-events");
@@ -414,6 +419,8 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
     let o = dronecine(&[
         "shoot",
         "shots/scene.psl",
+        "--seed",
+        "4",
         "--log",
         log_s,
         "--report",
@@ -432,26 +439,19 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
             .any(|e| e.kind == "compile::reposition" && e.message.starts_with("shot ")),
         "{events:#?}"
     );
-    let unsolved: Vec<_> = events
-        .iter()
-        .filter(|e| e.kind == "compile::unframeable")
-        .collect();
-    assert_eq!(unsolved.len(), 1, "told once: {events:#?}");
+    let errors: Vec<_> = events.iter().filter(|e| e.is_director_error()).collect();
+    assert_eq!(errors.len(), 1, "told once: {events:#?}");
     assert!(
-        unsolved[0].level == "error"
-            && unsolved[0]
+        errors[0].kind == "compile::too_close"
+            && errors[0]
                 .message
-                .starts_with("shot 5: this composition cannot be framed"),
+                .starts_with("shot 2: this framing puts the camera 0.49 m from Bob"),
         "{:?}",
-        unsolved[0]
+        errors[0]
     );
-    let shot5 = &r["shots"][4];
-    assert!(
-        shot5["rms_framing_error"].is_number(),
-        "shot 5 is flown and measured once its framing solves again: {shot5}"
-    );
-    // The report counts it (a flight that says "completed" with good figures had a framing
-    // it could not solve for a while), and the replay counts it again from the log.
+    // The report counts it (a flight that says "completed" with good figures came too close
+    // to an actor for a moment), and the replay counts it again from the log.
+    assert_eq!(r["completed"], true, "{r}");
     assert_eq!(r["director_errors"], 1, "{r}");
     let o = dronecine(&["replay", log_s, "--report", "json"]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -461,5 +461,25 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         stdout(&o).contains("1 director error against the live actors"),
         "{}",
         stdout(&o)
+    );
+
+    // The default seed: the reverse shot is framed throughout, and measured.
+    let log = dir.join("scene-default.mcap");
+    let o = dronecine(&[
+        "shoot",
+        "shots/scene.psl",
+        "--log",
+        log.to_str().unwrap(),
+        "--report",
+        "json",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = report(&o);
+    assert_eq!(r["director_errors"], 0, "{r}");
+    let shot5 = &r["shots"][4];
+    assert!(
+        shot5["rms_framing_error"].as_f64().is_some_and(|e| e < 0.5),
+        "{shot5}"
     );
 }

@@ -6,7 +6,7 @@
 use dronecine_compiler::camera::{CameraPose, Lens, Vec3};
 use dronecine_compiler::framing::{
     self, body_axis_distance_m, interpolate, place, screen_targets, solve, FramingError, Placement,
-    Visual,
+    Visual, OVER_SHOULDER_REACH,
 };
 use dronecine_compiler::profile::Gimbal;
 use dronecine_compiler::reference::ActorPose;
@@ -561,6 +561,94 @@ fn over_the_shoulder() {
     let mb = head(&actors[1], 0.825 * 1.65);
     let off = (p.position_m - mb).angle(&u).to_degrees();
     assert!(off < 30.0, "profile off by {off}°");
+}
+
+/// Over the shoulder with the actors brought closer, step by step, until the background
+/// actor's size is out of the toric circle's reach: up to `OVER_SHOULDER_REACH` beyond it the
+/// camera frames from the circle's farthest point, both actors still on their screen points
+/// and the background actor a little larger than written (never by more than the reach);
+/// beyond that, the composition is refused. Against live actors a few centimetres closer
+/// than blocked, `scene.psl`'s reverse shot failed (and held the camera) in 27 of 30 flights.
+#[test]
+fn over_the_shoulder_just_out_of_reach_frames_from_the_farthest_point() {
+    let l = lens(84.0);
+    let g = gimbal();
+    // `MS B 34backright LS A 34left screen right`: B foreground, A background.
+    let c = comp(
+        CameraAngle::EyeLevel,
+        vec![
+            (
+                Size::MS,
+                vec![subject(
+                    "B",
+                    Some(Profile::ThreeQuarterBackRight),
+                    None,
+                    None,
+                )],
+            ),
+            (
+                Size::LS,
+                vec![subject(
+                    "A",
+                    Some(Profile::ThreeQuarterLeft),
+                    Some(1.0 / 3.0),
+                    None,
+                )],
+            ),
+        ],
+    );
+    let (bottom, top) = size::band(Size::LS, 1.8);
+    let mut exact = 0;
+    let mut larger: Vec<f64> = Vec::new();
+    let mut refused = None;
+    for k in 0..300 {
+        let spacing = 4.0 - 0.01 * f64::from(k);
+        let mut actors = two_shot_scene();
+        actors[1].position_m = [spacing, 0.0, 0.0];
+        let v = match solve(&c, &NAMES, &actors, &l, &g) {
+            Ok(v) => v,
+            Err(e) => {
+                assert!(matches!(e, FramingError::SizeUnreachable { .. }), "{e:?}");
+                refused = Some(spacing);
+                break;
+            }
+        };
+        let p = place(&v, &actors, &l, &g);
+        let cam = pose(&p);
+        // A (background) stays exactly on its screen point…
+        for target in screen_targets(&v, &actors, &l, &g, &p.position_m) {
+            if target.actor == 0 {
+                let s = cam.project(&l, &target.point_m).unwrap();
+                let err = (s[0] - target.screen[0]).hypot(s[1] - target.screen[1]);
+                assert!(
+                    err < 1e-6,
+                    "at {spacing:.2} m: {s:?} vs {:?}",
+                    target.screen
+                );
+            }
+        }
+        // …framed LS (its band fills the frame's height), or larger once out of reach.
+        let tt = cam.project(&l, &head(&actors[0], top)).unwrap();
+        let bb = cam.project(&l, &head(&actors[0], bottom)).unwrap();
+        let band = tt[1] - bb[1];
+        if (band - 2.0).abs() < 0.02 {
+            assert!(
+                larger.is_empty(),
+                "exact again at {spacing:.2} m after {larger:?}"
+            );
+            exact += 1;
+        } else {
+            assert!(band > 2.0, "at {spacing:.2} m: band {band}");
+            larger.push(band / 2.0);
+        }
+    }
+    assert!(exact > 50, "{exact}");
+    assert!(refused.is_some(), "never refused");
+    let most = larger.iter().copied().fold(0.0, f64::max);
+    assert!(
+        larger.len() >= 5 && most > 1.1 && most <= OVER_SHOULDER_REACH + 0.02,
+        "{larger:?}"
+    );
 }
 
 /// A pitch gimbal with a narrow range: the pitch is clamped and flagged, the aim point still

@@ -192,15 +192,6 @@ fn the_scene_is_flown_to_its_end_with_actors_exactly_on_their_marks() {
         assert!(r.completed, "seed {seed}: {r:#?}");
         assert_eq!(r.failsafes, 0, "seed {seed}");
     }
-    // Its reverse over-the-shoulder shot does not solve against the live actors at moments
-    // (a director error, told); on those ticks the camera holds. Its feed-forward once took
-    // the difference between where the camera held and the framing solved a millisecond
-    // ahead as a velocity: on seed 2 the framing error of the flight was 1.31 (10.0 before
-    // the director kept its target inside the stage), against about 0.3 on other seeds.
-    let r = fly_sim(&text, &script, "lqg", SimConfig::new(2));
-    assert!(r.completed && r.director_errors >= 1, "{r:#?}");
-    let framing = r.figures.rms_framing_error.unwrap();
-    assert!(framing < 0.5, "framing {framing}");
     // What the director asks stays inside the stage less its margin (the steering, braking
     // for the walls, overshoots a target on the margin by under 2 cm; 5 cm before it did),
     // compiled against the script's blocking.
@@ -230,8 +221,9 @@ fn the_scene_is_flown_to_its_end_with_actors_exactly_on_their_marks() {
 /// and the steering braked on its distance to the target (metres along the wall), not on its
 /// distance to the wall (centimetres), and kept following the target's acceleration toward
 /// it. Now the steering brakes for the walls: both complete, and the reference never comes
-/// within 10 cm of a wall (on seed 4 it comes within 17 cm, braking from 0.8 m/s along the
-/// wall when the framing fails against the live actors).
+/// within 10 cm of a wall (20 cm on seed 4). Without the braking, 10 of seeds 1–30 leave the
+/// stage (now that the reverse shot is framed throughout, more than when it failed at
+/// moments); with it, none.
 #[test]
 fn the_scene_stays_on_the_stage_on_the_seeds_that_left_it() {
     /// The reference's closest approach to the stage's walls (floor and ceiling included).
@@ -279,10 +271,6 @@ fn the_scene_stays_on_the_stage_on_the_seeds_that_left_it() {
         let r = fly_simulated(&flight, &mut closest, &mut NoObserver).unwrap();
         assert!(r.completed, "seed {seed}: {r:#?}");
         assert_eq!(r.failsafes, 0, "seed {seed}");
-        assert!(
-            r.director_errors >= 1,
-            "seed {seed}: the reverse shot failed, and held"
-        );
         assert!(
             closest.room_m > 0.10,
             "seed {seed}: the reference came {:.3} m from a wall",
