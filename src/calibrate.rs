@@ -294,22 +294,13 @@ fn finish(
 
 pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
     if a.drone.is_some() {
-        let sim_only: Vec<&str> = [
+        let given = [
             (a.seed.is_some(), "--seed"),
             (a.ideal, "--ideal"),
             (a.plant.is_some(), "--plant"),
-        ]
-        .into_iter()
-        .filter_map(|(given, name)| given.then_some(name))
-        .collect();
-        if !sim_only.is_empty() {
-            let (names, verb) = match sim_only.as_slice() {
-                [one] => (one.to_string(), "is a simulator option"),
-                _ => (sim_only.join(", "), "are simulator options"),
-            };
-            return fail(format!(
-                "{names} {verb}: a real drone (--drone) has its own plant and noise"
-            ));
+        ];
+        if let Err(e) = crate::shoot::refuse_sim_options(&given) {
+            return fail(e);
         }
     }
     if let Err(e) = crate::shoot::check_servo_rate(a.rate) {

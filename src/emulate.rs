@@ -12,7 +12,7 @@ use dronecine_runtime::emulator::{
     empty_scene, Emulator, EmulatorConfig, NatNetConfig, NatNetData, ACTOR_ID_BASE, DRONE_ID,
 };
 use dronecine_runtime::natnet::frame::{UpAxis, Version};
-use dronecine_runtime::sim::{Effects, SimConfig};
+use dronecine_runtime::sim::SimConfig;
 
 pub struct Args<'a> {
     pub host: IpAddr,
@@ -27,6 +27,8 @@ pub struct Args<'a> {
     pub seed: u64,
     pub script: Option<&'a Path>,
     pub ideal: bool,
+    /// Simulator effects to switch off, by their names.
+    pub sim_off: &'a [String],
     pub color: bool,
 }
 
@@ -71,9 +73,13 @@ pub fn run(a: &Args) -> ExitCode {
         }
     };
     let mut sim = SimConfig::new(a.seed);
-    if a.ideal {
-        sim.effects = Effects::none();
-    }
+    sim.effects = match crate::shoot::sim_effects(a.ideal, a.sim_off) {
+        Ok(e) => e,
+        Err(e) => {
+            errln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     let config = EmulatorConfig {
         host: a.host,
         at_port: a.at_port,

@@ -117,9 +117,9 @@ enum Command {
         /// to write the time-stamped one in [default: flights/<script>-<UTC time>.mcap].
         #[arg(long, value_name = "FILE|DIR")]
         log: Option<PathBuf>,
-        /// The simulator's seed (noise, wind, radio loss, the actors' deviations).
-        #[arg(long, value_name = "N", default_value_t = 1)]
-        seed: u64,
+        /// The simulator's seed (noise, wind, radio loss, the actors' deviations) [default: 1].
+        #[arg(long, value_name = "N")]
+        seed: Option<u64>,
         /// The controller: the paper's LQG servo, or per-axis PID loops (tum_ardrone gains).
         #[arg(long, value_enum, default_value_t = ControllerKind::Lqg)]
         controller: ControllerKind,
@@ -146,6 +146,16 @@ enum Command {
         /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
         #[arg(long)]
         ideal: bool,
+        /// Switch simulator effects off (comma-separated): attitude-lag, tilt-saturation, drag,
+        /// asymmetric-vz, yaw-lag, latency, radio-loss, mocap-noise, mocap-dropouts, wind,
+        /// actor-deviation, battery.
+        #[arg(
+            long,
+            value_name = "EFFECT,…",
+            value_delimiter = ',',
+            conflicts_with = "ideal"
+        )]
+        sim_off: Vec<String>,
         /// Fly a real AR.Drone 2.0 (or `dronecine emulate`):
         /// ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]. Needs --mocap.
         #[arg(long, value_name = "URL")]
@@ -256,6 +266,14 @@ enum EmulateKind {
         /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
         #[arg(long)]
         ideal: bool,
+        /// Switch simulator effects off (comma-separated), as `shoot --sim-off`.
+        #[arg(
+            long,
+            value_name = "EFFECT,…",
+            value_delimiter = ',',
+            conflicts_with = "ideal"
+        )]
+        sim_off: Vec<String>,
     },
 }
 
@@ -345,6 +363,7 @@ fn run(cli: Cli) -> ExitCode {
             rate,
             report,
             ideal,
+            sim_off,
             quiet,
             drone,
             mocap,
@@ -364,6 +383,7 @@ fn run(cli: Cli) -> ExitCode {
             json: report == ReportFormat::Json,
             quiet,
             ideal,
+            sim_off: &sim_off,
             drone: drone.as_deref(),
             mocap: mocap.as_deref(),
             rig: rig.as_deref(),
@@ -383,6 +403,7 @@ fn run(cli: Cli) -> ExitCode {
                     seed,
                     script,
                     ideal,
+                    sim_off,
                 },
         } => emulate::run(&emulate::Args {
             host,
@@ -396,6 +417,7 @@ fn run(cli: Cli) -> ExitCode {
             seed,
             script: script.as_deref(),
             ideal,
+            sim_off: &sim_off,
             color,
         }),
         Command::Replay { file, report } => replay::run(&file, report == ReportFormat::Json),

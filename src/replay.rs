@@ -40,6 +40,9 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
                 "resumed_at": d.resumed_at,
             })).collect::<Vec<_>>(),
             "mismatches": r.mismatches,
+            "backend": log.header.backend,
+            "seed": log.header.seed,
+            "sim_effects_off": log.header.sim_effects_off,
             "report": r.report,
         });
         outln!(
@@ -68,10 +71,11 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
         None => {
             if r.ticks > 0 {
                 errln!(
-                    "replay: {} controller ticks reproduce the logged commands exactly ({} {})",
+                    "replay: {} controller ticks reproduce the logged commands exactly ({} {}; {})",
                     r.ticks,
                     log.header.controller.kind,
-                    log.header.profile_name
+                    log.header.profile_name,
+                    flown_on(&log.header)
                 );
             } else if r.unreplayed == 0 {
                 // Nothing was checked: say so rather than "0 ticks reproduce exactly".
@@ -147,4 +151,19 @@ pub fn damage_warnings(file: &Path, log: &FlightLog) -> Vec<String> {
             ),
         })
         .collect()
+}
+
+/// Where the logged flight was flown, as a reader wants it to fly it again: the drone's URL,
+/// or the simulator's seed and the effects that were off (`shoot --seed N --sim-off …`).
+fn flown_on(h: &dronecine_runtime::record::FlightHeader) -> String {
+    if h.backend != "sim" {
+        return format!("flown on {}", h.backend);
+    }
+    let seed = h.seed.map_or(String::new(), |s| format!(", seed {s}"));
+    let effects = match h.sim_effects_off.as_deref() {
+        None => String::new(),
+        Some([]) => ", every effect on".to_string(),
+        Some(off) => format!(", {} off", off.join(", ")),
+    };
+    format!("flown on the simulator{seed}{effects}")
 }

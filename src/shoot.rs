@@ -24,7 +24,8 @@ static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
 pub struct Args<'a> {
     pub file: &'a Path,
     pub log: Option<&'a Path>,
-    pub seed: u64,
+    /// The simulator's seed (`None`: 1; refused on hardware).
+    pub seed: Option<u64>,
     pub controller: &'a str,
     pub paper_prefilter: bool,
     pub per_tick_solve: bool,
@@ -33,6 +34,8 @@ pub struct Args<'a> {
     pub json: bool,
     pub quiet: bool,
     pub ideal: bool,
+    /// Simulator effects to switch off, by [`Effects::NAMES`].
+    pub sim_off: &'a [String],
     /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`: fly a real drone (or the emulator).
     pub drone: Option<&'a str>,
     /// `natnet://SERVER[:PORT][?multicast=GROUP]`: its positions.
@@ -51,6 +54,46 @@ enum Target {
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
     errln!("error: {msg}");
     ExitCode::FAILURE
+}
+
+/// The simulator's effects for `--ideal` (every one off) and `--sim-off NAME,…` (those off):
+/// `Err` names an effect that does not exist, with the names that do.
+pub(crate) fn sim_effects(ideal: bool, off: &[String]) -> Result<Effects, String> {
+    let mut effects = if ideal {
+        Effects::none()
+    } else {
+        Effects::all()
+    };
+    for name in off {
+        let name = name.trim();
+        if !effects.set(name, false) {
+            let names = Effects::NAMES.iter().map(|(n, _)| *n);
+            let guess = dronecine_grammar::suggest::did_you_mean(name, names.clone())
+                .map_or(String::new(), |g| format!(" ({g})"));
+            return Err(format!(
+                "--sim-off: no simulator effect `{name}`{guess}; the effects are {}",
+                names.collect::<Vec<_>>().join(", ")
+            ));
+        }
+    }
+    Ok(effects)
+}
+
+/// With a real drone: `Err` names the simulator options among `given` (each `(given, flag)`)
+/// that were given, since a real drone has its own plant and noise (`shoot`, `calibrate`).
+pub(crate) fn refuse_sim_options(given: &[(bool, &str)]) -> Result<(), String> {
+    let sim_only: Vec<&str> = given
+        .iter()
+        .filter_map(|&(given, name)| given.then_some(name))
+        .collect();
+    let (names, verb) = match sim_only.as_slice() {
+        [] => return Ok(()),
+        [one] => (one.to_string(), "is a simulator option"),
+        _ => (sim_only.join(", "), "are simulator options"),
+    };
+    Err(format!(
+        "{names} {verb}: a real drone (--drone) has its own plant and noise"
+    ))
 }
 
 /// The servo rates a flight may take (`shoot`, `calibrate`): `Err` says why not.
@@ -75,6 +118,17 @@ pub fn run(a: &Args) -> ExitCode {
     let (r, profile) = (&loaded.file, loaded.profile.clone());
     let (script, scene) = (loaded.script(), loaded.scene());
 
+    // The simulator's options: refused on hardware, before anything is compiled or flown.
+    if a.drone.is_some() {
+        let given = [
+            (a.seed.is_some(), "--seed"),
+            (a.ideal, "--ideal"),
+            (!a.sim_off.is_empty(), "--sim-off"),
+        ];
+        if let Err(e) = refuse_sim_options(&given) {
+            return fail(e);
+        }
+    }
     let names: Vec<&str> = scene.actors.iter().map(|x| x.name.as_str()).collect();
     let target =
         match crate::hardware::target("shoot", a.drone, a.mocap, a.rig, Some(&names), a.color) {
@@ -82,6 +136,12 @@ pub fn run(a: &Args) -> ExitCode {
             Ok(Some(t)) => Target::Hardware(t),
             Err(e) => return fail(e),
         };
+
+    let seed = a.seed.unwrap_or(1);
+    let effects = match sim_effects(a.ideal, a.sim_off) {
+        Ok(e) => e,
+        Err(e) => return fail(e),
+    };
 
     // The compiler's verdict first: a script the drone cannot fly is not flown.
     let opts = Options { rate_hz: a.rate_hz };
@@ -144,7 +204,9 @@ pub fn run(a: &Args) -> ExitCode {
             (Target::Hardware(_), Some(d)) => d.to_string(),
             _ => "sim".into(),
         },
-        seed: matches!(target, Target::Sim).then_some(a.seed),
+        seed: matches!(target, Target::Sim).then_some(seed),
+        sim_effects_off: matches!(target, Target::Sim)
+            .then(|| effects.off().into_iter().map(String::from).collect()),
         rate_hz: a.rate_hz,
         actor_names: actor_names.clone(),
         dronecine_version: env!("CARGO_PKG_VERSION").into(),
@@ -194,10 +256,8 @@ pub fn run(a: &Args) -> ExitCode {
     let mut display = Display::new(a.quiet);
     let result = match &target {
         Target::Sim => {
-            let mut sim = SimConfig::new(a.seed);
-            if a.ideal {
-                sim.effects = Effects::none();
-            }
+            let mut sim = SimConfig::new(seed);
+            sim.effects = effects;
             let flight = SimFlight {
                 script,
                 source: &r.text,

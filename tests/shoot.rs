@@ -483,3 +483,101 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         "{shot5}"
     );
 }
+
+/// `--sim-off` switches simulator effects off by name, and the log's header records which
+/// were off, so that a seeded flight can be flown again from its log; `replay` says how it
+/// was flown. Every effect off is `--ideal`, bit for bit. A name that is no effect is
+/// refused with the names that are (nothing flown, no log), and the simulator's options are
+/// refused with a real drone rather than ignored.
+#[test]
+fn sim_off_switches_effects_by_name_and_the_log_says_which() {
+    let dir = temp_dir("sim-off");
+    let fly = |name: &str, extra: &[&str]| {
+        let log = dir.join(name);
+        let mut args = vec![
+            "shoot",
+            "shots/square.psl",
+            "--log",
+            log.to_str().unwrap(),
+            "--report",
+            "json",
+            "-q",
+        ];
+        args.extend_from_slice(extra);
+        let o = dronecine(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (log, report(&o))
+    };
+    let header =
+        |log: &std::path::Path| dronecine_runtime::log::FlightLog::open(log).unwrap().header;
+    let (default_log, default) = fly("default.mcap", &[]);
+    assert_eq!(header(&default_log).sim_effects_off, Some(vec![]));
+    let (log, no_wind) = fly("calm.mcap", &["--sim-off", "wind,battery", "--seed", "3"]);
+    let h = header(&log);
+    assert_eq!(
+        (h.seed, h.sim_effects_off),
+        (
+            Some(3),
+            Some(vec!["wind".to_string(), "battery".to_string()])
+        )
+    );
+    assert_ne!(
+        default["rms_position_error_m"],
+        no_wind["rms_position_error_m"]
+    );
+    let o = dronecine(&["replay", log.to_str().unwrap()]);
+    assert!(
+        stderr(&o).contains("flown on the simulator, seed 3, wind, battery off"),
+        "{}",
+        stderr(&o)
+    );
+
+    // Every effect by name is --ideal.
+    let all = [
+        "attitude-lag,tilt-saturation,drag,asymmetric-vz,yaw-lag,latency,radio-loss,",
+        "mocap-noise,mocap-dropouts,wind,actor-deviation,battery",
+    ]
+    .concat();
+    let (_, by_name) = fly("all-off.mcap", &["--sim-off", &all]);
+    let (_, ideal) = fly("ideal.mcap", &["--ideal"]);
+    assert_eq!(by_name, ideal);
+
+    let refused = dir.join("refused.mcap");
+    let o = dronecine(&[
+        "shoot",
+        "shots/square.psl",
+        "--sim-off",
+        "wnd",
+        "--log",
+        refused.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("no simulator effect `wnd` (did you mean `wind`?)")
+            && stderr(&o).contains("actor-deviation, battery"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!refused.exists());
+    let o = dronecine(&[
+        "shoot",
+        "shots/square.psl",
+        "--seed",
+        "3",
+        "--sim-off",
+        "wind",
+        "--drone",
+        "ardrone://127.0.0.1:1",
+        "--mocap",
+        "natnet://127.0.0.1:1",
+        "--log",
+        refused.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--seed, --sim-off are simulator options"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!refused.exists());
+}

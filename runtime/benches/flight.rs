@@ -88,6 +88,7 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>) {
                 controller: flight.controller.clone(),
                 backend: "sim".into(),
                 seed: Some(1),
+                sim_effects_off: Some(vec!["battery".into()]),
                 rate_hz: 100.0,
                 actor_names: names.clone(),
                 dronecine_version: "bench".into(),

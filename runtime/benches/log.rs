@@ -137,6 +137,7 @@ fn header(names: &[String]) -> FlightHeader {
         controller: ControllerSetup::new("lqg"),
         backend: "sim".into(),
         seed: Some(1),
+        sim_effects_off: Some(Vec::new()),
         rate_hz: RATE_HZ,
         actor_names: names.to_vec(),
         dronecine_version: "bench".into(),

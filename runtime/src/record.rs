@@ -50,6 +50,13 @@ pub struct FlightHeader {
     pub backend: String,
     /// The simulator's seed (`None` on hardware).
     pub seed: Option<u64>,
+    /// The simulator's effects that were off, by their [`Effects::NAMES`] (`[]`: every effect
+    /// on, the default; `None` on hardware, and in logs written before it was recorded): with
+    /// the seed, what reproduces a simulated flight.
+    ///
+    /// [`Effects::NAMES`]: crate::sim::Effects::NAMES
+    #[serde(default)]
+    pub sim_effects_off: Option<Vec<String>>,
     pub rate_hz: f64,
     pub actor_names: Vec<String>,
     pub dronecine_version: String,

@@ -128,6 +128,7 @@ fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
             controller: setup.clone(),
             backend: "sim".into(),
             seed: Some(2),
+            sim_effects_off: Some(Vec::new()),
             rate_hz: 100.0,
             actor_names: names.clone(),
             dronecine_version: "test".into(),

@@ -52,6 +52,7 @@ fn header() -> FlightHeader {
         },
         backend: "sim".into(),
         seed: Some(u64::MAX),
+        sim_effects_off: Some(vec!["wind".into(), "battery".into()]),
         rate_hz: 100.0,
         actor_names: names(),
         dronecine_version: "0.1.0".into(),

@@ -45,6 +45,7 @@ fn fly_to_log(controller: &str, path: &std::path::Path) -> dronecine_runtime::re
         controller: setup.clone(),
         backend: "sim".into(),
         seed: Some(9),
+        sim_effects_off: None,
         rate_hz: 100.0,
         actor_names: names.clone(),
         dronecine_version: "test".into(),

@@ -4,6 +4,9 @@
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
+/// An effect's switch in [`Effects`]: the field it is.
+pub type EffectSwitch = fn(&mut Effects) -> &mut bool;
+
 /// The effects the simulated AR.Drone, mocap and actors add to the servo's model
 /// (control.md §6). All off ([`Effects::none`]) leaves exactly the model of control.md §2–3;
 /// each one switches on independently.
@@ -55,6 +58,45 @@ impl Effects {
             actor_deviation: true,
             battery: true,
         }
+    }
+
+    /// Each effect's name on the command line (`shoot --sim-off wind,battery`) and in the
+    /// flight log's header, and its switch: the one table both go through.
+    pub const NAMES: [(&'static str, EffectSwitch); 12] = [
+        ("attitude-lag", |e| &mut e.attitude_lag),
+        ("tilt-saturation", |e| &mut e.tilt_saturation),
+        ("drag", |e| &mut e.drag),
+        ("asymmetric-vz", |e| &mut e.asymmetric_vz),
+        ("yaw-lag", |e| &mut e.yaw_lag),
+        ("latency", |e| &mut e.latency),
+        ("radio-loss", |e| &mut e.radio_loss),
+        ("mocap-noise", |e| &mut e.mocap_noise),
+        ("mocap-dropouts", |e| &mut e.mocap_dropouts),
+        ("wind", |e| &mut e.wind),
+        ("actor-deviation", |e| &mut e.actor_deviation),
+        ("battery", |e| &mut e.battery),
+    ];
+
+    /// Switches the effect called `name` (one of [`Effects::NAMES`]); `false` if there is none
+    /// of that name.
+    pub fn set(&mut self, name: &str, on: bool) -> bool {
+        match Self::NAMES.iter().find(|(n, _)| *n == name) {
+            Some((_, switch)) => {
+                *switch(self) = on;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The names of the effects that are off, in [`Effects::NAMES`]' order.
+    pub fn off(&self) -> Vec<&'static str> {
+        let mut e = *self;
+        Self::NAMES
+            .iter()
+            .filter(|(_, switch)| !*switch(&mut e))
+            .map(|(n, _)| *n)
+            .collect()
     }
 
     pub fn none() -> Effects {
@@ -401,3 +443,37 @@ impl fmt::Display for SimError {
 }
 
 impl std::error::Error for SimError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every effect has one name and every name one effect: switching each on from none gives
+    /// twelve different configurations, and all of them on is `Effects::all()`.
+    #[test]
+    fn each_effect_has_exactly_one_name() {
+        let mut every = Effects::none();
+        let mut seen = Vec::new();
+        for (name, _) in Effects::NAMES {
+            let mut one = Effects::none();
+            assert!(one.set(name, true), "{name}");
+            assert_ne!(one, Effects::none(), "{name} switches nothing");
+            assert!(
+                !seen.contains(&one),
+                "{name} switches what another name does"
+            );
+            seen.push(one);
+            assert!(every.set(name, true));
+            assert_eq!(one.off().len(), Effects::NAMES.len() - 1);
+        }
+        assert_eq!(every, Effects::all());
+        assert!(Effects::all().off().is_empty());
+        let all: Vec<&str> = Effects::NAMES.iter().map(|(n, _)| *n).collect();
+        assert_eq!(Effects::none().off(), all);
+        let mut e = Effects::all();
+        assert!(!e.set("gravity", false));
+        assert_eq!(e, Effects::all());
+        assert!(e.set("battery", false) && e.set("wind", false));
+        assert_eq!(e.off(), ["wind", "battery"]);
+    }
+}
