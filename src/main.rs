@@ -143,19 +143,8 @@ enum Command {
         /// How to print the report.
         #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
         report: ReportFormat,
-        /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
-        #[arg(long)]
-        ideal: bool,
-        /// Switch simulator effects off (comma-separated): attitude-lag, tilt-saturation, drag,
-        /// asymmetric-vz, yaw-lag, latency, radio-loss, mocap-noise, mocap-dropouts, wind,
-        /// actor-deviation, battery.
-        #[arg(
-            long,
-            value_name = "EFFECT,…",
-            value_delimiter = ',',
-            conflicts_with = "ideal"
-        )]
-        sim_off: Vec<String>,
+        #[command(flatten)]
+        effects: SimEffects,
         /// Fly a real AR.Drone 2.0 (or `dronecine emulate`):
         /// ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]. Needs --mocap.
         #[arg(long, value_name = "URL")]
@@ -263,18 +252,27 @@ enum EmulateKind {
         /// A script whose scene gives the actors (and the drone profile); none without it.
         #[arg(long, value_name = "FILE.psl")]
         script: Option<PathBuf>,
-        /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
-        #[arg(long)]
-        ideal: bool,
-        /// Switch simulator effects off (comma-separated), as `shoot --sim-off`.
-        #[arg(
-            long,
-            value_name = "EFFECT,…",
-            value_delimiter = ',',
-            conflicts_with = "ideal"
-        )]
-        sim_off: Vec<String>,
+        #[command(flatten)]
+        effects: SimEffects,
     },
+}
+
+/// Which simulator effects a simulated flight has (`shoot`, `emulate`).
+#[derive(Clone, Debug, clap::Args)]
+struct SimEffects {
+    /// Simulate the servo's own model only: no lag, drag, latency, noise, wind or loss.
+    #[arg(long)]
+    ideal: bool,
+    /// Switch simulator effects off (comma-separated): attitude-lag, tilt-saturation, drag,
+    /// asymmetric-vz, yaw-lag, latency, radio-loss, mocap-noise, mocap-dropouts, wind,
+    /// actor-deviation, battery.
+    #[arg(
+        long,
+        value_name = "EFFECT,…",
+        value_delimiter = ',',
+        conflicts_with = "ideal"
+    )]
+    sim_off: Vec<String>,
 }
 
 #[derive(Copy, Clone, Debug, PartialEq, Eq, ValueEnum)]
@@ -362,8 +360,7 @@ fn run(cli: Cli) -> ExitCode {
             realtime,
             rate,
             report,
-            ideal,
-            sim_off,
+            effects,
             quiet,
             drone,
             mocap,
@@ -382,8 +379,8 @@ fn run(cli: Cli) -> ExitCode {
             rate_hz: rate,
             json: report == ReportFormat::Json,
             quiet,
-            ideal,
-            sim_off: &sim_off,
+            ideal: effects.ideal,
+            sim_off: &effects.sim_off,
             drone: drone.as_deref(),
             mocap: mocap.as_deref(),
             rig: rig.as_deref(),
@@ -402,8 +399,7 @@ fn run(cli: Cli) -> ExitCode {
                     no_natnet,
                     seed,
                     script,
-                    ideal,
-                    sim_off,
+                    effects,
                 },
         } => emulate::run(&emulate::Args {
             host,
@@ -416,8 +412,8 @@ fn run(cli: Cli) -> ExitCode {
             no_natnet,
             seed,
             script: script.as_deref(),
-            ideal,
-            sim_off: &sim_off,
+            ideal: effects.ideal,
+            sim_off: &effects.sim_off,
             color,
         }),
         Command::Replay { file, report } => replay::run(&file, report == ReportFormat::Json),
