@@ -64,8 +64,8 @@ pub(crate) fn sim_effects(ideal: bool, off: &[String]) -> Result<Effects, String
     } else {
         Effects::all()
     };
-    for name in off {
-        let name = name.trim();
+    // `--sim-off wind,` names nothing after its comma: nothing to switch.
+    for name in off.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
         if !effects.set(name, false) {
             let names = Effects::NAMES.iter().map(|(n, _)| *n);
             let guess = dronecine_grammar::suggest::did_you_mean(name, names.clone())
@@ -526,9 +526,24 @@ pub fn render_report_as(
 
 #[cfg(test)]
 mod tests {
-    use super::{civil_from_days, first_free, render_report};
+    use super::{civil_from_days, first_free, render_report, sim_effects};
     use dronecine_runtime::report::{Figures, FlightReport, ShotReport};
+    use dronecine_runtime::sim::Effects;
     use std::path::Path;
+
+    #[test]
+    fn sim_off_names_effects_and_skips_empty_ones() {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert_eq!(sim_effects(false, &[]), Ok(Effects::all()));
+        assert_eq!(sim_effects(true, &[]), Ok(Effects::none()));
+        let e = sim_effects(false, &names(&["wind", " battery", ""])).unwrap();
+        assert_eq!(e.off(), ["wind", "battery"]);
+        let err = sim_effects(false, &names(&["wind", "latncy"])).unwrap_err();
+        assert!(
+            err.starts_with("--sim-off: no simulator effect `latncy` (did you mean `latency`?)"),
+            "{err}"
+        );
+    }
 
     #[test]
     fn unmeasured_figures_print_as_dashes() {
