@@ -80,6 +80,7 @@ pub fn run(a: &Args) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    let effects_off = sim.effects.off();
     let config = EmulatorConfig {
         host: a.host,
         at_port: a.at_port,
@@ -99,8 +100,9 @@ pub fn run(a: &Args) -> ExitCode {
         Err(e) => return fail(e),
     };
     outln!(
-        "emulating an AR.Drone 2.0 ({profile_name}, seed {}) in real time",
-        a.seed
+        "emulating an AR.Drone 2.0 ({profile_name}, seed {}, {}) in real time",
+        a.seed,
+        crate::shoot::effects_off_phrase(&effects_off)
     );
     outln!("  AT commands     udp {}", handle.at_addr());
     outln!(

@@ -160,10 +160,8 @@ fn flown_on(h: &dronecine_runtime::record::FlightHeader) -> String {
         return format!("flown on {}", h.backend);
     }
     let seed = h.seed.map_or(String::new(), |s| format!(", seed {s}"));
-    let effects = match h.sim_effects_off.as_deref() {
-        None => String::new(),
-        Some([]) => ", every effect on".to_string(),
-        Some(off) => format!(", {} off", off.join(", ")),
-    };
+    let effects = h.sim_effects_off.as_deref().map_or(String::new(), |off| {
+        format!(", {}", crate::shoot::effects_off_phrase(off))
+    });
     format!("flown on the simulator{seed}{effects}")
 }

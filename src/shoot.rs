@@ -79,6 +79,19 @@ pub(crate) fn sim_effects(ideal: bool, off: &[String]) -> Result<Effects, String
     Ok(effects)
 }
 
+/// The simulator's effects that were off, as a phrase: `every effect on`, `every effect
+/// off`, or `wind, battery off` (`emulate`'s banner, `replay`).
+pub(crate) fn effects_off_phrase<S: AsRef<str>>(off: &[S]) -> String {
+    match off.len() {
+        0 => "every effect on".to_string(),
+        n if n == Effects::NAMES.len() => "every effect off".to_string(),
+        _ => {
+            let names: Vec<&str> = off.iter().map(AsRef::as_ref).collect();
+            format!("{} off", names.join(", "))
+        }
+    }
+}
+
 /// With a real drone: `Err` names the simulator options among `given` (each `(given, flag)`)
 /// that were given, since a real drone has its own plant and noise (`shoot`, `calibrate`).
 pub(crate) fn refuse_sim_options(given: &[(bool, &str)]) -> Result<(), String> {
@@ -526,7 +539,7 @@ pub fn render_report_as(
 
 #[cfg(test)]
 mod tests {
-    use super::{civil_from_days, first_free, render_report, sim_effects};
+    use super::{civil_from_days, effects_off_phrase, first_free, render_report, sim_effects};
     use dronecine_runtime::report::{Figures, FlightReport, ShotReport};
     use dronecine_runtime::sim::Effects;
     use std::path::Path;
@@ -538,6 +551,12 @@ mod tests {
         assert_eq!(sim_effects(true, &[]), Ok(Effects::none()));
         let e = sim_effects(false, &names(&["wind", " battery", ""])).unwrap();
         assert_eq!(e.off(), ["wind", "battery"]);
+        assert_eq!(effects_off_phrase::<&str>(&[]), "every effect on");
+        assert_eq!(effects_off_phrase(&e.off()), "wind, battery off");
+        assert_eq!(
+            effects_off_phrase(&Effects::none().off()),
+            "every effect off"
+        );
         let err = sim_effects(false, &names(&["wind", "latncy"])).unwrap_err();
         assert!(
             err.starts_with("--sim-off: no simulator effect `latncy` (did you mean `latency`?)"),
