@@ -119,6 +119,8 @@ pub struct Director {
     monitor: Monitor,
     warned: Vec<bool>,
     too_close: Vec<bool>,
+    /// By timeline index: `compile::beyond_reach` told.
+    beyond_reach: Vec<bool>,
     /// Per-tick scratch: the actors extrapolated, and their body axes.
     ahead: Vec<ActorPose>,
     axes: Vec<(Vec3, f64)>,
@@ -261,6 +263,7 @@ impl Director {
             monitor: Monitor::new(profile, scene, script.timeline.len()),
             warned: vec![false; script.timeline.len()],
             too_close: vec![false; script.timeline.len()],
+            beyond_reach: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
             axes: Vec::with_capacity(scene.actors.len()),
             framed,
@@ -910,6 +913,10 @@ impl Director {
                 };
                 if keep {
                     self.check_clearance(index, &p, actors);
+                    self.check_reach(index, &a, actors);
+                    if let Some((b, _)) = &b {
+                        self.check_reach(index, b, actors);
+                    }
                     self.visual = Some(match b {
                         None => a,
                         Some((b, s)) => {
@@ -957,6 +964,75 @@ impl Director {
                 return;
             }
         }
+    }
+
+    /// Tells once per shot that an over-the-shoulder's background actor is framed larger than
+    /// written, its size just out of the toric circle's reach where the actors stand
+    /// (`framing::OVER_SHOULDER_REACH`): the help says how much further apart they would have
+    /// to stand.
+    fn check_reach(&mut self, index: usize, v: &framing::Visual, actors: &[ActorPose]) {
+        let framing::Visual::Two(t) = v else {
+            return;
+        };
+        if self.beyond_reach[index] || t.stretch < REACH_TOLD {
+            return;
+        }
+        let (sized, other) = match t.primary {
+            framing::Primary::A => (t.a, t.b),
+            framing::Primary::B => (t.b, t.a),
+        };
+        let (Some(p), Some(q)) = (actors.get(sized), actors.get(other)) else {
+            return;
+        };
+        self.beyond_reach[index] = true;
+        let name = self.names.get(sized).map_or("an actor", String::as_str);
+        let other_name = self
+            .names
+            .get(other)
+            .map_or("the other actor", String::as_str);
+        let size = match &self.plans[index] {
+            Plan::Hold(c) | Plan::Move { to: c, .. } => c
+                .framings
+                .iter()
+                .find(|f| f.subjects.iter().any(|s| s.actor == name))
+                .map(|f| f.size.as_str()),
+            _ => None,
+        }
+        .unwrap_or("written");
+        // The circle's diameter grows with the distance between the two aim points (band
+        // centres), the angle between them on screen fixed: apart enough when that distance
+        // has grown by the stretch.
+        let apart_m = crate::norm_xy(
+            p.position_m[0] - q.position_m[0],
+            p.position_m[1] - q.position_m[1],
+        );
+        let aim_z = |a: &ActorPose, band: [f64; 2]| a.position_m[2] + (band[0] + band[1]) / 2.0;
+        let (band_sized, band_other) = if sized == t.a {
+            (t.band_a_m, t.band_b_m)
+        } else {
+            (t.band_b_m, t.band_a_m)
+        };
+        let dz = aim_z(p, band_sized) - aim_z(q, band_other);
+        let needed_m = ((math::hypot(apart_m, dz) * t.stretch).powi(2) - dz * dz).sqrt();
+        let more_cm = ((needed_m - apart_m) * 100.0).ceil();
+        self.diagnostics.push(
+            Diagnostic::warning(
+                Code::BeyondReach,
+                self.shots[index].span,
+                format!(
+                    "{name} is framed {:.0}% larger than {size}: {:.2} m from {other_name}, no camera \
+                     frames {name} as {size} with both actors at their screen points, so it \
+                     frames from as far as it can",
+                    (t.stretch - 1.0) * 100.0,
+                    apart_m
+                ),
+            )
+            .with_label(format!("{name} larger than {size}"))
+            .with_help(format!(
+                "block the actors about {more_cm:.0} cm further apart, write {name}'s size one \
+                 step tighter, or bring their screen positions closer together"
+            )),
+        );
     }
 
     /// Record a framing failure once per shot and hold position this tick. The plan is
@@ -1093,6 +1169,12 @@ impl Director {
         (self.timings, diags)
     }
 }
+
+/// From how much larger than written an over-the-shoulder's background actor is framed (its
+/// size out of the toric circle's reach) `compile::beyond_reach` is told: 2 %, under which
+/// no one sees it, and which live actors standing at the edge of reach cross back and forth
+/// (`scene.psl`'s reverse shot: 0.3 % at moments on most seeds).
+const REACH_TOLD: f64 = 1.02;
 
 /// `goal` held inside the box `[lo, hi]`: on an axis where its position is outside, the
 /// position is put on the box's face and the velocity and acceleration that would carry it

@@ -122,6 +122,10 @@ pub struct TwoVisual {
     /// The requested camera-angle elevation (for the fixed-pitch flag).
     pub elevation_rad: f64,
     pub over_shoulder: bool,
+    /// 1, or for an over-the-shoulder whose sized (primary, background) actor's size was out
+    /// of the toric circle's reach, how far out (its size's distance over the circle's
+    /// diameter, at most [`OVER_SHOULDER_REACH`]): the actor is framed that much larger.
+    pub stretch: f64,
 }
 
 /// What [`place`] could not render exactly.
@@ -613,6 +617,7 @@ impl Pair {
             primary,
             elevation_rad: self.elevation,
             over_shoulder,
+            stretch: 1.0,
         }
     }
 
@@ -797,11 +802,13 @@ fn solve_over_shoulder(
         .distance_b(lens)
         .ok_or(FramingError::SizeUnreachable { size: bg_size })?;
     let mut thetas = toric::theta_for_distance_to_b(alpha, ab, d);
+    let mut stretch = 1.0;
     if thetas.is_empty() {
         // Just out of reach: framed from the farthest point of the circle instead.
         let farthest = 2.0 * toric::radius_m(ab, alpha);
         if d <= farthest * OVER_SHOULDER_REACH {
             thetas = toric::theta_for_distance_to_b(alpha, ab, farthest * (1.0 - 1e-12));
+            stretch = d / farthest;
         }
     }
     if thetas.is_empty() {
@@ -824,15 +831,18 @@ fn solve_over_shoulder(
         // No profile: the side of the screen order, the root nearer the foreground actor.
         let phi = pair.side_phi();
         let theta = pair.refine_theta(lens, thetas[thetas.len() - 1], phi, Primary::B);
-        return Ok(pair.visual(
-            Toric {
-                alpha_rad: alpha,
-                theta_rad: theta,
-                phi_rad: phi,
-            },
-            Primary::B,
-            true,
-        ));
+        return Ok(TwoVisual {
+            stretch,
+            ..pair.visual(
+                Toric {
+                    alpha_rad: alpha,
+                    theta_rad: theta,
+                    phi_rad: phi,
+                },
+                Primary::B,
+                true,
+            )
+        });
     };
     let (ma, mb) = (pair.ma, pair.mb);
     let cost = |theta: f64, phi: f64| -> f64 {
@@ -870,15 +880,18 @@ fn solve_over_shoulder(
     let phi = wrap_angle_rad(phi);
     pair.agree_with_side(phi)?;
     let theta = pair.refine_theta(lens, theta, phi, Primary::B);
-    Ok(pair.visual(
-        Toric {
-            alpha_rad: alpha,
-            theta_rad: theta,
-            phi_rad: phi,
-        },
-        Primary::B,
-        true,
-    ))
+    Ok(TwoVisual {
+        stretch,
+        ..pair.visual(
+            Toric {
+                alpha_rad: alpha,
+                theta_rad: theta,
+                phi_rad: phi,
+            },
+            Primary::B,
+            true,
+        )
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1332,6 +1345,7 @@ pub fn swap_pair(t: &TwoVisual) -> TwoVisual {
         },
         elevation_rad: t.elevation_rad,
         over_shoulder: t.over_shoulder,
+        stretch: t.stretch,
     }
 }
 
