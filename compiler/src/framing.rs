@@ -621,6 +621,20 @@ impl Pair {
         }
     }
 
+    /// The over-the-shoulder visual at (θ, φ), B (the background) sized, `stretch` as
+    /// [`TwoVisual::stretch`].
+    fn over_shoulder_visual(&self, theta: f64, phi: f64, stretch: f64) -> TwoVisual {
+        let toric = Toric {
+            alpha_rad: self.alpha,
+            theta_rad: theta,
+            phi_rad: phi,
+        };
+        TwoVisual {
+            stretch,
+            ..self.visual(toric, Primary::B, true)
+        }
+    }
+
     fn distance_a(&self, lens: &Lens) -> Option<f64> {
         band_distance_m(
             lens,
@@ -831,18 +845,7 @@ fn solve_over_shoulder(
         // No profile: the side of the screen order, the root nearer the foreground actor.
         let phi = pair.side_phi();
         let theta = pair.refine_theta(lens, thetas[thetas.len() - 1], phi, Primary::B);
-        return Ok(TwoVisual {
-            stretch,
-            ..pair.visual(
-                Toric {
-                    alpha_rad: alpha,
-                    theta_rad: theta,
-                    phi_rad: phi,
-                },
-                Primary::B,
-                true,
-            )
-        });
+        return Ok(pair.over_shoulder_visual(theta, phi, stretch));
     };
     let (ma, mb) = (pair.ma, pair.mb);
     let cost = |theta: f64, phi: f64| -> f64 {
@@ -880,18 +883,7 @@ fn solve_over_shoulder(
     let phi = wrap_angle_rad(phi);
     pair.agree_with_side(phi)?;
     let theta = pair.refine_theta(lens, theta, phi, Primary::B);
-    Ok(TwoVisual {
-        stretch,
-        ..pair.visual(
-            Toric {
-                alpha_rad: alpha,
-                theta_rad: theta,
-                phi_rad: phi,
-            },
-            Primary::B,
-            true,
-        )
-    })
+    Ok(pair.over_shoulder_visual(theta, phi, stretch))
 }
 
 // ---------------------------------------------------------------------------------------------
