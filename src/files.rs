@@ -59,8 +59,9 @@ pub fn write_atomic(path: &Path, text: &str) -> std::io::Result<()> {
 }
 
 /// Makes ready for `path` to be written by the option `flag` (`-o`, `--csv`, `--log`): its
-/// folder is created if missing, and a path that names a folder is refused. Called before the work that the file will hold, so that a calibration flight
-/// or a compilation is never done for an output that cannot be written.
+/// folder is created if missing, and a path that names a folder is refused. Called before the
+/// work that the file will hold, so that a calibration flight or a compilation is never done
+/// for an output that cannot be written.
 pub fn prepare_output(path: &Path, flag: &str) -> Result<(), String> {
     if path.is_dir() {
         return Err(format!(

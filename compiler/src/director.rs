@@ -787,6 +787,17 @@ impl Director {
         }
     }
 
+    /// The composition of end `end` of plan `index` (0: the hold or the move's start, 1: the
+    /// move's end); `None` for paths.
+    fn composition(&self, index: usize, end: usize) -> Option<&Composition> {
+        match (&self.plans[index], end) {
+            (Plan::Hold(c), _)
+            | (Plan::Move { from: c, .. }, 0)
+            | (Plan::Move { to: c, .. }, _) => Some(c),
+            _ => None,
+        }
+    }
+
     /// `framing::solve` of end `end` (0: the hold or the move's start, 1: the move's end) of
     /// plan `index`, memoised (see [`Solved`]).
     fn solve_end(
@@ -814,17 +825,12 @@ impl Director {
         if let Some(k) = hit {
             return self.solved[k].result.clone();
         }
-        let comp = match (&self.plans[index], end) {
-            (Plan::Hold(c), _)
-            | (Plan::Move { from: c, .. }, 0)
-            | (Plan::Move { to: c, .. }, _) => c,
-            // Only compositions are solved (shot_ends).
-            _ => {
-                return Err(FramingError::Unsupported {
-                    framings: 0,
-                    subjects: 0,
-                })
-            }
+        // Only compositions are solved (shot_ends).
+        let Some(comp) = self.composition(index, end) else {
+            return Err(FramingError::Unsupported {
+                framings: 0,
+                subjects: 0,
+            });
         };
         let result = match &self.prepared[index][end] {
             Some(prepared) => prepared.solve(comp, actors, &self.lens, &self.gimbal),
@@ -913,9 +919,9 @@ impl Director {
                 };
                 if keep {
                     self.check_clearance(index, &p, actors);
-                    self.check_reach(index, &a, actors);
+                    self.check_reach(index, 0, &a, actors);
                     if let Some((b, _)) = &b {
-                        self.check_reach(index, b, actors);
+                        self.check_reach(index, 1, b, actors);
                     }
                     self.visual = Some(match b {
                         None => a,
@@ -970,7 +976,7 @@ impl Director {
     /// written, its size just out of the toric circle's reach where the actors stand
     /// (`framing::OVER_SHOULDER_REACH`): the help says how much further apart they would have
     /// to stand.
-    fn check_reach(&mut self, index: usize, v: &framing::Visual, actors: &[ActorPose]) {
+    fn check_reach(&mut self, index: usize, end: usize, v: &framing::Visual, actors: &[ActorPose]) {
         let framing::Visual::Two(t) = v else {
             return;
         };
@@ -990,15 +996,14 @@ impl Director {
             .names
             .get(other)
             .map_or("the other actor", String::as_str);
-        let size = match &self.plans[index] {
-            Plan::Hold(c) | Plan::Move { to: c, .. } => c
-                .framings
-                .iter()
-                .find(|f| f.subjects.iter().any(|s| s.actor == name))
-                .map(|f| f.size.as_str()),
-            _ => None,
-        }
-        .unwrap_or("written");
+        let size = self
+            .composition(index, end)
+            .and_then(|c| {
+                c.framings
+                    .iter()
+                    .find(|f| f.subjects.iter().any(|s| s.actor == name))
+            })
+            .map_or("written", |f| f.size.as_str());
         // The circle's diameter grows with the distance between the two aim points (band
         // centres), the angle between them on screen fixed: apart enough when that distance
         // has grown by the stretch.
@@ -1006,14 +1011,13 @@ impl Director {
             p.position_m[0] - q.position_m[0],
             p.position_m[1] - q.position_m[1],
         );
-        let aim_z = |a: &ActorPose, band: [f64; 2]| a.position_m[2] + (band[0] + band[1]) / 2.0;
         let (band_sized, band_other) = if sized == t.a {
             (t.band_a_m, t.band_b_m)
         } else {
             (t.band_b_m, t.band_a_m)
         };
-        let dz = aim_z(p, band_sized) - aim_z(q, band_other);
-        let needed_m = ((math::hypot(apart_m, dz) * t.stretch).powi(2) - dz * dz).sqrt();
+        let aims = framing::band_centre(p, band_sized) - framing::band_centre(q, band_other);
+        let needed_m = ((aims.norm() * t.stretch).powi(2) - aims.z * aims.z).sqrt();
         let more_cm = ((needed_m - apart_m) * 100.0).ceil();
         self.diagnostics.push(
             Diagnostic::warning(

@@ -255,7 +255,8 @@ fn band_point(p: &ActorPose, h_m: f64) -> Vec3 {
     feet(p) + Vec3::new(0.0, 0.0, h_m)
 }
 
-fn band_centre(p: &ActorPose, band_m: [f64; 2]) -> Vec3 {
+/// The centre of a band `band_m` (metres above the feet) of actor `p`: a framing's aim point.
+pub(crate) fn band_centre(p: &ActorPose, band_m: [f64; 2]) -> Vec3 {
     band_point(p, (band_m[0] + band_m[1]) / 2.0)
 }
 
@@ -795,8 +796,8 @@ fn solve_together(
 /// How much farther than the toric circle allows an over-the-shoulder's background actor may
 /// be asked to be framed (its size's distance over the circle's diameter) and still be framed,
 /// from the circle's farthest point: up to this, the background actor is framed a little
-/// larger than written (by at most 1/this) with both actors on their screen points, instead
-/// of the composition failing. The scene's reverse shot is written at the edge of reach
+/// larger than written (by at most this factor) with both actors on their screen points,
+/// instead of the composition failing. The scene's reverse shot is written at the edge of reach
 /// (distance 1.0000 of the diameter against its blocking); against the live actors, who stand
 /// a few centimetres closer at moments, it was out of reach by up to 10% (30 seeds of
 /// `scene.psl`), so 27 of 30 flights held the camera, unframed, for part of the shot.

@@ -490,17 +490,10 @@ fn two_shot_defaults_to_thirds() {
     assert!(ta[1].abs() < 1e-9 && tb[1].abs() < 0.05, "{ta:?} {tb:?}");
 }
 
-/// Over the shoulder (psl.md §2 example): the background actor's size and screen position
-/// are exact, the foreground actor lands close to its third, the profile is near.
-#[test]
-fn over_the_shoulder() {
-    let l = lens(84.0);
-    let g = gimbal();
-    // Actors in conversation, 1.2 m apart (at 2.5 m, an MLS of A is closer to A than B is).
-    let mut actors = two_shot_scene();
-    actors[1].position_m = [1.2, 0.0, 0.0];
-    // `MS B 34backright MLS A 34left screen right`: B foreground, A background.
-    let c = comp(
+/// `MS B 34backright <background> A 34left screen right`: B in the foreground, A in the
+/// background at `background` size.
+fn over_b_shoulder(background: Size) -> Composition {
+    comp(
         CameraAngle::EyeLevel,
         vec![
             (
@@ -513,7 +506,7 @@ fn over_the_shoulder() {
                 )],
             ),
             (
-                Size::MLS,
+                background,
                 vec![subject(
                     "A",
                     Some(Profile::ThreeQuarterLeft),
@@ -522,7 +515,20 @@ fn over_the_shoulder() {
                 )],
             ),
         ],
-    );
+    )
+}
+
+/// Over the shoulder (psl.md §2 example): the background actor's size and screen position
+/// are exact, the foreground actor lands close to its third, the profile is near.
+#[test]
+fn over_the_shoulder() {
+    let l = lens(84.0);
+    let g = gimbal();
+    // Actors in conversation, 1.2 m apart (at 2.5 m, an MLS of A is closer to A than B is).
+    let mut actors = two_shot_scene();
+    actors[1].position_m = [1.2, 0.0, 0.0];
+    // `MS B 34backright MLS A 34left screen right`: B foreground, A background.
+    let c = over_b_shoulder(Size::MLS);
     let v = solve(&c, &NAMES, &actors, &l, &g).unwrap();
     let Visual::Two(t) = &v else { panic!("{v:?}") };
     assert!(t.over_shoulder && t.a == 1 && t.b == 0);
@@ -574,29 +580,7 @@ fn over_the_shoulder_just_out_of_reach_frames_from_the_farthest_point() {
     let l = lens(84.0);
     let g = gimbal();
     // `MS B 34backright LS A 34left screen right`: B foreground, A background.
-    let c = comp(
-        CameraAngle::EyeLevel,
-        vec![
-            (
-                Size::MS,
-                vec![subject(
-                    "B",
-                    Some(Profile::ThreeQuarterBackRight),
-                    None,
-                    None,
-                )],
-            ),
-            (
-                Size::LS,
-                vec![subject(
-                    "A",
-                    Some(Profile::ThreeQuarterLeft),
-                    Some(1.0 / 3.0),
-                    None,
-                )],
-            ),
-        ],
-    );
+    let c = over_b_shoulder(Size::LS);
     let (bottom, top) = size::band(Size::LS, 1.8);
     let mut exact = 0;
     let mut larger: Vec<f64> = Vec::new();
