@@ -120,6 +120,15 @@ pub(crate) fn check_servo_rate(rate_hz: f64) -> Result<(), String> {
     }
 }
 
+/// The refusal of a `--log` that names an existing file.
+fn log_exists(path: &Path) -> String {
+    format!(
+        "the flight log `{}` already exists; a flight does not overwrite a recording\n  \
+         help: give --log a new name, or leave it out for a time-stamped one in flights/",
+        path.display()
+    )
+}
+
 pub fn run(a: &Args) -> ExitCode {
     if let Err(e) = check_servo_rate(a.rate_hz) {
         return fail(e);
@@ -156,6 +165,24 @@ pub fn run(a: &Args) -> ExitCode {
         Err(e) => return fail(e),
     };
 
+    let script_name = a
+        .file
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "flight".into());
+    // `--log DIR` (an existing folder): the time-stamped name, in that folder.
+    let into_dir = a.log.filter(|p| p.is_dir());
+    let mut log_path = match (a.log, into_dir) {
+        (_, Some(dir)) => dir.join(default_log_name(&script_name)),
+        (Some(p), None) => p.to_path_buf(),
+        (None, None) => Path::new("flights").join(default_log_name(&script_name)),
+    };
+    // A `--log` that names a recording is refused now, not after the compile (a quarter of a
+    // second for an hour's script); creating the log below refuses it again, race-free.
+    if a.log.is_some() && into_dir.is_none() && log_path.exists() {
+        return fail(log_exists(&log_path));
+    }
+
     // The compiler's verdict first: a script the drone cannot fly is not flown.
     let opts = Options { rate_hz: a.rate_hz };
     let compiled =
@@ -188,18 +215,6 @@ pub fn run(a: &Args) -> ExitCode {
         kind: a.controller.to_string(),
         paper_prefilter: a.paper_prefilter,
         per_tick_solve: a.per_tick_solve,
-    };
-    let script_name = a
-        .file
-        .file_stem()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "flight".into());
-    // `--log DIR` (an existing folder): the time-stamped name, in that folder.
-    let into_dir = a.log.filter(|p| p.is_dir());
-    let mut log_path = match (a.log, into_dir) {
-        (_, Some(dir)) => dir.join(default_log_name(&script_name)),
-        (Some(p), None) => p.to_path_buf(),
-        (None, None) => Path::new("flights").join(default_log_name(&script_name)),
     };
     if let Err(e) = crate::files::prepare_output(&log_path, "--log") {
         return fail(e);
@@ -252,11 +267,7 @@ pub fn run(a: &Args) -> ExitCode {
     let mut log = match created.and_then(|w| LogThread::spawn(w, a.rate_hz)) {
         Ok(w) => w,
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-            return fail(format!(
-                "the flight log `{}` already exists; a flight does not overwrite a recording\n  \
-                 help: give --log a new name, or leave it out for a time-stamped one in flights/",
-                log_path.display()
-            ))
+            return fail(log_exists(&log_path))
         }
         Err(e) => return fail(e),
     };

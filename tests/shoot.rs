@@ -240,6 +240,27 @@ fn bad_input_is_a_clear_error() {
         infeasible.display()
     );
     assert!(stderr(&o).contains(&help), "{}", stderr(&o));
+    // An existing --log is refused before the compile (which, for an hour's script, takes a
+    // quarter of a second): the refusal is the log's, not the compiler's verdict.
+    let taken = dir.join("taken.mcap");
+    std::fs::write(&taken, "a recording").unwrap();
+    let o = dronecine(&[
+        "shoot",
+        infeasible.to_str().unwrap(),
+        "-q",
+        "--rate",
+        "50",
+        "--log",
+        taken.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("already exists"), "{e}");
+    assert!(
+        !e.contains("cannot be flown"),
+        "refused before the compile: {e}"
+    );
+    assert_eq!(std::fs::read(&taken).unwrap(), b"a recording");
     let (out, previews) = (dir.join("fast.mcap"), dir.join("fast-previews"));
     let o = dronecine(&[
         "compile",
