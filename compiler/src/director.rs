@@ -103,6 +103,10 @@ pub struct Director {
     raw_target: Vec3,
     /// A framing failed to solve during this step (the target, or its look-ahead).
     failed_now: bool,
+    /// The camera has a position: a framing (or a path) has solved at least once. Until then
+    /// the camera is nowhere the script puts it (a first framing that does not solve holds
+    /// it at its start, the origin offline), so nothing is checked against that position.
+    placed: bool,
     safety_m: f64,
     profile_name: String,
     phase: Phase,
@@ -249,6 +253,7 @@ impl Director {
             stage_hi,
             raw_target: Vec3::zeros(),
             failed_now: false,
+            placed: false,
             safety_m: profile.safety.actor_distance_m,
             profile_name: profile.name.clone(),
             phase: Phase::NotStarted,
@@ -293,6 +298,13 @@ impl Director {
     /// The timeline as flown so far.
     pub fn timings(&self) -> &[ShotTiming] {
         &self.timings
+    }
+
+    /// Whether the camera has a position: some step's framing (or path) has solved. A first
+    /// framing that does not solve leaves it unplaced, its samples where the camera started.
+    /// The flight's pre-flight check refuses to take off for such a framing.
+    pub fn placed(&self) -> bool {
+        self.placed
     }
 
     /// Where the last [`Director::step`]'s target is as solved: its reference is kept inside
@@ -481,9 +493,10 @@ impl Director {
         );
         let target = goal.p;
 
-        if first || dt <= 0.0 {
+        if first || dt <= 0.0 || !self.placed {
             // The first shot starts framed: on its target, moving with it (never faster than
-            // the camera may fly: live actors' velocities are estimates).
+            // the camera may fly: live actors' velocities are estimates). So does a first
+            // framing that solves only after a few ticks: the camera was never anywhere else.
             self.state = Kinematics {
                 p: target,
                 v: steering::truncate_hv(v_t, self.limits.speed_h_mps, self.limits.speed_v_mps),
@@ -544,9 +557,13 @@ impl Director {
             camera_pitch_rad: self.pitch_rad,
             shot: self.shot_index(),
         };
-        let in_shot = matches!(self.phase, Phase::Shot { .. });
-        self.monitor
-            .record(&sample, &goal, &self.raw_target, actors, in_shot);
+        // (After the last shot, the target is where the camera is: no placing.)
+        self.placed |= !self.failed_now && !matches!(self.phase, Phase::Done);
+        if self.placed {
+            let in_shot = matches!(self.phase, Phase::Shot { .. });
+            self.monitor
+                .record(&sample, &goal, &self.raw_target, actors, in_shot);
+        }
         sample
     }
 

@@ -546,7 +546,14 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
         // Where the first framing is as solved (the director's reference is kept inside the
         // stage, off a framing that is not).
-        let (first, solved) = self.probe();
+        let (first, solved, unsolved) = self.probe();
+        if let Some(why) = unsolved {
+            // Its sample would be where the camera starts (the origin): never flown to.
+            return Err(FlightError::Preflight(format!(
+                "the first framing cannot be solved against the actors as they stand now \
+                 ({why}): put the actors on their marks or change the first shot"
+            )));
+        }
         let solved: [f64; 3] = solved.into();
         let stage = self.setup.scene.stage;
         if !inside(&stage, &solved, 0.0) {
@@ -976,11 +983,15 @@ impl<'s, 'b> Flight<'s, 'b> {
     }
 
     /// The first framing against the actors as they stand now: the director's first sample,
-    /// and its target as solved.
-    fn probe(&self) -> (Sample, Vec3) {
+    /// its target as solved, and why it did not solve (the director's message), if it did not.
+    fn probe(&self) -> (Sample, Vec3, Option<String>) {
         let mut probe = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
         let sample = probe.step(0.0, &self.actors.poses);
-        (sample, probe.solved_target_m())
+        let unsolved = (!probe.placed()).then(|| {
+            (probe.diagnostics_so_far().iter().find(|d| d.is_error()))
+                .map_or_else(|| "no camera position".to_string(), |d| d.message.clone())
+        });
+        (sample, probe.solved_target_m(), unsolved)
     }
 
     fn failsafe(&mut self, t: f64, message: &str) {

@@ -635,6 +635,31 @@ fn preflight_refuses_a_first_framing_outside_the_stage() {
 }
 
 #[test]
+fn preflight_refuses_a_first_framing_that_does_not_solve() {
+    // B 1.5 m from A: the over-the-shoulder's LS of A is out of the toric circle's reach.
+    // Before, the unsolved framing's sample was where the director's camera starts, the
+    // origin, inside the stage: the drone took off and flew toward A's feet.
+    let src = "stage 10m x 8m x 3m\ndrone ardrone2\n\
+               actor A height 1.80m at (0, 0) facing 0deg\n\
+               actor B height 1.65m at (1.5, 0) facing 180deg\n\
+               MS on B 34backright LS on A 34left screen right for 6s\n";
+    let (r, rec, _) = fly_on(
+        src,
+        |c| c.start_position_m = [-3.0, 2.0, 0.0],
+        None,
+        Rig::plain,
+    );
+    match r {
+        Err(FlightError::Preflight(m)) => {
+            assert!(m.contains("the first framing cannot be solved"), "{m}");
+            assert!(m.contains("cannot be framed"), "the director's reason: {m}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(rec.first("take_off").is_none());
+}
+
+#[test]
 fn preflight_refuses_a_scene_without_shots() {
     // Before, the director indexed the first shot of an empty timeline: a panic.
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n";
