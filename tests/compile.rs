@@ -873,6 +873,51 @@ fn a_framing_that_fails_a_moment_ahead_gives_no_feed_forward() {
     assert!(fastest < 1.0, "{fastest} m/s");
 }
 
+/// A first framing that does not solve leaves the camera unplaced: it is held where it
+/// starts (`Director::start_from`: on set, where the approach left the drone; the flight
+/// once flew to the origin instead, A's mark), nothing is checked against that position, and
+/// when the framing solves the camera starts on it, framed, as a first shot does.
+#[test]
+fn an_unplaced_camera_is_held_where_it_starts_then_starts_framed() {
+    let script = script_of(
+        "stage 10m x 8m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor B height 1.65m at (3, 0) facing 180deg\n\
+         MS on B 34backright LS on A 34left screen right for 12s\n",
+    );
+    let scene = script.scene.as_ref().unwrap();
+    let poses = |b_x_m: f64| {
+        let mut p = Blocking::new(scene).poses(0.0);
+        p[1].position_m = [b_x_m, 0.0, 0.0];
+        p
+    };
+    let start = Vec3::new(-2.0, 1.5, 1.2);
+    let mut d = Director::new(&script, scene, &ardrone());
+    d.start_from(start);
+    for k in 0..50 {
+        // B 1.5 m from A: out of the over-the-shoulder's reach.
+        let s = d.step(f64::from(k) / 100.0, &poses(1.5));
+        assert_eq!(Vec3::from(s.position_m), start, "tick {k}");
+        assert_eq!(Vec3::from(s.velocity_mps), Vec3::zeros(), "tick {k}");
+        assert!(!d.placed());
+    }
+    let s = d.step(0.5, &poses(3.0));
+    assert!(d.placed());
+    let target = d.solved_target_m();
+    assert!(
+        (Vec3::from(s.position_m) - target).norm() < 1e-9,
+        "{s:?} {target}"
+    );
+    d.start_from(start);
+    let s = d.step(0.51, &poses(3.0));
+    assert!(
+        (Vec3::from(s.position_m) - target).norm() < 0.01,
+        "start_from once stepped"
+    );
+    let codes: Vec<Code> = d.diagnostics_so_far().iter().map(|x| x.code).collect();
+    assert_eq!(codes, [Code::Unframeable], "nothing about the start");
+}
+
 /// An over-the-shoulder whose background actor's size is just out of reach where the actors
 /// stand is flown with the actor a little larger, and compile says so (`compile::beyond_reach`,
 /// a warning) with how much further apart to block them; the fix it names works. Further in,

@@ -300,6 +300,15 @@ impl Director {
         &self.timings
     }
 
+    /// Where the camera is before the first step (the flight: where the approach left the
+    /// drone). A first framing that does not solve holds it there, instead of at the origin,
+    /// until it solves. No effect once stepped.
+    pub fn start_from(&mut self, position_m: Vec3) {
+        if matches!(self.phase, Phase::NotStarted) {
+            self.state.p = position_m;
+        }
+    }
+
     /// Whether the camera has a position: some step's framing (or path) has solved. A first
     /// framing that does not solve leaves it unplaced, its samples where the camera started.
     /// The flight's pre-flight check refuses to take off for such a framing.

@@ -626,6 +626,9 @@ impl<'s, 'b> Flight<'s, 'b> {
         let mut completed = false;
         let mut last = hover_sample(t, &first);
         let mut director = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
+        // Where the approach left the drone: a first framing that no longer solves against
+        // the actors (they moved since the pre-flight probe) holds it there, not at the origin.
+        director.start_from(Vec3::from(last.position_m));
         if let Outcome::Done = outcome {
             let action_s = t + self.period_s;
             self.mocap.action(action_s);
