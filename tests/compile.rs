@@ -11,7 +11,7 @@ use dronecine_compiler::director::Director;
 use dronecine_compiler::framing;
 use dronecine_compiler::profile::Profile;
 use dronecine_compiler::reference::{ActorPose, Sample};
-use dronecine_grammar::script::{Script, ShotContent, Transition};
+use dronecine_grammar::script::{Scene, Script, ShotContent, Transition};
 use dronecine_grammar::vocab::MoveKind;
 use dronecine_grammar::Code;
 use serde::Serialize;
@@ -800,6 +800,26 @@ fn a_framing_beyond_the_wall_is_refused_and_not_followed() {
     );
 }
 
+/// The over-the-shoulder of `scene.psl`'s reverse shot (B in the foreground, A's LS behind),
+/// A at the origin facing B at `b_x_m` on the x axis, for `duration_s`.
+fn over_shoulder(b_x_m: f64, duration_s: f64) -> String {
+    format!(
+        "stage 10m x 8m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor B height 1.65m at ({b_x_m}, 0) facing 180deg\n\
+         MS on B 34backright LS on A 34left screen right for {duration_s}s\n"
+    )
+}
+
+/// The blocking's poses with B moved to `b_x_m` on the x axis, walking toward A at
+/// `toward_mps` (as a tracker's velocity says).
+fn b_at(scene: &Scene, b_x_m: f64, toward_mps: f64) -> Vec<ActorPose> {
+    let mut p = Blocking::new(scene).poses(0.0);
+    p[1].position_m = [b_x_m, 0.0, 0.0];
+    p[1].velocity_mps = [-toward_mps, 0.0, 0.0];
+    p
+}
+
 /// A framing that solves now but not a moment ahead (live actors at the edge of what the
 /// composition can frame) gives the camera no feed-forward: the look-ahead difference would
 /// be the jump between where the camera is held and the framing solved now, hundreds of
@@ -812,19 +832,9 @@ fn a_framing_beyond_the_wall_is_refused_and_not_followed() {
 /// framing and stays on it.
 #[test]
 fn a_framing_that_fails_a_moment_ahead_gives_no_feed_forward() {
-    let script = script_of(
-        "stage 10m x 8m x 3m\ndrone ardrone2\n\
-         actor A height 1.80m at (0, 0) facing 0deg\n\
-         actor B height 1.65m at (3, 0) facing 180deg\n\
-         MS on B 34backright LS on A 34left screen right for 12s\n",
-    );
+    let script = script_of(&over_shoulder(3.0, 12.0));
     let scene = script.scene.as_ref().unwrap();
-    let poses = |spacing_m: f64, toward_mps: f64| {
-        let mut p = Blocking::new(scene).poses(0.0);
-        p[1].position_m = [spacing_m, 0.0, 0.0];
-        p[1].velocity_mps = [-toward_mps, 0.0, 0.0];
-        p
-    };
+    let poses = |spacing_m: f64, toward_mps: f64| b_at(scene, spacing_m, toward_mps);
     let frames = |spacing_m: f64| {
         let mut d = Director::new(&script, scene, &ardrone());
         d.step(0.0, &poses(spacing_m, 0.0));
@@ -879,18 +889,9 @@ fn a_framing_that_fails_a_moment_ahead_gives_no_feed_forward() {
 /// when the framing solves the camera starts on it, framed, as a first shot does.
 #[test]
 fn an_unplaced_camera_is_held_where_it_starts_then_starts_framed() {
-    let script = script_of(
-        "stage 10m x 8m x 3m\ndrone ardrone2\n\
-         actor A height 1.80m at (0, 0) facing 0deg\n\
-         actor B height 1.65m at (3, 0) facing 180deg\n\
-         MS on B 34backright LS on A 34left screen right for 12s\n",
-    );
+    let script = script_of(&over_shoulder(3.0, 12.0));
     let scene = script.scene.as_ref().unwrap();
-    let poses = |b_x_m: f64| {
-        let mut p = Blocking::new(scene).poses(0.0);
-        p[1].position_m = [b_x_m, 0.0, 0.0];
-        p
-    };
+    let poses = |b_x_m: f64| b_at(scene, b_x_m, 0.0);
     let start = Vec3::new(-2.0, 1.5, 1.2);
     let mut d = Director::new(&script, scene, &ardrone());
     d.start_from(start);
@@ -924,14 +925,7 @@ fn an_unplaced_camera_is_held_where_it_starts_then_starts_framed() {
 /// the composition cannot be framed at all (an error).
 #[test]
 fn an_over_the_shoulder_just_out_of_reach_is_told_with_a_fix_that_works() {
-    let src = |b_x_m: f64| {
-        format!(
-            "stage 10m x 8m x 3m\ndrone ardrone2\n\
-             actor A height 1.80m at (0, 0) facing 0deg\n\
-             actor B height 1.65m at ({b_x_m}, 0) facing 180deg\n\
-             MS on B 34backright LS on A 34left screen right for 6s\n"
-        )
-    };
+    let src = |b_x_m: f64| over_shoulder(b_x_m, 6.0);
     let (c, _, _) = run(&script_of(&src(1.85)));
     let told: Vec<_> = c
         .diagnostics
