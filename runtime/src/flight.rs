@@ -571,6 +571,16 @@ impl<'s, 'b> Flight<'s, 'b> {
         let deadline = t + self.setup.safety.take_off_timeout_s;
         loop {
             t = self.wait_tick(t + self.period_s)?;
+            // No reference yet (the drone climbs on its own): the display says so.
+            self.observer.progress(&Progress {
+                t_s: t,
+                phase: Phase::TakeOff,
+                shot: None,
+                shots: self.setup.script.timeline.len(),
+                script_t_s: 0.0,
+                script_duration_s: self.script_duration_s,
+                position_error_m: None,
+            });
             match self.drone.telemetry().state {
                 FlightState::Flying => break,
                 FlightState::Emergency => {

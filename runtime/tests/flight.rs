@@ -6,7 +6,7 @@
 use dronecine_compiler::profile::Profile;
 use dronecine_runtime::backend::{BackendError, Clock, Drone, FlightState, Mocap, MocapFrame};
 use dronecine_runtime::flight::{
-    self, Backends, FlightError, FlightSetup, FlightSink, NoObserver, Safety,
+    self, Backends, FlightError, FlightSetup, FlightSink, Observer, Progress, Safety,
 };
 use dronecine_runtime::record::ControllerSetup;
 use dronecine_runtime::record::{Event, Phase, TickRecord};
@@ -102,6 +102,20 @@ struct Recorder {
     events: Vec<Event>,
     ticks: usize,
     hover_ticks_in_shots: usize,
+    /// The phases the progress display was shown, each once, in order.
+    phases: Vec<Phase>,
+}
+
+/// The observer's side of [`Recorder`]: the phases of the progress reports.
+#[derive(Default)]
+struct Phases(Vec<Phase>);
+
+impl Observer for Phases {
+    fn progress(&mut self, p: &Progress) {
+        if self.0.last() != Some(&p.phase) {
+            self.0.push(p.phase);
+        }
+    }
 }
 
 impl FlightSink for Recorder {
@@ -170,6 +184,7 @@ fn fly_on(
     let setup = ControllerSetup::new("lqg");
     let mut controller = controller_for(&setup, &profile, 100.0).unwrap();
     let mut rec = Recorder::default();
+    let mut phases = Phases::default();
     let result = flight::fly(
         &FlightSetup {
             script: &script,
@@ -187,8 +202,9 @@ fn fly_on(
             clock: backends.clock.as_mut(),
         },
         &mut rec,
-        &mut NoObserver,
+        &mut phases,
     );
+    rec.phases = phases.0;
     let state = backends.drone.telemetry().state;
     (result, rec, state)
 }
@@ -244,6 +260,17 @@ fn an_undisturbed_flight_completes_without_failsafes() {
         assert!(kinds.contains(&k), "{k} missing from {kinds:?}");
     }
     assert!(r.figures.rms_framing_error.is_some());
+    // The progress display follows the flight from its first tick: before, it showed nothing
+    // until the approach (the take-off, seconds on set, an empty bar).
+    assert_eq!(
+        rec.phases,
+        [
+            Phase::TakeOff,
+            Phase::Approach,
+            Phase::Shots,
+            Phase::Landing
+        ]
+    );
 }
 
 #[test]
