@@ -120,6 +120,42 @@ pub(crate) fn check_servo_rate(rate_hz: f64) -> Result<(), String> {
     }
 }
 
+/// One line before take-off for the compiler's warnings about a script flown anyway (the
+/// shot will not look quite as written; `compile` tells each in full, with its fix), or
+/// `None` without any. A repositioning flight is the plan working as written: not counted.
+fn warnings_line(diagnostics: &[diag::Diagnostic], name: &str, rate: &str) -> Option<String> {
+    let mut counts: Vec<(&str, usize)> = Vec::new();
+    for d in diagnostics {
+        if d.is_error() || d.code == dronecine_grammar::Code::Reposition {
+            continue;
+        }
+        match counts.iter_mut().find(|(c, _)| *c == d.code.as_str()) {
+            Some((_, n)) => *n += 1,
+            None => counts.push((d.code.as_str(), 1)),
+        }
+    }
+    let total: usize = counts.iter().map(|(_, n)| n).sum();
+    if total == 0 {
+        return None;
+    }
+    let list: Vec<String> = counts
+        .iter()
+        .map(|&(c, n)| {
+            if n > 1 {
+                format!("{c} ×{n}")
+            } else {
+                c.to_string()
+            }
+        })
+        .collect();
+    let s = if total > 1 { "s" } else { "" };
+    Some(format!(
+        "warning: `{name}` is flown as written with {total} compiler warning{s} ({})\n  \
+         help: `dronecine compile {name}{rate}` tells each, with its fix",
+        list.join(", ")
+    ))
+}
+
 /// The refusal of a `--log` that names an existing file.
 fn log_exists(path: &Path) -> String {
     format!(
@@ -190,17 +226,17 @@ pub fn run(a: &Args) -> ExitCode {
             Ok(c) => c,
             Err(e) => return fail(e),
         };
+    // The same compilation as `compile`'s at this rate: its output shows the same.
+    let rate = if a.rate_hz == compile::DEFAULT_RATE_HZ {
+        String::new()
+    } else {
+        format!(" --rate {}", a.rate_hz)
+    };
     if compiled.has_errors() {
         err!(
             "{}",
             diag::render(&r.name, &r.text, &compiled.diagnostics, a.color, 100)
         );
-        // The same compilation as `compile`'s at this rate: the previews show the same.
-        let rate = if a.rate_hz == compile::DEFAULT_RATE_HZ {
-            String::new()
-        } else {
-            format!(" --rate {}", a.rate_hz)
-        };
         errln!(
             "error: `{}` cannot be flown by {}; nothing was flown\n  help: `dronecine compile {}{rate} \
              --allow-infeasible -o OUT.mcap --preview DIR` draws the flight it would be",
@@ -209,6 +245,11 @@ pub fn run(a: &Args) -> ExitCode {
             r.name,
         );
         return ExitCode::FAILURE;
+    }
+    if !a.quiet {
+        if let Some(line) = warnings_line(&compiled.diagnostics, &r.name, &rate) {
+            errln!("{line}");
+        }
     }
 
     let setup = ControllerSetup {

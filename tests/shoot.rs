@@ -449,6 +449,7 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         "-q",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("flown as written"), "-q: {}", stderr(&o));
     let r = report(&o);
     // The flight's events, read back by the log reader.
     let events = dronecine_runtime::log::FlightLog::open(&log)
@@ -493,9 +494,51 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         log.to_str().unwrap(),
         "--report",
         "json",
-        "-q",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // Before take-off, one line for the warnings `compile` tells in full (before, `shoot`
+    // flew them without a word): each code `compile` prints, counted, but the repositioning
+    // flights, which are the plan working as written.
+    let compiled = dronecine(&[
+        "compile",
+        "shots/scene.psl",
+        "-o",
+        dir.join("scene-compiled.mcap").to_str().unwrap(),
+    ]);
+    assert!(compiled.status.success(), "{}", stderr(&compiled));
+    let mut expected: Vec<(String, usize)> = Vec::new();
+    for code in stderr(&compiled)
+        .lines()
+        .filter(|l| l.starts_with("compile::"))
+    {
+        if code == "compile::reposition" {
+            continue;
+        }
+        match expected.iter_mut().find(|(c, _)| c == code) {
+            Some((_, n)) => *n += 1,
+            None => expected.push((code.to_string(), 1)),
+        }
+    }
+    let total: usize = expected.iter().map(|(_, n)| n).sum();
+    assert!(total >= 2, "{}", stderr(&compiled));
+    let line = stderr(&o)
+        .lines()
+        .find(|l| l.contains("is flown as written with"))
+        .map(str::to_string)
+        .unwrap_or_else(|| panic!("{}", stderr(&o)));
+    assert!(
+        line.contains(&format!("with {total} compiler warnings (")),
+        "{line}"
+    );
+    for (code, n) in &expected {
+        let named = if *n > 1 {
+            format!("{code} ×{n}")
+        } else {
+            code.clone()
+        };
+        assert!(line.contains(&named), "{named} in {line}");
+    }
+    assert!(stderr(&o).contains("help: `dronecine compile shots/scene.psl` tells each"));
     let r = report(&o);
     assert_eq!(r["director_errors"], 0, "{r}");
     let shot5 = &r["shots"][4];
