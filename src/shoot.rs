@@ -151,7 +151,7 @@ fn warnings_line(diagnostics: &[diag::Diagnostic], name: &str, rate: &str) -> Op
     let s = if total > 1 { "s" } else { "" };
     Some(format!(
         "warning: `{name}` is flown as written with {total} compiler warning{s} ({})\n  \
-         help: `dronecine compile {name}{rate}` tells each, with its fix",
+         help: `dronecine compile {name}{rate} -o OUT.mcap` tells each, with its fix",
         list.join(", ")
     ))
 }

@@ -449,7 +449,11 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         "-q",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!stderr(&o).contains("flown as written"), "-q: {}", stderr(&o));
+    assert!(
+        !stderr(&o).contains("flown as written"),
+        "-q: {}",
+        stderr(&o)
+    );
     let r = report(&o);
     // The flight's events, read back by the log reader.
     let events = dronecine_runtime::log::FlightLog::open(&log)
@@ -538,7 +542,28 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         };
         assert!(line.contains(&named), "{named} in {line}");
     }
-    assert!(stderr(&o).contains("help: `dronecine compile shots/scene.psl` tells each"));
+    // The help's command works, as written, and tells them.
+    let help = stderr(&o)
+        .lines()
+        .find_map(|l| l.strip_prefix("  help: `dronecine "))
+        .and_then(|l| l.split('`').next())
+        .map(str::to_string)
+        .unwrap_or_else(|| panic!("{}", stderr(&o)));
+    assert_eq!(help, "compile shots/scene.psl -o OUT.mcap");
+    let out = dir.join("OUT.mcap");
+    let args: Vec<&str> = help
+        .split(' ')
+        .map(|w| {
+            if w == "OUT.mcap" {
+                out.to_str().unwrap()
+            } else {
+                w
+            }
+        })
+        .collect();
+    let told = dronecine(&args);
+    assert!(told.status.success(), "{}", stderr(&told));
+    assert_eq!(stderr(&told), stderr(&compiled));
     let r = report(&o);
     assert_eq!(r["director_errors"], 0, "{r}");
     let shot5 = &r["shots"][4];
