@@ -883,38 +883,57 @@ fn a_framing_that_fails_a_moment_ahead_gives_no_feed_forward() {
     assert!(fastest < 1.0, "{fastest} m/s");
 }
 
-/// A first framing that does not solve leaves the camera unplaced: it is held where it
-/// starts (`Director::start_from`: on set, where the approach left the drone; the flight
-/// once flew to the origin instead, A's mark), nothing is checked against that position, and
-/// when the framing solves the camera starts on it, framed, as a first shot does.
+/// A first framing that does not solve leaves the camera unplaced (offline: nowhere, held at
+/// the origin): nothing is checked against that position, and when the framing solves the
+/// camera starts on it, framed, as a first shot does. On set the flight says where the
+/// camera is (`Director::start_from`, where the approach left the drone; the flight once flew
+/// to the origin instead, A's mark): it is held there, and steers from there when the
+/// framing solves, without a jump.
 #[test]
-fn an_unplaced_camera_is_held_where_it_starts_then_starts_framed() {
+fn an_unplaced_camera_is_held_then_starts_framed_and_a_started_one_steers() {
     let script = script_of(&over_shoulder(3.0, 12.0));
     let scene = script.scene.as_ref().unwrap();
+    // B 1.5 m from A is out of the over-the-shoulder's reach; 3 m is not.
     let poses = |b_x_m: f64| b_at(scene, b_x_m, 0.0);
+    let t = |k: u32| f64::from(k) / 100.0;
+
+    // Offline: unplaced, then framed at once.
+    let mut d = Director::new(&script, scene, &ardrone());
+    for k in 0..50 {
+        d.step(t(k), &poses(1.5));
+        assert!(!d.placed(), "tick {k}");
+    }
+    let s = d.step(t(50), &poses(3.0));
+    assert!(d.placed());
+    let target = d.solved_target_m();
+    let off = (Vec3::from(s.position_m) - target).norm();
+    assert!(off < 1e-9, "{off} m from the framing");
+    let codes: Vec<Code> = d.diagnostics_so_far().iter().map(|x| x.code).collect();
+    assert_eq!(codes, [Code::Unframeable], "nothing about the origin");
+
+    // On set: held where it starts, then steered from there.
     let start = Vec3::new(-2.0, 1.5, 1.2);
     let mut d = Director::new(&script, scene, &ardrone());
     d.start_from(start);
+    assert!(d.placed());
     for k in 0..50 {
-        // B 1.5 m from A: out of the over-the-shoulder's reach.
-        let s = d.step(f64::from(k) / 100.0, &poses(1.5));
+        let s = d.step(t(k), &poses(1.5));
         assert_eq!(Vec3::from(s.position_m), start, "tick {k}");
         assert_eq!(Vec3::from(s.velocity_mps), Vec3::zeros(), "tick {k}");
-        assert!(!d.placed());
     }
-    let s = d.step(0.5, &poses(3.0));
-    assert!(d.placed());
-    let target = d.solved_target_m();
-    assert!(
-        (Vec3::from(s.position_m) - target).norm() < 1e-9,
-        "{s:?} {target}"
-    );
+    let s = d.step(t(50), &poses(3.0));
+    let moved = (Vec3::from(s.position_m) - start).norm();
+    assert!(moved < 0.01, "no jump: {moved} m in a tick");
+    let mut s = s;
+    for k in 51..1000 {
+        s = d.step(t(k), &poses(3.0));
+    }
+    let off = (Vec3::from(s.position_m) - d.solved_target_m()).norm();
+    assert!(off < 0.02, "{off} m from the framing after 9.5 s");
+    // A second start_from, once stepped, changes nothing.
     d.start_from(start);
-    let s = d.step(0.51, &poses(3.0));
-    assert!(
-        (Vec3::from(s.position_m) - target).norm() < 0.01,
-        "start_from once stepped"
-    );
+    let s2 = d.step(t(1000), &poses(3.0));
+    assert!((Vec3::from(s2.position_m) - Vec3::from(s.position_m)).norm() < 0.01);
     let codes: Vec<Code> = d.diagnostics_so_far().iter().map(|x| x.code).collect();
     assert_eq!(codes, [Code::Unframeable], "nothing about the start");
 }

@@ -103,9 +103,9 @@ pub struct Director {
     raw_target: Vec3,
     /// A framing failed to solve during this step (the target, or its look-ahead).
     failed_now: bool,
-    /// The camera has a position: a framing (or a path) has solved at least once. Until then
-    /// the camera is nowhere the script puts it (a first framing that does not solve holds
-    /// it at its start, the origin offline), so nothing is checked against that position.
+    /// The camera has a position: a framing (or a path) has solved at least once, or the
+    /// flight said where it starts. Until then the camera is nowhere (a first framing that
+    /// does not solve holds it at the origin), so nothing is checked against that position.
     placed: bool,
     safety_m: f64,
     profile_name: String,
@@ -301,17 +301,20 @@ impl Director {
     }
 
     /// Where the camera is before the first step (the flight: where the approach left the
-    /// drone). A first framing that does not solve holds it there, instead of at the origin,
-    /// until it solves. No effect once stepped.
+    /// drone, which is a real position: the camera is placed). A first framing that does not
+    /// solve holds it there, instead of at the origin, and when it solves the camera steers
+    /// to it from there rather than jumping. No effect once stepped.
     pub fn start_from(&mut self, position_m: Vec3) {
         if matches!(self.phase, Phase::NotStarted) {
             self.state.p = position_m;
+            self.placed = true;
         }
     }
 
-    /// Whether the camera has a position: some step's framing (or path) has solved. A first
-    /// framing that does not solve leaves it unplaced, its samples where the camera started.
-    /// The flight's pre-flight check refuses to take off for such a framing.
+    /// Whether the camera has a position: some step's framing (or path) has solved, or
+    /// [`Director::start_from`] said where it is. A first framing that does not solve leaves
+    /// it unplaced, its samples at the origin. The flight's pre-flight check refuses to take
+    /// off for such a framing.
     pub fn placed(&self) -> bool {
         self.placed
     }
