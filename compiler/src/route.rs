@@ -156,7 +156,7 @@ impl Keepout<'_> {
     }
 
     /// The deepest intrusion along `route` from `a` to `b`.
-    fn route_intrusion_m(&self, route: &Route, a: &Vec3, b: &Vec3) -> f64 {
+    pub fn route_intrusion_m(&self, route: &Route, a: &Vec3, b: &Vec3) -> f64 {
         (0..=CHECKS)
             .map(|k| self.intrusion_m(&route.at(a, b, k as f64 / CHECKS as f64)))
             .fold(0.0, f64::max)

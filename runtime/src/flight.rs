@@ -28,6 +28,8 @@ use dronecine_compiler::camera::{CameraPose, Lens, Vec3};
 use dronecine_compiler::director::Director;
 use dronecine_compiler::framing::ScreenTarget;
 use dronecine_compiler::profile::Profile;
+use dronecine_compiler::route::{self, Keepout, Route};
+use dronecine_compiler::steering::SteerLimits;
 use dronecine_grammar::script::{Scene, Script};
 use dronecine_grammar::Code;
 use serde::Serialize;
@@ -233,27 +235,36 @@ fn finite_pose(p: &BodyPose) -> bool {
 }
 
 /// A minimum-jerk flight between two poses (the approach and the landing hold).
+/// The approach: a minimum-jerk flight from the take-off hover to the first framing, along
+/// the route the compiler's repositioning flights take (`route::choose`): straight when that
+/// is clear, else round an actor in the way, inside the stage less its margin.
 #[derive(Clone, Copy, Debug)]
 struct Glide {
     t0_s: f64,
     duration_s: f64,
     from_m: Vec3,
     to_m: Vec3,
+    route: Route,
     from_heading_rad: f64,
     turn_rad: f64,
 }
 
 impl Glide {
     /// Long enough that the peaks stay at half the profile's speed and acceleration
-    /// (minimum jerk: peak speed 1.875·d/T, peak acceleration 5.77·d/T²) and yaw rate.
-    fn new(t0_s: f64, from: &Sample, to: &Sample, profile: &Profile) -> Glide {
+    /// (minimum jerk: peak speed 1.875·d/T, peak acceleration 5.77·d/T² over the route's
+    /// length d; a bend's centripetal acceleration too) and yaw rate.
+    fn new(t0_s: f64, from: &Sample, to: &Sample, profile: &Profile, keep: &Keepout) -> Glide {
         let from_m = Vec3::from(from.position_m);
         let to_m = Vec3::from(to.position_m);
-        let d = (to_m - from_m).norm();
+        let route = route::choose(&from_m, &to_m, None, keep);
+        let d = match route {
+            Route::Straight => (to_m - from_m).norm(),
+            _ => route.length(&from_m, &to_m),
+        };
         let turn_rad = wrap_angle_rad(to.heading_rad - from.heading_rad);
         let lim = &profile.limits;
         let dz = (to_m.z - from_m.z).abs();
-        let duration_s = [
+        let mut duration_s = [
             2.0,
             1.875 * d / (0.5 * lim.speed_max_mps),
             (5.77 * d / (0.5 * lim.accel_max_mps2)).sqrt(),
@@ -262,11 +273,26 @@ impl Glide {
         ]
         .into_iter()
         .fold(0.0, f64::max);
+        if route != Route::Straight {
+            // `fit_duration` keeps to 80% of the limits it is given: these are 62.5% of the
+            // profile's, so the bend keeps to half of them.
+            let half = SteerLimits {
+                speed_h_mps: 0.625 * lim.speed_max_mps,
+                speed_v_mps: 0.625 * lim.vz_max_mps,
+                accel_h_mps2: 0.625 * lim.accel_max_mps2,
+                accel_v_mps2: 0.625 * lim.accel_max_mps2,
+                jerk_mps3: lim.jerk_max_mps3,
+                yaw_rate_radps: lim.yaw_rate_max_radps,
+                yaw_accel_radps2: 2.0 * lim.yaw_rate_max_radps,
+            };
+            duration_s = route.fit_duration(&from_m, &to_m, duration_s, &half);
+        }
         Glide {
             t0_s,
             duration_s,
             from_m,
             to_m,
+            route,
             from_heading_rad: from.heading_rad,
             turn_rad,
         }
@@ -283,12 +309,26 @@ impl Glide {
             ds / self.duration_s,
             dds / (self.duration_s * self.duration_s),
         );
-        let d = self.to_m - self.from_m;
+        let (p, v, a) = match self.route {
+            Route::Straight => {
+                let d = self.to_m - self.from_m;
+                (self.from_m + d * s, d * ds, d * dds)
+            }
+            // The route's first and second derivatives in s, by central differences (a
+            // route is smooth, and defined a little beyond its ends).
+            route => {
+                let at = |s: f64| route.at(&self.from_m, &self.to_m, s);
+                let h = 1e-4;
+                let (p0, p, p1) = (at(s - h), at(s), at(s + h));
+                let (p_s, p_ss) = ((p1 - p0) / (2.0 * h), (p1 - 2.0 * p + p0) / (h * h));
+                (p, p_s * ds, p_ss * ds * ds + p_s * dds)
+            }
+        };
         Sample {
             t_s,
-            position_m: (self.from_m + d * s).into(),
-            velocity_mps: (d * ds).into(),
-            acceleration_mps2: (d * dds).into(),
+            position_m: p.into(),
+            velocity_mps: v.into(),
+            acceleration_mps2: a.into(),
             heading_rad: wrap_angle_rad(self.from_heading_rad + self.turn_rad * s),
             heading_rate_radps: self.turn_rad * ds,
             camera_pitch_rad: pitch_rad,
@@ -306,6 +346,11 @@ fn hover_sample(t_s: f64, at: &Sample) -> Sample {
         ..*at
     }
 }
+
+/// How far into an actor's safety distance or the stage's margin an approach may come
+/// before it is told (a warning event): the take-off hover or the first framing themselves
+/// may be that close.
+const APPROACH_TOLERANCE_M: f64 = 0.1;
 
 /// Pause after the approach, before "action!", so the drone settles on the first framing.
 const SETTLE_S: f64 = 1.0;
@@ -615,13 +660,44 @@ impl<'s, 'b> Flight<'s, 'b> {
         };
         // Against the actors as they stand now (they may have moved during take-off).
         let first = self.first_framing();
-        let glide = Glide::new(t, &here, &first, self.setup.profile);
+        let (lo, hi) = (
+            self.setup.scene.stage.min_m(),
+            self.setup.scene.stage.max_m(),
+        );
+        let margin = self.setup.profile.safety.stage_margin_m;
+        let keep = Keepout {
+            lo: Vec3::new(lo[0] + margin, lo[1] + margin, lo[2] + margin),
+            hi: Vec3::new(hi[0] - margin, hi[1] - margin, hi[2] - margin),
+            actors: &self.actors.poses,
+            safety_m: self.setup.profile.safety.actor_distance_m,
+        };
+        let glide = Glide::new(t, &here, &first, self.setup.profile, &keep);
+        let way = match glide.route {
+            Route::Straight => "",
+            Route::Around { .. } => ", round an actor in the way",
+        };
+        let intrusion_m = keep.route_intrusion_m(&glide.route, &glide.from_m, &glide.to_m);
         self.event(
             t,
             "info",
             "approach",
-            format!("flying to the first framing ({:.1} s)", glide.duration_s),
+            format!(
+                "flying to the first framing ({:.1} s{way})",
+                glide.duration_s
+            ),
         );
+        if intrusion_m > APPROACH_TOLERANCE_M {
+            self.event(
+                t,
+                "warning",
+                "approach_not_clear",
+                format!(
+                    "no clear way to the first framing from where the drone took off: the \
+                     approach comes {intrusion_m:.2} m into an actor's safety distance or the \
+                     stage's margin; take off further from the actors"
+                ),
+            );
+        }
         let mut outcome = Outcome::Done;
         while t < glide.end_s() + SETTLE_S {
             t = self.wait_tick(t + self.period_s)?;

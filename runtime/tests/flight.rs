@@ -104,6 +104,10 @@ struct Recorder {
     hover_ticks_in_shots: usize,
     /// The phases the progress display was shown, each once, in order.
     phases: Vec<Phase>,
+    /// During the approach, the least horizontal distance from the reference and from the
+    /// measured drone to an actor (below the top of their safety cylinder, 0.5 m over the
+    /// head).
+    approach_clearance_m: Option<(f64, f64)>,
 }
 
 /// The observer's side of [`Recorder`]: the phases of the progress reports.
@@ -121,6 +125,23 @@ impl Observer for Phases {
 impl FlightSink for Recorder {
     fn tick(&mut self, r: &TickRecord) -> std::io::Result<()> {
         self.ticks += 1;
+        if r.phase == Phase::Approach {
+            let clearance = |p: [f64; 3]| {
+                (r.actors.iter())
+                    .filter(|a| p[2] <= a.position_m[2] + a.height_m + 0.5)
+                    .map(|a| (p[0] - a.position_m[0]).hypot(p[1] - a.position_m[1]))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let reference = clearance(r.sample.position_m);
+            let measured = r
+                .mocap
+                .and_then(|f| f.drone)
+                .map_or(f64::INFINITY, |d| clearance(d.position_m));
+            let (a, b) = self
+                .approach_clearance_m
+                .unwrap_or((f64::INFINITY, f64::INFINITY));
+            self.approach_clearance_m = Some((a.min(reference), b.min(measured)));
+        }
         if r.phase == Phase::Shots && r.command_sent == dronecine_runtime::frames::Command::HOVER {
             self.hover_ticks_in_shots += 1;
         }
@@ -684,6 +705,36 @@ fn preflight_refuses_a_first_framing_that_does_not_solve() {
         other => panic!("{other:?}"),
     }
     assert!(rec.first("take_off").is_none());
+}
+
+#[test]
+fn the_approach_flies_round_an_actor_in_its_way() {
+    // The drone takes off behind A; the first framing is in front of A: the straight line
+    // to it goes through A.
+    let src = "stage 10m x 8m x 3m\ndrone ardrone2\n\
+               actor A height 1.80m at (0, 0) facing 0deg\nMS on A front for 4s\n";
+    let (r, rec, _) = fly_on(
+        src,
+        |c| c.start_position_m = [-2.5, 0.2, 0.0],
+        None,
+        Rig::plain,
+    );
+    let r = r.unwrap();
+    assert!(r.completed, "{:?}", rec.kinds());
+    let (reference_m, measured_m) = rec.approach_clearance_m.unwrap();
+    // ardrone2 keeps 0.5 m from actors.
+    assert!(
+        reference_m >= 0.5 - 1e-6,
+        "the reference came {reference_m} m from A"
+    );
+    assert!(measured_m >= 0.4, "the drone came {measured_m} m from A");
+    let approach = rec.first("approach").unwrap();
+    assert!(
+        approach.message.contains("round an actor in the way"),
+        "{}",
+        approach.message
+    );
+    assert!(rec.first("approach_not_clear").is_none());
 }
 
 #[test]
