@@ -694,7 +694,7 @@ impl<'s, 'b> Flight<'s, 'b> {
                 format!(
                     "no clear way to the first framing from where the drone took off: the \
                      approach comes {intrusion_m:.2} m into an actor's safety distance or the \
-                     stage's margin; take off further from the actors"
+                     stage's margin; take off further from the actors and the walls"
                 ),
             );
         }

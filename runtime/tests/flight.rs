@@ -735,6 +735,27 @@ fn the_approach_flies_round_an_actor_in_its_way() {
         approach.message
     );
     assert!(rec.first("approach_not_clear").is_none());
+
+    // Taken off 0.1 m from a wall, inside the stage's 0.3 m margin: no way is clear, which is
+    // told; the drone still flies to its framing.
+    let (r, rec, _) = fly_on(
+        src,
+        |c| c.start_position_m = [-4.9, 0.2, 0.0],
+        None,
+        Rig::plain,
+    );
+    assert!(r.unwrap().completed, "{:?}", rec.kinds());
+    let told = rec.first("approach_not_clear").unwrap();
+    assert_eq!(told.level, "warning");
+    // (The hover drifts a few centimetres from the take-off spot.)
+    let into_m: f64 = told
+        .message
+        .split(" m into")
+        .next()
+        .and_then(|m| m.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{}", told.message));
+    assert!((0.1..0.25).contains(&into_m), "{}", told.message);
 }
 
 #[test]
