@@ -18,7 +18,9 @@
 //!
 //! Failsafes (each logged as an event): a controller fault (NaN, time not increasing) →
 //! hover for that tick; the drone's body not tracked for `mocap_hover_s` → hover, for
-//! `mocap_land_s` → land; the drone outside the stage → land; battery below
+//! `mocap_land_s` → land; an actor's body not tracked as long, during the approach or the
+//! shots, the same (the drone cannot keep clear of an actor it does not see; an actor
+//! tracked again before the landing lets it fly on); the drone outside the stage → land; battery below
 //! `battery_land_percent` → land; no telemetry for `link_lost_s` → land; Ctrl-C → land, a
 //! second Ctrl-C → emergency motor cut.
 
@@ -94,9 +96,11 @@ pub struct Backends<'a> {
 /// Thresholds of the failsafes and the pre-flight checks.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Safety {
-    /// Drone not tracked this long → hover.
+    /// The drone, or an actor during the approach or the shots, not tracked this long →
+    /// hover.
     pub mocap_hover_s: f64,
-    /// Drone not tracked this long → land.
+    /// The drone, or an actor during the approach or the shots, not tracked this long →
+    /// land.
     pub mocap_land_s: f64,
     /// Below this, no take-off, and a flying drone lands.
     pub battery_land_percent: f64,
@@ -234,7 +238,6 @@ fn finite_pose(p: &BodyPose) -> bool {
     p.position_m.iter().all(|x| x.is_finite()) && p.heading_rad.is_finite()
 }
 
-/// A minimum-jerk flight between two poses (the approach and the landing hold).
 /// The approach: a minimum-jerk flight from the take-off hover to the first framing, along
 /// the route the compiler's repositioning flights take (`route::choose`): straight when that
 /// is clear, else round an actor in the way, inside the stage less its margin.
@@ -385,6 +388,9 @@ struct Flight<'s, 'b> {
     fresh: bool,
     last_frame_t_s: Option<f64>,
     last_drone_seen_s: f64,
+    /// Per actor: when their body was last tracked, and whether the drone hovers for them.
+    actor_seen_s: Vec<f64>,
+    actor_lost: Vec<bool>,
     measured: Option<Measurement>,
     actors: ActorTracker,
     targets: Vec<ScreenTarget>,
@@ -453,6 +459,8 @@ impl<'s, 'b> Flight<'s, 'b> {
             fresh: false,
             last_frame_t_s: None,
             last_drone_seen_s: f64::NEG_INFINITY,
+            actor_seen_s: vec![f64::NEG_INFINITY; n_actors],
+            actor_lost: vec![false; n_actors],
             measured: None,
             actors: ActorTracker::new(setup.scene),
             targets: Vec::with_capacity(4),
@@ -520,6 +528,11 @@ impl<'s, 'b> Flight<'s, 'b> {
             } else {
                 self.last_frame_t_s = Some(self.frame.t_s);
                 self.actors.update(&self.frame);
+                for (seen, body) in self.actor_seen_s.iter_mut().zip(&self.frame.actors) {
+                    if body.as_ref().is_some_and(finite_pose) {
+                        *seen = now;
+                    }
+                }
                 self.measured = match self.frame.drone {
                     Some(p) => {
                         self.last_drone_seen_s = now;
@@ -957,6 +970,36 @@ impl<'s, 'b> Flight<'s, 'b> {
         } else {
             self.hovering = false;
         }
+        // An actor the drone does not see: it cannot keep clear of them (nor frame them).
+        let mut actor_hover = false;
+        if matches!(phase, Phase::Approach | Phase::Shots) {
+            for i in 0..self.actor_seen_s.len() {
+                let unseen_s = t - self.actor_seen_s[i];
+                let name = &self.setup.scene.actors[i].name;
+                if unseen_s >= self.setup.safety.mocap_land_s {
+                    let land = self.setup.safety.mocap_land_s;
+                    self.failsafe(
+                        t,
+                        &format!("actor {name} has not been tracked for {land:.0} s: landing"),
+                    );
+                    outcome = Outcome::Land;
+                } else if unseen_s >= self.setup.safety.mocap_hover_s {
+                    if !self.actor_lost[i] {
+                        self.actor_lost[i] = true;
+                        self.failsafe(t, &format!("actor {name} is not tracked: hovering"));
+                    }
+                    actor_hover = true;
+                } else if self.actor_lost[i] {
+                    self.actor_lost[i] = false;
+                    self.event(
+                        t,
+                        "info",
+                        "actor_tracked",
+                        format!("actor {name} is tracked again: flying on"),
+                    );
+                }
+            }
+        }
         if let Some(m) = self.measured {
             // A non-finite pose is the controller's fault (hover for the tick), not a place.
             let finite = m.position_m.iter().all(|x| x.is_finite());
@@ -1011,7 +1054,7 @@ impl<'s, 'b> Flight<'s, 'b> {
                 return Ok(Outcome::Land);
             }
         }
-        if self.hovering || output.is_err() || matches!(outcome, Outcome::Land) {
+        if self.hovering || actor_hover || output.is_err() || matches!(outcome, Outcome::Land) {
             command_sent = Command::HOVER;
             self.drone.hover()?;
         } else {

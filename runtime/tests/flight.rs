@@ -29,6 +29,8 @@ struct Faults {
     shift_from_s: Option<(f64, f64)>,
     /// The actors are never tracked.
     lose_actors: bool,
+    /// Actor `.0` is not tracked from `.1` until `.2` seconds.
+    lose_actor: Option<(usize, f64, f64)>,
 }
 
 struct Faulty<M: Mocap> {
@@ -50,6 +52,11 @@ impl<M: Mocap> Mocap for Faulty<M> {
             }
             if self.faults.lose_actors {
                 frame.actors.iter_mut().for_each(|a| *a = None);
+            }
+            if let Some((i, from, until)) = self.faults.lose_actor {
+                if (from..until).contains(&frame.t_s) {
+                    frame.actors[i] = None;
+                }
             }
             if let (Some(t), false) = (self.faults.nan_at_s, self.nan_done) {
                 if frame.t_s >= t {
@@ -330,6 +337,73 @@ fn losing_the_drone_hovers_then_lands() {
         rec.hover_ticks_in_shots >= 140,
         "{} hover ticks",
         rec.hover_ticks_in_shots
+    );
+    assert!(rec.first("landed").is_some());
+}
+
+/// A mocap body lost is a failsafe for an actor as for the drone (the drone cannot keep clear
+/// of an actor it does not see): hover after 0.5 s, land after 2 s; an actor tracked again
+/// before that lets the flight go on. Before, the director framed the actor's last pose for
+/// as long as they were lost, without a word.
+#[test]
+fn losing_an_actor_hovers_then_lands_and_finding_them_flies_on() {
+    let lost_at = action_s() + 1.0;
+    // Lost for 1 s: a hover, then the shot goes on to its end.
+    let (r, rec) = fly_with(
+        Faults {
+            lose_actor: Some((0, lost_at, lost_at + 1.0)),
+            ..Faults::default()
+        },
+        None,
+        |_| {},
+    );
+    let r = r.unwrap();
+    assert!(r.completed, "{:?}", rec.kinds());
+    assert_eq!(r.failsafes, 1);
+    let hover = rec.first("failsafe").unwrap();
+    assert_eq!(hover.message, "actor A is not tracked: hovering");
+    assert!(
+        (hover.t_s - (lost_at + 0.5)).abs() < 0.05,
+        "hover at {}",
+        hover.t_s
+    );
+    let back = rec.first("actor_tracked").unwrap();
+    assert!(
+        (back.t_s - (lost_at + 1.0)).abs() < 0.05,
+        "back at {}",
+        back.t_s
+    );
+    // Half a second of hovering, no more.
+    assert!(
+        (45..=55).contains(&rec.hover_ticks_in_shots),
+        "{} hover ticks",
+        rec.hover_ticks_in_shots
+    );
+
+    // Lost for good: hover, then land 2 s after.
+    let (r, rec) = fly_with(
+        Faults {
+            lose_actor: Some((0, lost_at, f64::INFINITY)),
+            ..Faults::default()
+        },
+        None,
+        |_| {},
+    );
+    let r = r.unwrap();
+    assert!(!r.completed);
+    let land = rec
+        .events
+        .iter()
+        .find(|e| e.kind == "failsafe" && e.message.contains("landing"))
+        .unwrap();
+    assert_eq!(
+        land.message,
+        "actor A has not been tracked for 2 s: landing"
+    );
+    assert!(
+        (land.t_s - (lost_at + 2.0)).abs() < 0.05,
+        "land at {}",
+        land.t_s
     );
     assert!(rec.first("landed").is_some());
 }
