@@ -237,6 +237,12 @@ fn fly_on(
     (result, rec, state)
 }
 
+/// Flies `src` on the plain simulator, the drone taking off from `start_m`.
+fn fly_from(src: &str, start_m: [f64; 3]) -> (Result<FlightReport, FlightError>, Recorder) {
+    let (result, rec, _) = fly_on(src, |c| c.start_position_m = start_m, None, Rig::plain);
+    (result, rec)
+}
+
 fn fly_with(
     faults: Faults,
     clock_jump: Option<(f64, f64)>,
@@ -743,12 +749,7 @@ fn preflight_refuses_a_first_framing_outside_the_stage() {
     // The actor faces the wall 0.2 m away: the front MS puts the camera outside the stage.
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                actor A height 1.80m at (3.8, 0) facing 0deg\nMS on A front for 4s\n";
-    let (r, rec, _) = fly_on(
-        src,
-        |c| c.start_position_m = [3.0, 0.0, 0.0],
-        None,
-        Rig::plain,
-    );
+    let (r, rec) = fly_from(src, [3.0, 0.0, 0.0]);
     match r {
         Err(FlightError::Preflight(m)) => assert!(m.contains("outside the stage"), "{m}"),
         other => panic!("{other:?}"),
@@ -765,12 +766,7 @@ fn preflight_refuses_a_first_framing_that_does_not_solve() {
                actor A height 1.80m at (0, 0) facing 0deg\n\
                actor B height 1.65m at (1.5, 0) facing 180deg\n\
                MS on B 34backright LS on A 34left screen right for 6s\n";
-    let (r, rec, _) = fly_on(
-        src,
-        |c| c.start_position_m = [-3.0, 2.0, 0.0],
-        None,
-        Rig::plain,
-    );
+    let (r, rec) = fly_from(src, [-3.0, 2.0, 0.0]);
     match r {
         Err(FlightError::Preflight(m)) => {
             assert!(m.contains("the first framing cannot be solved"), "{m}");
@@ -787,12 +783,7 @@ fn the_approach_flies_round_an_actor_in_its_way() {
     // to it goes through A.
     let src = "stage 10m x 8m x 3m\ndrone ardrone2\n\
                actor A height 1.80m at (0, 0) facing 0deg\nMS on A front for 4s\n";
-    let (r, rec, _) = fly_on(
-        src,
-        |c| c.start_position_m = [-2.5, 0.2, 0.0],
-        None,
-        Rig::plain,
-    );
+    let (r, rec) = fly_from(src, [-2.5, 0.2, 0.0]);
     let r = r.unwrap();
     assert!(r.completed, "{:?}", rec.kinds());
     let (reference_m, measured_m) = rec.approach_clearance_m.unwrap();
@@ -812,12 +803,7 @@ fn the_approach_flies_round_an_actor_in_its_way() {
 
     // Taken off 0.1 m from a wall, inside the stage's 0.3 m margin: no way is clear, which is
     // told; the drone still flies to its framing.
-    let (r, rec, _) = fly_on(
-        src,
-        |c| c.start_position_m = [-4.9, 0.2, 0.0],
-        None,
-        Rig::plain,
-    );
+    let (r, rec) = fly_from(src, [-4.9, 0.2, 0.0]);
     assert!(r.unwrap().completed, "{:?}", rec.kinds());
     let told = rec.first("approach_not_clear").unwrap();
     assert_eq!(told.level, "warning");
