@@ -12,6 +12,7 @@ use dronecine_runtime::emulator::{
     empty_scene, Emulator, EmulatorConfig, NatNetConfig, NatNetData, ACTOR_ID_BASE, DRONE_ID,
 };
 use dronecine_runtime::natnet::frame::{UpAxis, Version};
+use dronecine_runtime::session;
 use dronecine_runtime::sim::SimConfig;
 
 pub struct Args<'a> {
@@ -56,6 +57,7 @@ pub fn run(a: &Args) -> ExitCode {
             a.natnet_version
         ));
     };
+    let mut sim = SimConfig::new(a.seed);
     let (scene, profile, names) = match a.script {
         None => (
             empty_scene(),
@@ -69,10 +71,15 @@ pub fn run(a: &Args) -> ExitCode {
             };
             let scene = loaded.scene();
             let names = scene.actors.iter().map(|x| x.name.clone()).collect();
+            // The drone stands below its first framing, as the embedded simulator's does
+            // (at the origin it could stand on an actor's mark, which `shoot` refuses).
+            if !loaded.script().timeline.is_empty() {
+                (sim.start_position_m, sim.start_heading_rad) =
+                    session::start_pose(loaded.script(), scene, &loaded.profile);
+            }
             (scene.clone(), loaded.profile.clone(), names)
         }
     };
-    let mut sim = SimConfig::new(a.seed);
     sim.effects = match crate::shoot::sim_effects(a.ideal, a.sim_off) {
         Ok(e) => e,
         Err(e) => {

@@ -553,8 +553,8 @@ impl<'s, 'b> Flight<'s, 'b> {
 
     fn run(mut self) -> Result<FlightReport, FlightError> {
         let t_start = self.clock.now_s();
-        // Pre-flight: the drone and every actor tracked, battery, the reference's start
-        // inside the stage.
+        // Pre-flight: the drone and every actor tracked, the drone inside the stage and clear
+        // of the actors, battery, the first framing solved and inside the stage.
         let mut t = t_start;
         let mut seen_drone: Option<Measurement> = None;
         while t - t_start <= self.setup.safety.mocap_wait_s {
@@ -579,6 +579,17 @@ impl<'s, 'b> Flight<'s, 'b> {
                 "the drone's tracked pose is not a number".into(),
             ));
         }
+        // Where it takes off from: inside the stage (the failsafe would land it at once),
+        // and not under an actor's nose.
+        let stage = self.setup.scene.stage;
+        let [x, y, _] = m0.position_m;
+        let (lo, hi) = (stage.min_m(), stage.max_m());
+        if !inside(&stage, &[x, y, lo[2].max(hi[2].min(m0.position_m[2]))], 0.0) {
+            return Err(FlightError::Preflight(format!(
+                "the drone stands at ({x:.2}, {y:.2}) m, outside the stage: place it inside, \
+                 below its first framing"
+            )));
+        }
         let untracked: Vec<&str> = self
             .setup
             .scene
@@ -594,6 +605,18 @@ impl<'s, 'b> Flight<'s, 'b> {
                 if untracked.len() > 1 { "s" } else { "" },
                 untracked.join(", ")
             )));
+        }
+        let safety_m = self.setup.profile.safety.actor_distance_m;
+        for (actor, body) in self.setup.scene.actors.iter().zip(&self.frame.actors) {
+            let Some(body) = body else { continue };
+            let d = dronecine_compiler::norm_xy(x - body.position_m[0], y - body.position_m[1]);
+            if d < safety_m {
+                return Err(FlightError::Preflight(format!(
+                    "the drone stands {d:.2} m from {}; {} keeps {safety_m:.2} m from actors: \
+                     place it further away, below its first framing",
+                    actor.name, self.setup.profile.name
+                )));
+            }
         }
         let telemetry = self.drone.telemetry();
         if telemetry.battery_percent < self.setup.safety.battery_land_percent {

@@ -745,6 +745,33 @@ fn a_draining_battery_lands_mid_flight() {
 }
 
 #[test]
+fn preflight_refuses_a_take_off_outside_the_stage_or_by_an_actor() {
+    // SCRIPT's stage is 8 m × 6 m, A stands at the origin. Before, the first took off and
+    // was landed by the stage failsafe; the second took off 0.3 m from A.
+    // (Measured: the mocap's noise, and A standing a few centimetres off the mark.)
+    let cases = [
+        (
+            [-4.5, 0.0, 0.0],
+            ["the drone stands at (-4.5", "m, outside the stage"],
+        ),
+        (
+            [0.3, 0.0, 0.0],
+            ["the drone stands 0.", "m from A; ardrone2 keeps 0.50 m"],
+        ),
+    ];
+    for (start_m, says) in cases {
+        let (r, rec) = fly_from(SCRIPT, start_m);
+        match r {
+            Err(FlightError::Preflight(m)) => {
+                assert!(m.starts_with(says[0]) && m.contains(says[1]), "{m}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(rec.first("take_off").is_none());
+    }
+}
+
+#[test]
 fn preflight_refuses_a_first_framing_outside_the_stage() {
     // The actor faces the wall 0.2 m away: the front MS puts the camera outside the stage.
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\n\
