@@ -644,6 +644,25 @@ impl<'s, 'b> Flight<'s, 'b> {
                 solved[0], solved[1], solved[2]
             )));
         }
+        // …and clear of the actors as they stand now: one off their mark can stand where the
+        // first framing puts the drone, and the approach would fly it there (it keeps clear
+        // of the actors on the way, not at its end).
+        let to = first.position_m;
+        for (actor, pose) in self.setup.scene.actors.iter().zip(&self.actors.poses) {
+            if to[2] > pose.position_m[2] + pose.height_m + safety_m {
+                continue;
+            }
+            let d =
+                dronecine_compiler::norm_xy(to[0] - pose.position_m[0], to[1] - pose.position_m[1]);
+            if safety_m - d > APPROACH_TOLERANCE_M {
+                return Err(FlightError::Preflight(format!(
+                    "the first framing puts the drone {d:.2} m from {} as the actors stand now; \
+                     {} keeps {safety_m:.2} m from actors: put {} on their mark or change the \
+                     first shot",
+                    actor.name, self.setup.profile.name, actor.name
+                )));
+            }
+        }
 
         // Take-off.
         let take_off_s = t;

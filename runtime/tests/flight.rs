@@ -31,6 +31,8 @@ struct Faults {
     lose_actors: bool,
     /// Actor `.0` is not tracked from `.1` until `.2` seconds.
     lose_actor: Option<(usize, f64, f64)>,
+    /// Actor `.0` is measured this far (x, y) from where they are: off their mark.
+    shift_actor: Option<(usize, [f64; 2])>,
 }
 
 struct Faulty<M: Mocap> {
@@ -52,6 +54,12 @@ impl<M: Mocap> Mocap for Faulty<M> {
             }
             if self.faults.lose_actors {
                 frame.actors.iter_mut().for_each(|a| *a = None);
+            }
+            if let Some((i, [dx, dy])) = self.faults.shift_actor {
+                if let Some(Some(a)) = frame.actors.get_mut(i) {
+                    a.position_m[0] += dx;
+                    a.position_m[1] += dy;
+                }
             }
             if let Some((i, from, until)) = self.faults.lose_actor {
                 if (from..until).contains(&frame.t_s) {
@@ -769,6 +777,49 @@ fn preflight_refuses_a_take_off_outside_the_stage_or_by_an_actor() {
         }
         assert!(rec.first("take_off").is_none());
     }
+}
+
+#[test]
+fn preflight_refuses_a_first_framing_where_an_actor_stands() {
+    // B, off their mark, stands where the first framing (A's front MS) puts the drone; on
+    // their mark, 2 m to the side, the flight is fine.
+    let src = "stage 10m x 8m x 3m\ndrone ardrone2\n\
+               actor A height 1.80m at (0, 0) facing 0deg\n\
+               actor B height 1.80m at (0, 2) facing 0deg\nMS on A front for 4s\n";
+    let fly = |shift: Option<[f64; 2]>| {
+        let faults = Faults {
+            shift_actor: shift.map(|d| (1, d)),
+            ..Faults::default()
+        };
+        // (Taking off away from both, so that the take-off spot's own check does not speak.)
+        let (r, rec, _) = fly_on(
+            src,
+            |c| c.start_position_m = [-3.0, -2.0, 0.0],
+            None,
+            |sim| Rig {
+                mocap: Box::new(Faulty {
+                    inner: sim.mocap(),
+                    faults,
+                    nan_done: false,
+                }),
+                ..Rig::plain(sim)
+            },
+        );
+        (r, rec)
+    };
+    let (r, rec) = fly(None);
+    assert!(r.unwrap().completed, "{:?}", rec.kinds());
+    // The front MS puts the camera at (0.80, 0, 1.49) m (compile's first sample).
+    let (r, rec) = fly(Some([0.8, -2.0]));
+    match r {
+        Err(FlightError::Preflight(m)) => assert!(
+            m.starts_with("the first framing puts the drone 0.")
+                && m.contains("m from B as the actors stand now; ardrone2 keeps 0.50 m"),
+            "{m}"
+        ),
+        other => panic!("{other:?}"),
+    }
+    assert!(rec.first("take_off").is_none());
 }
 
 #[test]
