@@ -237,10 +237,8 @@ impl Director {
                 _ => [None, None],
             })
             .collect();
-        let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
-        let margin = profile.safety.stage_margin_m;
-        let stage_lo = Vec3::new(lo[0] + margin, lo[1] + margin, lo[2] + margin);
-        let stage_hi = Vec3::new(hi[0] - margin, hi[1] - margin, hi[2] - margin);
+        let (stage_lo, stage_hi) =
+            route::stage_less_margin(&scene.stage, profile.safety.stage_margin_m);
         Director {
             shots: script.timeline.clone(),
             plans,

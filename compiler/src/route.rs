@@ -138,6 +138,16 @@ pub struct Keepout<'a> {
     pub safety_m: f64,
 }
 
+/// The stage less `margin_m` on every side (the floor and the ceiling too): the box the
+/// director keeps its target in, and the one routes keep to.
+pub fn stage_less_margin(stage: &dronecine_grammar::script::Stage, margin_m: f64) -> (Vec3, Vec3) {
+    let (lo, hi) = (stage.min_m(), stage.max_m());
+    (
+        Vec3::new(lo[0] + margin_m, lo[1] + margin_m, lo[2] + margin_m),
+        Vec3::new(hi[0] - margin_m, hi[1] - margin_m, hi[2] - margin_m),
+    )
+}
+
 impl Keepout<'_> {
     /// How far `p` is into a wall or an actor's cylinder (0 when clear).
     pub fn intrusion_m(&self, p: &Vec3) -> f64 {

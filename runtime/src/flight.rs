@@ -20,8 +20,8 @@
 //! hover for that tick; the drone's body not tracked for `mocap_hover_s` → hover, for
 //! `mocap_land_s` → land; an actor's body not tracked as long, during the approach or the
 //! shots, the same (the drone cannot keep clear of an actor it does not see; an actor
-//! tracked again before the landing lets it fly on); the drone outside the stage → land; battery below
-//! `battery_land_percent` → land; no telemetry for `link_lost_s` → land; Ctrl-C → land, a
+//! tracked again before the landing lets it fly on); the drone outside the stage → land;
+//! battery below `battery_land_percent` → land; no telemetry for `link_lost_s` → land; Ctrl-C → land, a
 //! second Ctrl-C → emergency motor cut.
 
 use std::io;
@@ -715,14 +715,13 @@ impl<'s, 'b> Flight<'s, 'b> {
         };
         // Against the actors as they stand now (they may have moved during take-off).
         let first = self.first_framing();
-        let (lo, hi) = (
-            self.setup.scene.stage.min_m(),
-            self.setup.scene.stage.max_m(),
+        let (lo, hi) = route::stage_less_margin(
+            &self.setup.scene.stage,
+            self.setup.profile.safety.stage_margin_m,
         );
-        let margin = self.setup.profile.safety.stage_margin_m;
         let keep = Keepout {
-            lo: Vec3::new(lo[0] + margin, lo[1] + margin, lo[2] + margin),
-            hi: Vec3::new(hi[0] - margin, hi[1] - margin, hi[2] - margin),
+            lo,
+            hi,
             actors: &self.actors.poses,
             safety_m: self.setup.profile.safety.actor_distance_m,
         };
