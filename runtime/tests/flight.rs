@@ -251,6 +251,15 @@ fn fly_from(src: &str, start_m: [f64; 3]) -> (Result<FlightReport, FlightError>,
     (result, rec)
 }
 
+/// The pre-flight refusal's message, checking that nothing took off.
+fn refused_before_take_off(r: Result<FlightReport, FlightError>, rec: &Recorder) -> String {
+    assert!(rec.first("take_off").is_none(), "{:?}", rec.kinds());
+    match r {
+        Err(FlightError::Preflight(m)) => m,
+        other => panic!("{other:?}"),
+    }
+}
+
 fn fly_with(
     faults: Faults,
     clock_jump: Option<(f64, f64)>,
@@ -487,11 +496,8 @@ fn preflight_refuses_an_untracked_drone_or_actor_and_a_flat_battery() {
         None,
         |_| {},
     );
-    match r {
-        Err(FlightError::Preflight(m)) => assert!(m.contains("not tracked"), "{m}"),
-        other => panic!("{other:?}"),
-    }
-    assert!(rec.first("take_off").is_none());
+    let m = refused_before_take_off(r, &rec);
+    assert!(m.contains("not tracked"), "{m}");
 
     let (r, rec) = fly_with(
         Faults {
@@ -501,20 +507,12 @@ fn preflight_refuses_an_untracked_drone_or_actor_and_a_flat_battery() {
         None,
         |_| {},
     );
-    match r {
-        Err(FlightError::Preflight(m)) => {
-            assert!(m.contains("actor not tracked") && m.contains('A'), "{m}")
-        }
-        other => panic!("{other:?}"),
-    }
-    assert!(rec.first("take_off").is_none());
+    let m = refused_before_take_off(r, &rec);
+    assert!(m.contains("actor not tracked") && m.contains('A'), "{m}");
 
     let (r, rec) = fly_with(Faults::default(), None, |c| c.battery_start_percent = 10.0);
-    match r {
-        Err(FlightError::Preflight(m)) => assert!(m.contains("battery"), "{m}"),
-        other => panic!("{other:?}"),
-    }
-    assert!(rec.first("take_off").is_none());
+    let m = refused_before_take_off(r, &rec);
+    assert!(m.contains("battery"), "{m}");
 }
 
 /// A clock that "presses Ctrl-C" at the given times.
@@ -769,13 +767,8 @@ fn preflight_refuses_a_take_off_outside_the_stage_or_by_an_actor() {
     ];
     for (start_m, says) in cases {
         let (r, rec) = fly_from(SCRIPT, start_m);
-        match r {
-            Err(FlightError::Preflight(m)) => {
-                assert!(m.starts_with(says[0]) && m.contains(says[1]), "{m}");
-            }
-            other => panic!("{other:?}"),
-        }
-        assert!(rec.first("take_off").is_none());
+        let m = refused_before_take_off(r, &rec);
+        assert!(m.starts_with(says[0]) && m.contains(says[1]), "{m}");
     }
 }
 
@@ -811,15 +804,12 @@ fn preflight_refuses_a_first_framing_where_an_actor_stands() {
     assert!(r.unwrap().completed, "{:?}", rec.kinds());
     // The front MS puts the camera at (0.80, 0, 1.49) m (compile's first sample).
     let (r, rec) = fly(Some([0.8, -2.0]));
-    match r {
-        Err(FlightError::Preflight(m)) => assert!(
-            m.starts_with("the first framing puts the drone 0.")
-                && m.contains("m from B as the actors stand now; ardrone2 keeps 0.50 m"),
-            "{m}"
-        ),
-        other => panic!("{other:?}"),
-    }
-    assert!(rec.first("take_off").is_none());
+    let m = refused_before_take_off(r, &rec);
+    assert!(
+        m.starts_with("the first framing puts the drone 0.")
+            && m.contains("m from B as the actors stand now; ardrone2 keeps 0.50 m"),
+        "{m}"
+    );
 }
 
 #[test]
@@ -828,11 +818,8 @@ fn preflight_refuses_a_first_framing_outside_the_stage() {
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                actor A height 1.80m at (3.8, 0) facing 0deg\nMS on A front for 4s\n";
     let (r, rec) = fly_from(src, [3.0, 0.0, 0.0]);
-    match r {
-        Err(FlightError::Preflight(m)) => assert!(m.contains("outside the stage"), "{m}"),
-        other => panic!("{other:?}"),
-    }
-    assert!(rec.first("take_off").is_none());
+    let m = refused_before_take_off(r, &rec);
+    assert!(m.contains("outside the stage"), "{m}");
 }
 
 #[test]
@@ -845,14 +832,9 @@ fn preflight_refuses_a_first_framing_that_does_not_solve() {
                actor B height 1.65m at (1.5, 0) facing 180deg\n\
                MS on B 34backright LS on A 34left screen right for 6s\n";
     let (r, rec) = fly_from(src, [-3.0, 2.0, 0.0]);
-    match r {
-        Err(FlightError::Preflight(m)) => {
-            assert!(m.contains("the first framing cannot be solved"), "{m}");
-            assert!(m.contains("cannot be framed"), "the director's reason: {m}");
-        }
-        other => panic!("{other:?}"),
-    }
-    assert!(rec.first("take_off").is_none());
+    let m = refused_before_take_off(r, &rec);
+    assert!(m.contains("the first framing cannot be solved"), "{m}");
+    assert!(m.contains("cannot be framed"), "the director's reason: {m}");
 }
 
 #[test]
@@ -901,10 +883,7 @@ fn preflight_refuses_a_scene_without_shots() {
     // Before, the director indexed the first shot of an empty timeline: a panic.
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n";
     let (r, rec, state) = fly_on(src, |_| {}, None, Rig::plain);
-    match r {
-        Err(FlightError::Preflight(m)) => assert!(m.contains("no shots"), "{m}"),
-        other => panic!("{other:?}"),
-    }
-    assert!(rec.first("take_off").is_none());
+    let m = refused_before_take_off(r, &rec);
+    assert!(m.contains("no shots"), "{m}");
     assert_eq!(state, FlightState::Landed);
 }
