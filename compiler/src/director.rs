@@ -1010,9 +1010,9 @@ impl Director {
         if self.beyond_reach[index] || t.stretch < REACH_TOLD {
             return;
         }
-        let (sized, other) = match t.primary {
-            framing::Primary::A => (t.a, t.b),
-            framing::Primary::B => (t.b, t.a),
+        let (sized, other, band_sized, band_other) = match t.primary {
+            framing::Primary::A => (t.a, t.b, t.band_a_m, t.band_b_m),
+            framing::Primary::B => (t.b, t.a, t.band_b_m, t.band_a_m),
         };
         let (Some(p), Some(q)) = (actors.get(sized), actors.get(other)) else {
             return;
@@ -1038,11 +1038,6 @@ impl Director {
             p.position_m[0] - q.position_m[0],
             p.position_m[1] - q.position_m[1],
         );
-        let (band_sized, band_other) = if sized == t.a {
-            (t.band_a_m, t.band_b_m)
-        } else {
-            (t.band_b_m, t.band_a_m)
-        };
         let aims = framing::band_centre(p, band_sized) - framing::band_centre(q, band_other);
         let needed_m = ((aims.norm() * t.stretch).powi(2) - aims.z * aims.z).sqrt();
         let more_cm = ((needed_m - apart_m) * 100.0).ceil();

@@ -155,14 +155,24 @@ impl Keepout<'_> {
         for i in 0..3 {
             worst = worst.max(self.lo[i] - p[i]).max(p[i] - self.hi[i]);
         }
-        for a in self.actors {
+        self.deepest_actor(p).map_or(worst, |(_, d)| worst.max(d))
+    }
+
+    /// The actor (by index) whose safety cylinder `p` is deepest in, and how deep; `None`
+    /// when `p` is clear of every actor's.
+    pub fn deepest_actor(&self, p: &Vec3) -> Option<(usize, f64)> {
+        let mut deepest = None;
+        for (i, a) in self.actors.iter().enumerate() {
             let [x, y, z] = a.position_m;
             if p.z > z + a.height_m + self.safety_m {
                 continue;
             }
-            worst = worst.max(self.safety_m - crate::norm_xy(p.x - x, p.y - y));
+            let d = self.safety_m - crate::norm_xy(p.x - x, p.y - y);
+            if d > deepest.map_or(0.0, |(_, worst)| worst) {
+                deepest = Some((i, d));
+            }
         }
-        worst
+        deepest
     }
 
     /// The deepest intrusion along `route` from `a` to `b`.

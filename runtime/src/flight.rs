@@ -607,16 +607,15 @@ impl<'s, 'b> Flight<'s, 'b> {
             )));
         }
         let safety_m = self.setup.profile.safety.actor_distance_m;
-        for (actor, body) in self.setup.scene.actors.iter().zip(&self.frame.actors) {
-            let Some(body) = body else { continue };
-            let d = dronecine_compiler::norm_xy(x - body.position_m[0], y - body.position_m[1]);
-            if d < safety_m {
-                return Err(FlightError::Preflight(format!(
-                    "the drone stands {d:.2} m from {}; {} keeps {safety_m:.2} m from actors: \
-                     place it further away, below its first framing",
-                    actor.name, self.setup.profile.name
-                )));
-            }
+        let spot = Vec3::new(x, y, m0.position_m[2]);
+        if let Some((i, into_m)) = self.keepout().deepest_actor(&spot) {
+            return Err(FlightError::Preflight(format!(
+                "the drone stands {:.2} m from {}; {} keeps {safety_m:.2} m from actors: \
+                 place it further away, below its first framing",
+                safety_m - into_m,
+                self.setup.scene.actors[i].name,
+                self.setup.profile.name
+            )));
         }
         let telemetry = self.drone.telemetry();
         if telemetry.battery_percent < self.setup.safety.battery_land_percent {
@@ -647,19 +646,16 @@ impl<'s, 'b> Flight<'s, 'b> {
         // …and clear of the actors as they stand now: one off their mark can stand where the
         // first framing puts the drone, and the approach would fly it there (it keeps clear
         // of the actors on the way, not at its end).
-        let to = first.position_m;
-        for (actor, pose) in self.setup.scene.actors.iter().zip(&self.actors.poses) {
-            if to[2] > pose.position_m[2] + pose.height_m + safety_m {
-                continue;
-            }
-            let d =
-                dronecine_compiler::norm_xy(to[0] - pose.position_m[0], to[1] - pose.position_m[1]);
-            if safety_m - d > APPROACH_TOLERANCE_M {
+        let to = Vec3::from(first.position_m);
+        if let Some((i, into_m)) = self.keepout().deepest_actor(&to) {
+            if into_m > APPROACH_TOLERANCE_M {
+                let name = &self.setup.scene.actors[i].name;
                 return Err(FlightError::Preflight(format!(
-                    "the first framing puts the drone {d:.2} m from {} as the actors stand now; \
-                     {} keeps {safety_m:.2} m from actors: put {} on their mark or change the \
-                     first shot",
-                    actor.name, self.setup.profile.name, actor.name
+                    "the first framing puts the drone {:.2} m from {name} as the actors stand \
+                     now; {} keeps {safety_m:.2} m from actors: put {name} on their mark or \
+                     change the first shot",
+                    safety_m - into_m,
+                    self.setup.profile.name
                 )));
             }
         }
@@ -715,16 +711,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         };
         // Against the actors as they stand now (they may have moved during take-off).
         let first = self.first_framing();
-        let (lo, hi) = route::stage_less_margin(
-            &self.setup.scene.stage,
-            self.setup.profile.safety.stage_margin_m,
-        );
-        let keep = Keepout {
-            lo,
-            hi,
-            actors: &self.actors.poses,
-            safety_m: self.setup.profile.safety.actor_distance_m,
-        };
+        let keep = self.keepout();
         let glide = Glide::new(t, &here, &first, self.setup.profile, &keep);
         let way = match glide.route {
             Route::Straight => "",
@@ -1148,6 +1135,21 @@ impl<'s, 'b> Flight<'s, 'b> {
         self.setup
             .interrupts
             .map_or(0, |n| n.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// Where the drone may go: the stage less its margin, and out of the actors' safety
+    /// cylinders as the actors stand now (the director's and the compiler's routes' rule).
+    fn keepout(&self) -> Keepout<'_> {
+        let (lo, hi) = route::stage_less_margin(
+            &self.setup.scene.stage,
+            self.setup.profile.safety.stage_margin_m,
+        );
+        Keepout {
+            lo,
+            hi,
+            actors: &self.actors.poses,
+            safety_m: self.setup.profile.safety.actor_distance_m,
+        }
     }
 
     /// The first shot's framing against the actors as they stand now.

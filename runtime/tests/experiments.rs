@@ -39,6 +39,17 @@ fn fly_text(text: &str, script: &Script, controller: &str, seed: u64) -> FlightR
 }
 
 fn fly_sim(text: &str, script: &Script, controller: &str, sim: SimConfig) -> FlightReport {
+    fly_sim_into(text, script, controller, sim, &mut NullSink)
+}
+
+/// [`fly_sim`], each tick handed to `sink`.
+fn fly_sim_into(
+    text: &str,
+    script: &Script,
+    controller: &str,
+    sim: SimConfig,
+    sink: &mut dyn FlightSink,
+) -> FlightReport {
     let scene = script.scene.as_ref().unwrap();
     let profile = profile_of(script);
     let flight = SimFlight {
@@ -53,7 +64,7 @@ fn fly_sim(text: &str, script: &Script, controller: &str, sim: SimConfig) -> Fli
         realtime: false,
         interrupts: None,
     };
-    fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap()
+    fly_simulated(&flight, sink, &mut NoObserver).unwrap()
 }
 
 fn fly(path: &str, controller: &str, seed: u64) -> FlightReport {
@@ -248,27 +259,14 @@ fn the_scene_stays_on_the_stage_on_the_seeds_that_left_it() {
     }
     let (text, script) = load("shots/scene.psl");
     let scene = script.scene.as_ref().unwrap();
-    let profile = profile_of(&script);
     let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
     for seed in [4, 12] {
-        let flight = SimFlight {
-            script: &script,
-            source: &text,
-            scene,
-            profile: &profile,
-            rate_hz: 100.0,
-            controller: ControllerSetup::new("lqg"),
-            plant: None,
-            sim: SimConfig::new(seed),
-            realtime: false,
-            interrupts: None,
-        };
         let mut closest = Closest {
             lo,
             hi,
             room_m: f64::INFINITY,
         };
-        let r = fly_simulated(&flight, &mut closest, &mut NoObserver).unwrap();
+        let r = fly_sim_into(&text, &script, "lqg", SimConfig::new(seed), &mut closest);
         assert!(r.completed, "seed {seed}: {r:#?}");
         assert_eq!(r.failsafes, 0, "seed {seed}");
         assert!(
