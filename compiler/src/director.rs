@@ -519,17 +519,29 @@ impl Director {
                     .iter()
                     .map(|a| (Vec3::from(a.position_m), a.height_m)),
             );
-            let extra = steering::separation(&self.state.p, &self.axes, self.safety_m, 3.0)
-                + steering::containment(&self.state.p, &self.stage_lo, &self.stage_hi, 4.0);
-            self.state = steering::step(
-                &self.state,
-                &goal,
-                extra,
-                (&self.stage_lo, &self.stage_hi),
-                &self.limits,
-                &self.gains,
-                dt,
-            );
+            // A tick longer than the steering's step is steered in sub-steps toward the goal
+            // as it moved during the tick, so the camera is the same at any rate.
+            let n = steering::substeps(dt);
+            let h = dt / n as f64;
+            for k in 0..n {
+                let back_s = (n - 1 - k) as f64 * h;
+                let goal_then = if back_s > 0.0 {
+                    goal.earlier(back_s)
+                } else {
+                    goal
+                };
+                let extra = steering::separation(&self.state.p, &self.axes, self.safety_m, 3.0)
+                    + steering::containment(&self.state.p, &self.stage_lo, &self.stage_hi, 4.0);
+                self.state = steering::step(
+                    &self.state,
+                    &goal_then,
+                    extra,
+                    (&self.stage_lo, &self.stage_hi),
+                    &self.limits,
+                    &self.gains,
+                    h,
+                );
+            }
         }
 
         // Orientation at the camera's actual position.
@@ -544,14 +556,23 @@ impl Director {
                 rate_radps: 0.0,
             };
         } else {
-            self.heading = steering::step_heading(
-                &self.heading,
-                heading_target,
-                heading_rate_target,
-                &self.limits,
-                &self.gains,
-                dt,
-            );
+            let n = steering::substeps(dt);
+            let h = dt / n as f64;
+            for k in 0..n {
+                let back_s = (n - 1 - k) as f64 * h;
+                self.heading = steering::step_heading(
+                    &self.heading,
+                    if back_s > 0.0 {
+                        heading_target - heading_rate_target * back_s
+                    } else {
+                        heading_target
+                    },
+                    heading_rate_target,
+                    &self.limits,
+                    &self.gains,
+                    h,
+                );
+            }
         }
         self.pitch_rad = pitch_target;
         self.last_target = (!self.failed_now).then_some((t_s, v_t, heading_target));
