@@ -391,12 +391,17 @@ struct Flight<'s, 'b> {
     /// Per actor: when their body was last tracked, and whether the drone hovers for them.
     actor_seen_s: Vec<f64>,
     actor_lost: Vec<bool>,
+    /// The drone's measurement of this tick's fresh mocap frame (`None` between frames).
     measured: Option<Measurement>,
+    /// The newest finite measurement of the drone and when it arrived, held between frames:
+    /// where the drone is, for what needs it every tick (the aim, the approach's start),
+    /// whatever the mocap's rate against the loop's.
+    drone_m: Option<(f64, Measurement)>,
     actors: ActorTracker,
     targets: Vec<ScreenTarget>,
     framing: Vec<FramingRecord>,
-    /// The last heading aimed from the measured position (time, heading).
-    last_aim: Option<(f64, f64)>,
+    /// The last aim from a fresh measurement of the drone's position.
+    last_aim: Option<Aim>,
     last_tick_s: Option<f64>,
     controller_started: bool,
     metrics: Metrics,
@@ -411,6 +416,14 @@ struct Flight<'s, 'b> {
     link_lost: bool,
     log_error: Option<io::Error>,
     script_duration_s: f64,
+}
+
+/// A heading aimed from a fresh measurement of the drone's position, and its rate.
+#[derive(Clone, Copy, Debug)]
+struct Aim {
+    t_s: f64,
+    heading_rad: f64,
+    rate_radps: f64,
 }
 
 /// How a phase of the loop ended.
@@ -462,6 +475,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             actor_seen_s: vec![f64::NEG_INFINITY; n_actors],
             actor_lost: vec![false; n_actors],
             measured: None,
+            drone_m: None,
             actors: ActorTracker::new(setup.scene),
             targets: Vec::with_capacity(4),
             framing: Vec::with_capacity(n_actors.max(2)),
@@ -536,6 +550,15 @@ impl<'s, 'b> Flight<'s, 'b> {
                 self.measured = match self.frame.drone {
                     Some(p) => {
                         self.last_drone_seen_s = now;
+                        if finite_pose(&p) {
+                            self.drone_m = Some((
+                                now,
+                                Measurement {
+                                    position_m: p.position_m,
+                                    heading_rad: p.heading_rad,
+                                },
+                            ));
+                        }
                         Some(Measurement {
                             position_m: p.position_m,
                             heading_rad: p.heading_rad,
@@ -696,7 +719,9 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
 
         // Approach: from where the drone hovers to the first framing.
-        let here = match self.measured.or(seen_drone) {
+        // Where it hovers: its newest measurement (this tick's frame may not have come yet:
+        // at 200 Hz against a 100 Hz mocap, the approach set off from the ground pose).
+        let here = match self.drone_m.map(|(_, m)| m).or(seen_drone) {
             Some(m) => Sample {
                 t_s: t,
                 position_m: m.position_m,
@@ -808,27 +833,7 @@ impl<'s, 'b> Flight<'s, 'b> {
                 let usable = self.measured.filter(|m| {
                     m.position_m.iter().all(|x| x.is_finite()) && m.heading_rad.is_finite()
                 });
-                if let Some(m) = usable {
-                    if let Some((heading, pitch)) =
-                        director.hold_orientation(&self.actors.poses, &Vec3::from(m.position_m))
-                    {
-                        // Its rate from the previous aim (the director's rate is that of its
-                        // own, smoother heading).
-                        if let Some((t0, h0)) = self.last_aim {
-                            if t > t0 {
-                                world_sample.heading_rate_radps =
-                                    wrap_angle_rad(heading - h0) / (t - t0);
-                            }
-                        }
-                        self.last_aim = Some((t, heading));
-                        world_sample.heading_rad = heading;
-                        world_sample.camera_pitch_rad = pitch;
-                    } else {
-                        self.last_aim = None;
-                    }
-                } else {
-                    self.last_aim = None;
-                }
+                self.aim(&director, t, usable.is_some(), &mut world_sample);
                 // The framing as the drone really films it: the measured pose, the camera
                 // pitch the reference asks of the gimbal (level without one).
                 self.framing.clear();
@@ -1167,6 +1172,53 @@ impl<'s, 'b> Flight<'s, 'b> {
                 .map_or_else(|| "no camera position".to_string(), |d| d.message.clone())
         });
         (sample, probe.solved_target_m(), unsolved)
+    }
+
+    /// In a hold, the heading and gimbal pitch that frame the live actors from where the
+    /// drone is, into `sample` (else the director's own, smoother heading stays). Aimed anew
+    /// on a tick with a fresh measurement (`fresh`), its rate from the previous aim; between
+    /// frames (a loop faster than the mocap, a frame dropped) carried on at that rate from
+    /// the newest measurement. Before, a tick without a frame fell back to the director's
+    /// heading and dropped the rate: at 200 Hz against a 100 Hz mocap every other tick, and
+    /// `two-actors.psl`'s heading error went from 0.29° to 2.6° RMS, its framing error
+    /// from 0.023 to 0.061.
+    fn aim(&mut self, director: &Director, t: f64, fresh: bool, sample: &mut Sample) {
+        let Some((seen_s, m)) = self.drone_m else {
+            self.last_aim = None;
+            return;
+        };
+        // A drone not seen this long hovers (its failsafe): nothing to aim from.
+        let Some((heading, pitch)) = (t - seen_s < self.setup.safety.mocap_hover_s)
+            .then(|| director.hold_orientation(&self.actors.poses, &Vec3::from(m.position_m)))
+            .flatten()
+        else {
+            self.last_aim = None;
+            return;
+        };
+        match self.last_aim {
+            Some(aim) if !fresh => {
+                sample.heading_rad =
+                    wrap_angle_rad(aim.heading_rad + aim.rate_radps * (t - aim.t_s));
+                sample.heading_rate_radps = aim.rate_radps;
+            }
+            previous => {
+                // Its rate from the previous aim (the director's rate is that of its own,
+                // smoother heading).
+                if let Some(aim) = previous {
+                    if t > aim.t_s {
+                        sample.heading_rate_radps =
+                            wrap_angle_rad(heading - aim.heading_rad) / (t - aim.t_s);
+                    }
+                }
+                sample.heading_rad = heading;
+                self.last_aim = Some(Aim {
+                    t_s: t,
+                    heading_rad: heading,
+                    rate_radps: sample.heading_rate_radps,
+                });
+            }
+        }
+        sample.camera_pitch_rad = pitch;
     }
 
     fn failsafe(&mut self, t: f64, message: &str) {
