@@ -444,6 +444,52 @@ fn a_size_inside_the_safety_distance_is_an_error() {
     assert!(!c.has_errors(), "{:?}", c.diagnostics);
 }
 
+/// An actor who walks through the camera's spot: the error says how close the framing puts
+/// the camera at the closest, and when, not only the first moment it is too close. Before,
+/// it said "0.49 m from C" (the first tick inside 0.50 m), which reads as a centimetre to
+/// spare, for an actor who passes 0.10 m from the camera's spot; the monitor's own report of
+/// the closest approach is dropped as its repeat.
+#[test]
+fn an_actor_walking_through_the_framing_is_told_at_their_closest() {
+    // MS on A front puts the camera at (0.80, 0); C walks along x = 0.9, crossing y = 0 at
+    // 6 s (the walk's middle).
+    let (c, _, _) = run(&script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\n\
+         actor A height 1.80m at (0, 0) facing 0deg\n\
+         actor C height 1.70m at (0.9, -3) facing 90deg\n\
+         at 2s C walks to (0.9, 3) over 8s\n\
+         MS on A front for 12s\n",
+    ));
+    let close: Vec<_> = c
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == Code::TooClose)
+        .collect();
+    assert_eq!(close.len(), 1, "{close:#?}");
+    let m = &close[0].message;
+    assert!(
+        m.starts_with("this framing puts the camera 0.10 m from C at the closest, 6.0 s into the shot (too close from 5."),
+        "{m}"
+    );
+    assert!(m.ends_with("ardrone2 keeps 0.50 m from actors"), "{m}");
+    // A framing too close for the whole shot keeps the message it was told with (the
+    // closest is the first), its time included.
+    let (c, _, _) = run(&script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\nlens 92deg\nactor A height 1.80m at (0, 0) facing 0deg\n\
+         CU on A front for 4s\n",
+    ));
+    let d = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == Code::TooClose)
+        .unwrap();
+    assert!(
+        d.message.contains(" m from A (0.0 s into the shot); "),
+        "{}",
+        d.message
+    );
+}
+
 /// A cut from beside B to a wide two-shot of A and B: the repositioning flight's short way
 /// round the pair's midpoint would sweep through B and out of the stage (the first version of
 /// the planner flew it, and the monitor refused the script: 0.28 m from B, 0.38 m outside);

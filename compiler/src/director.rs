@@ -123,6 +123,8 @@ pub struct Director {
     monitor: Monitor,
     warned: Vec<bool>,
     too_close: Vec<bool>,
+    /// By timeline index: the closest a `compile::too_close` framing came, told at the end.
+    closest: Vec<Option<Closest>>,
     /// By timeline index: `compile::beyond_reach` told.
     beyond_reach: Vec<bool>,
     /// Per-tick scratch: the actors extrapolated, and their body axes.
@@ -266,6 +268,7 @@ impl Director {
             monitor: Monitor::new(profile, scene, script.timeline.len()),
             warned: vec![false; script.timeline.len()],
             too_close: vec![false; script.timeline.len()],
+            closest: vec![None; script.timeline.len()],
             beyond_reach: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
             axes: Vec::with_capacity(scene.actors.len()),
@@ -966,7 +969,7 @@ impl Director {
                     }
                 };
                 if keep {
-                    self.check_clearance(index, &p, actors);
+                    self.check_clearance(index, into_s, &p, actors);
                     self.check_reach(index, 0, &a, actors);
                     if let Some((b, _)) = &b {
                         self.check_reach(index, 1, b, actors);
@@ -989,24 +992,45 @@ impl Director {
     }
 
     /// A framing whose camera position is inside an actor's safety distance: an error on the
-    /// shot (once), with the size to use instead.
-    fn check_clearance(&mut self, index: usize, p: &Vec3, actors: &[ActorPose]) {
+    /// shot (once, when it first is: a flight tells it then), with the size to use instead.
+    /// The closest it comes to that actor is followed to the end ([`Director::finish`] tells
+    /// it): an actor who walks through the camera's spot first comes 0.49 m from it, and the
+    /// error said no more than that.
+    fn check_clearance(&mut self, index: usize, into_s: f64, p: &Vec3, actors: &[ActorPose]) {
         if self.too_close[index] {
+            if let Some(c) = self.closest[index].as_mut() {
+                if let Some(a) = actors.get(c.actor) {
+                    let d = framing::body_axis_distance_m(p, a);
+                    if d < c.closest_m {
+                        (c.closest_m, c.closest_s) = (d, into_s);
+                    }
+                }
+            }
             return;
         }
         for (i, a) in actors.iter().enumerate() {
             let d = framing::body_axis_distance_m(p, a);
             if d < self.safety_m - 0.01 {
                 self.too_close[index] = true;
+                self.closest[index] = Some(Closest {
+                    diagnostic: self.diagnostics.len(),
+                    actor: i,
+                    first_m: d,
+                    first_s: into_s,
+                    closest_m: d,
+                    closest_s: into_s,
+                });
                 let name = self.names.get(i).map(String::as_str).unwrap_or("an actor");
                 self.diagnostics.push(
                     Diagnostic::error(
                         Code::TooClose,
                         self.shots[index].span,
                         format!(
-                            "this framing puts the camera {d:.2} m from {name}; {} keeps {:.2} m \
-                             from actors",
-                            self.profile_name, self.safety_m
+                            "this framing puts the camera {d:.2} m from {name} ({:.1} s into \
+                             the shot); {} keeps {:.2} m from actors",
+                            into_s.max(0.0),
+                            self.profile_name,
+                            self.safety_m
                         ),
                     )
                     .with_label(format!("too close to {name}"))
@@ -1204,6 +1228,24 @@ impl Director {
     pub fn finish(mut self) -> (Vec<ShotTiming>, Vec<Diagnostic>) {
         let shots = std::mem::take(&mut self.shots);
         let mut diags = std::mem::take(&mut self.diagnostics);
+        // A framing too close: the closest it came, when it came closer than first told.
+        for c in self.closest.iter().flatten() {
+            if c.closest_m > c.first_m - 0.005 {
+                continue;
+            }
+            let name = self.names.get(c.actor).map_or("an actor", String::as_str);
+            if let Some(d) = diags.get_mut(c.diagnostic) {
+                d.message = format!(
+                    "this framing puts the camera {:.2} m from {name} at the closest, {:.1} s \
+                     into the shot (too close from {:.1} s); {} keeps {:.2} m from actors",
+                    c.closest_m,
+                    c.closest_s.max(0.0),
+                    c.first_s.max(0.0),
+                    self.profile_name,
+                    self.safety_m
+                );
+            }
+        }
         diags.extend(
             self.monitor
                 .diagnostics(&shots, &self.timings, &self.too_close),
@@ -1215,6 +1257,19 @@ impl Director {
         });
         (self.timings, diags)
     }
+}
+
+/// A shot's framing too close to an actor: where it was first told and the closest it came.
+#[derive(Clone, Copy, Debug)]
+struct Closest {
+    /// Its diagnostic's index in the director's list.
+    diagnostic: usize,
+    actor: usize,
+    /// The distance and the time into the shot when first told.
+    first_m: f64,
+    first_s: f64,
+    closest_m: f64,
+    closest_s: f64,
 }
 
 /// From how much larger than written an over-the-shoulder's background actor is framed (its
