@@ -490,6 +490,49 @@ fn an_actor_walking_through_the_framing_is_told_at_their_closest() {
     );
 }
 
+/// A framing the stage's margin holds the drone off is a warning that says by how much and
+/// what it does to the shot. Before, the director held the camera at the margin without a
+/// word: on a 2 m stage an MS from 0.80 m was flown from 0.70 m, A 12 % larger than written.
+#[test]
+fn a_framing_into_the_stages_margin_is_told_with_what_it_costs() {
+    let src = |side_m: f64, lens: &str| {
+        format!(
+            "stage {side_m}m x {side_m}m x 2m\ndrone ardrone2\n{lens}\
+             actor A height 1.80m at (0, 0) facing 0deg\nMS on A front for 4s\n"
+        )
+    };
+    let (c, samples, _) = run(&script_of(&src(2.0, "")));
+    let warned: Vec<_> = c
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == Code::InMargin)
+        .collect();
+    assert_eq!(warned.len(), 1, "{:#?}", c.diagnostics);
+    assert!(!warned[0].is_error());
+    let m = &warned[0].message;
+    assert!(
+        m.starts_with("this framing puts the camera 0.10 m into the stage's 0.30 m margin at (0.80, 0.00, ")
+            && m.ends_with("the drone is held at the margin, up to 0.10 m off its framing (12 % of its 0.80 m to A)"),
+        "{m}"
+    );
+    // As it says: flown from the margin, 1 − 0.30 m.
+    for s in &samples {
+        assert!((s.position_m[0] - 0.70).abs() < 1e-9, "{s:?}");
+    }
+    // With room, nothing to tell.
+    let (c, _, _) = run(&script_of(&src(3.0, "")));
+    assert!(
+        c.diagnostics.iter().all(|d| d.code != Code::InMargin),
+        "{:#?}",
+        c.diagnostics
+    );
+    // A framing beyond the stage is its error alone.
+    let (c, _, _) = run(&script_of(&src(2.0, "lens 40deg\n")));
+    let codes: Vec<_> = c.diagnostics.iter().map(|d| d.code).collect();
+    assert!(codes.contains(&Code::LeavesStage), "{codes:?}");
+    assert!(!codes.contains(&Code::InMargin), "{codes:?}");
+}
+
 /// A cut from beside B to a wide two-shot of A and B: the repositioning flight's short way
 /// round the pair's midpoint would sweep through B and out of the stage (the first version of
 /// the planner flew it, and the monitor refused the script: 0.28 m from B, 0.38 m outside);

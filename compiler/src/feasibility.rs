@@ -56,6 +56,15 @@ struct ShotStats {
     /// The deepest point outside was the framing's (the target as solved), which the
     /// director does not follow out of the stage.
     outside_framing: bool,
+    /// How deep the framing (the target as solved) puts the camera into the stage's margin
+    /// during the shot, inside the stage, as a fraction of its distance to the nearest actor
+    /// (what the screen shows of the shift: a size that much larger, or an angle of that many
+    /// radians), and where, how deep, and which actor at what distance: the director holds
+    /// the drone at the margin, off its framing.
+    in_margin: Peak,
+    in_margin_at: [f64; 3],
+    in_margin_m: f64,
+    in_margin_actor: Option<(usize, f64)>,
 }
 
 /// Per-shot peaks of everything checked.
@@ -71,6 +80,7 @@ pub struct Monitor {
     safety_m: f64,
     lo: Vec3,
     hi: Vec3,
+    margin_m: f64,
     profile: String,
     names: Vec<String>,
 }
@@ -91,6 +101,7 @@ impl Monitor {
             safety_m: profile.safety.actor_distance_m,
             lo: Vec3::from(lo),
             hi: Vec3::from(hi),
+            margin_m: profile.safety.stage_margin_m,
             profile: profile.name.clone(),
             names: scene.actors.iter().map(|a| a.name.clone()).collect(),
         }
@@ -162,6 +173,33 @@ impl Monitor {
                 st.outside = Peak { value: out, t_s: t };
                 st.outside_at = q.into();
                 st.outside_framing = framing;
+            }
+        }
+        if in_shot {
+            // Signed: how far beyond the nearest face (negative inside), plus the margin.
+            let beyond = (0..3).fold(f64::NEG_INFINITY, |d, i| {
+                d.max(self.lo[i] - solved[i]).max(solved[i] - self.hi[i])
+            });
+            let into = beyond + self.margin_m;
+            if into > 0.0 && into <= self.margin_m {
+                let nearest = (actors.iter().enumerate())
+                    .map(|(i, a)| {
+                        let d =
+                            crate::norm_xy(solved.x - a.position_m[0], solved.y - a.position_m[1]);
+                        (i, d)
+                    })
+                    .min_by(|a, b| a.1.total_cmp(&b.1));
+                // Without actors (a path), the shift is the shift: as if 1 m away.
+                let share = into / nearest.map_or(1.0, |(_, d)| d.max(0.1));
+                if share > st.in_margin.value {
+                    st.in_margin = Peak {
+                        value: share,
+                        t_s: t,
+                    };
+                    st.in_margin_at = (*solved).into();
+                    st.in_margin_m = into;
+                    st.in_margin_actor = nearest;
+                }
             }
         }
     }
@@ -339,6 +377,40 @@ impl Monitor {
                     .with_help("use a wider size, a longer lens (`lens …`), or move the path away from the actors"),
                 );
             }
+            // Held at the margin: a warning (the shot is flown, a little off its framing) when
+            // the screen shows it (`IN_MARGIN_TOLD`), and the framing does not leave the stage
+            // (an error of its own).
+            if st.in_margin.value > IN_MARGIN_TOLD && st.outside.value <= 0.02 {
+                let (p, by, when) = (st.in_margin_at, st.in_margin_m, at(st.in_margin.t_s));
+                let margin = self.margin_m;
+                let share = match st.in_margin_actor {
+                    Some((i, d)) => format!(
+                        " ({:.0} % of its {d:.2} m to {})",
+                        st.in_margin.value * 100.0,
+                        self.names.get(i).map_or("the actor", String::as_str)
+                    ),
+                    None => String::new(),
+                };
+                out.push(
+                    Diagnostic::warning(
+                        Code::InMargin,
+                        shot.span,
+                        format!(
+                            "this framing puts the camera {by:.2} m into the stage's {margin:.2} m \
+                             margin at ({:.2}, {:.2}, {:.2}) ({when}); the drone is held at the \
+                             margin, up to {by:.2} m off its framing{share}",
+                            p[0], p[1], p[2]
+                        ),
+                    )
+                    .with_label("into the stage's margin")
+                    .with_help(format!(
+                        "{} keeps {margin:.2} m from the stage's walls, floor and ceiling: make the \
+                         stage larger, or move the framing inward (a tighter size brings the \
+                         camera closer to the actors)",
+                        self.profile
+                    )),
+                );
+            }
             if st.outside.value > 0.02 {
                 let (p, by, when) = (st.outside_at, st.outside.value, at(st.outside.t_s));
                 let at_p = format!("at ({:.2}, {:.2}, {:.2}) ({when})", p[0], p[1], p[2]);
@@ -360,6 +432,13 @@ impl Monitor {
         out
     }
 }
+
+/// The share of its distance to the nearest actor that a framing's camera may be held off by
+/// the stage's margin before `compile::in_margin` is told: 8 % (a size that much off, about a
+/// quarter of the step between two named sizes, or an angle of 5°). `scene.psl`'s high-angle
+/// two-shot is held 0.07–0.08 m off at 1.3 m (6 %), its reverse over-the-shoulder 0.10 m off
+/// at 2.3 m (4 %): not told; an MS held 0.10 m off at 0.8 m (12 %) is.
+const IN_MARGIN_TOLD: f64 = 0.08;
 
 /// Round up to a tenth (durations and times suggested to the user).
 pub(crate) fn round_up_1(x: f64) -> f64 {

@@ -95,6 +95,7 @@ codes! {
     RigMissingKey => "rig::missing_key": "A rig file lacks a required key.",
     SizeOff => "compile::size_off": "An over-the-shoulder hold frames an actor two or more sizes from the one the script names.",
     ProfileOff => "compile::profile_off": "An over-the-shoulder hold sees an actor from a side far from the profile the script names.",
+    InMargin => "compile::in_margin": "A framing puts the camera inside the stage's safety margin: the drone is held at the margin, off its framing.",
     BeyondReach => "compile::beyond_reach": "An over-the-shoulder's background size is just out of reach where the actors stand: the actor is framed a little larger.",
 }
 
