@@ -301,6 +301,19 @@ impl Director {
         &self.timings
     }
 
+    /// Where the shots' clock `t_s` (as [`Director::step`] is given it) falls on the script's
+    /// clock as written: a repositioning flight inserted before a shot holds it at the shot's
+    /// start, so that it runs from 0 to the script's written end whatever the flights
+    /// inserted (a progress display's position).
+    pub fn written_t_s(&self, t_s: f64) -> f64 {
+        match self.timings.last() {
+            Some(x) => {
+                x.script_start_s + (t_s - x.start_s).clamp(0.0, (x.end_s - x.start_s).max(0.0))
+            }
+            None => 0.0,
+        }
+    }
+
     /// Where the camera is before the first step (the flight: where the approach left the
     /// drone, which is a real position: the camera is placed). A first framing that does not
     /// solve holds it there, instead of at the origin, and when it solves the camera steers

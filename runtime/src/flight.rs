@@ -67,7 +67,9 @@ pub struct Progress {
     pub phase: Phase,
     pub shot: Option<usize>,
     pub shots: usize,
-    /// Script time within the shots (0 before they start).
+    /// Where the shots are on the script's clock as written (0 before they start, held at a
+    /// shot's start during a repositioning flight inserted before it, the script's end after
+    /// the last: [`Director::written_t_s`]).
     pub script_t_s: f64,
     /// Script duration as written.
     pub script_duration_s: f64,
@@ -416,6 +418,8 @@ struct Flight<'s, 'b> {
     link_lost: bool,
     log_error: Option<io::Error>,
     script_duration_s: f64,
+    /// Where the shots are on the script's clock as written (0 before "action!").
+    written_t_s: f64,
 }
 
 /// A heading aimed from a fresh measurement of the drone's position, and its rate.
@@ -492,6 +496,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             link_lost: false,
             log_error: None,
             script_duration_s,
+            written_t_s: 0.0,
         })
     }
 
@@ -791,6 +796,7 @@ impl<'s, 'b> Flight<'s, 'b> {
                 t = self.wait_tick(t + self.period_s)?;
                 let script_t = t - action_s;
                 let sample = director.step(script_t, &self.actors.poses);
+                self.written_t_s = director.written_t_s(script_t);
                 // What the director found against the live actors, told as it arises: a
                 // framing it cannot solve holds the drone where it is until it solves, which
                 // the report alone would show only as a thinner framing figure.
@@ -1125,11 +1131,9 @@ impl<'s, 'b> Flight<'s, 'b> {
             phase,
             shot,
             shots: self.setup.script.timeline.len(),
-            script_t_s: if phase == Phase::Shots {
-                sample.t_s.min(self.script_duration_s)
-            } else {
-                0.0
-            },
+            // Not the sample's time, which is the flight's clock (the display once showed the
+            // take-off's seconds as script time, and filled its bar before the shots ended).
+            script_t_s: self.written_t_s,
             script_duration_s: self.script_duration_s,
             position_error_m: error.map(|e| e.0),
         });

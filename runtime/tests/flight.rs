@@ -119,6 +119,8 @@ struct Recorder {
     hover_ticks_in_shots: usize,
     /// The phases the progress display was shown, each once, in order.
     phases: Vec<Phase>,
+    /// Each progress report's phase and position on the script's clock.
+    script_times: Vec<(Phase, f64)>,
     /// During the approach, the least horizontal distance from the reference and from the
     /// measured drone to an actor (below the top of their safety cylinder, 0.5 m over the
     /// head).
@@ -127,15 +129,17 @@ struct Recorder {
     approach_start_m: Option<[f64; 3]>,
 }
 
-/// The observer's side of [`Recorder`]: the phases of the progress reports.
+/// The observer's side of [`Recorder`]: the phases of the progress reports, and their
+/// script times.
 #[derive(Default)]
-struct Phases(Vec<Phase>);
+struct Phases(Vec<Phase>, Vec<(Phase, f64)>);
 
 impl Observer for Phases {
     fn progress(&mut self, p: &Progress) {
         if self.0.last() != Some(&p.phase) {
             self.0.push(p.phase);
         }
+        self.1.push((p.phase, p.script_t_s));
     }
 }
 
@@ -254,7 +258,7 @@ fn fly_at(
         &mut rec,
         &mut phases,
     );
-    rec.phases = phases.0;
+    (rec.phases, rec.script_times) = (phases.0, phases.1);
     let state = backends.drone.telemetry().state;
     (result, rec, state)
 }
@@ -951,4 +955,53 @@ fn a_loop_faster_than_the_mocap_aims_and_sets_off_from_the_newest_measurement() 
             rec.kinds()
         );
     }
+}
+
+/// The progress display's position runs on the script's clock as written: 0 until "action!",
+/// from 0 to the script's end over the shots, held at a shot's start while a repositioning
+/// flight inserted before it flies, and at the end while landing. Before, it was the flight's
+/// clock (the take-off's seconds shown as script time), and reached the end seconds before
+/// the shots did.
+#[test]
+fn the_progress_runs_on_the_scripts_clock_as_written() {
+    // A cut that needs a repositioning flight: the shots take longer than written.
+    const CUT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
+                       actor A height 1.80m at (0, 0) facing 0deg\n\
+                       MS on A front for 3s\ncut to MS on A back for 3s\n";
+    let (r, rec, _) = fly_on(CUT, |_| {}, None, Rig::plain);
+    let r = r.unwrap();
+    assert!(r.completed, "{:?}", rec.kinds());
+    assert!(
+        r.shots_time_s > 7.0,
+        "a repositioning flight: {} s",
+        r.shots_time_s
+    );
+    let before: Vec<f64> = (rec.script_times.iter())
+        .filter(|(p, _)| matches!(p, Phase::TakeOff | Phase::Approach))
+        .map(|x| x.1)
+        .collect();
+    assert!(
+        !before.is_empty() && before.iter().all(|&t| t == 0.0),
+        "{before:?}"
+    );
+    let shots: Vec<f64> = (rec.script_times.iter())
+        .filter(|(p, _)| *p == Phase::Shots)
+        .map(|x| x.1)
+        .collect();
+    assert!(shots[0] < 0.02, "the shots start at {}", shots[0]);
+    assert!(shots.windows(2).all(|w| w[1] >= w[0]), "it never runs back");
+    assert!(shots.iter().all(|&t| t <= 6.0 + 1e-9));
+    // Held at 3 s for the repositioning flight's length.
+    let held = shots.iter().filter(|&&t| t == 3.0).count() as f64 * 0.01;
+    assert!(
+        (held - (r.shots_time_s - 6.0)).abs() < 0.05,
+        "held {held} s for {} s of repositioning",
+        r.shots_time_s - 6.0
+    );
+    assert!((shots.last().unwrap() - 6.0).abs() < 1e-9);
+    let landing: Vec<f64> = (rec.script_times.iter())
+        .filter(|(p, _)| *p == Phase::Landing)
+        .map(|x| x.1)
+        .collect();
+    assert!(landing.iter().all(|&t| t == 6.0), "{landing:?}");
 }
