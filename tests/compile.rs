@@ -1058,7 +1058,7 @@ fn an_unplaced_camera_is_held_then_starts_framed_and_a_started_one_steers() {
     // On set: held where it starts, then steered from there.
     let start = Vec3::new(-2.0, 1.5, 1.2);
     let mut d = Director::new(&script, scene, &ardrone());
-    d.start_from(start);
+    d.start_from(start, Vec3::zeros(), 0.3);
     assert!(d.placed());
     for k in 0..50 {
         let s = d.step(t(k), &poses(1.5));
@@ -1075,11 +1075,61 @@ fn an_unplaced_camera_is_held_then_starts_framed_and_a_started_one_steers() {
     let off = (Vec3::from(s.position_m) - d.solved_target_m()).norm();
     assert!(off < 0.02, "{off} m from the framing after 9.5 s");
     // A second start_from, once stepped, changes nothing.
-    d.start_from(start);
+    d.start_from(start, Vec3::zeros(), 0.3);
     let s2 = d.step(t(1000), &poses(3.0));
     assert!((Vec3::from(s2.position_m) - Vec3::from(s.position_m)).norm() < 0.01);
     let codes: Vec<Code> = d.diagnostics_so_far().iter().map(|x| x.code).collect();
     assert_eq!(codes, [Code::Unframeable], "nothing about the start");
+}
+
+/// Before 0 s the director's clock is held at the script's start: a camera placed off the
+/// first framing (the flight: where its approach's glide ended) steers onto it, without a
+/// jump, and on into the first shot; the shot does not start early. This is the flight's
+/// settle before "action!".
+#[test]
+fn before_its_clock_starts_a_placed_camera_steers_onto_the_first_framing() {
+    let script = script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+         MS on A front for 2s\ncut to MS on A 34left for 2s\n",
+    );
+    let scene = script.scene.as_ref().unwrap();
+    let poses = Blocking::new(scene).poses(0.0);
+    let framed = Director::new(&script, scene, &ardrone()).step(0.0, &poses);
+    let target = Vec3::from(framed.position_m);
+    let start = target + Vec3::new(0.3, 0.4, 0.0);
+    let mut d = Director::new(&script, scene, &ardrone());
+    d.start_from(start, Vec3::zeros(), framed.heading_rad);
+    let mut last = start;
+    let mut at_zero = None;
+    for k in -100..=150 {
+        let t = f64::from(k) / 100.0;
+        let s = d.step(t, &poses);
+        let p = Vec3::from(s.position_m);
+        assert!(
+            (p - last).norm() < 0.02,
+            "a jump at {t} s: {} m",
+            (p - last).norm()
+        );
+        assert_eq!(s.shot, 0, "{t} s");
+        if k < 0 {
+            assert_eq!(d.written_t_s(t), 0.0);
+        }
+        if k == 0 {
+            at_zero = Some((p - target).norm());
+        }
+        last = p;
+    }
+    // Closing as e^(−t/1 s) from 0.5 m: about 0.18 m at 0 s, and on the framing 1.5 s later.
+    let at_zero = at_zero.unwrap();
+    assert!((0.1..0.3).contains(&at_zero), "{at_zero} m off at 0 s");
+    assert!(
+        (last - target).norm() < 0.05,
+        "{} m off at 1.5 s",
+        (last - target).norm()
+    );
+    // The first shot still ends at 2 s, as written.
+    let s = d.step(2.01, &poses);
+    assert_eq!(s.shot, 1);
 }
 
 /// An over-the-shoulder whose background actor's size is just out of reach where the actors

@@ -107,6 +107,9 @@ pub struct Director {
     /// flight said where it starts. Until then the camera is nowhere (a first framing that
     /// does not solve holds it at the origin), so nothing is checked against that position.
     placed: bool,
+    /// [`Director::start_from`] placed the camera: the first step keeps it there (and its
+    /// heading), and the framing is steered to, not jumped to.
+    started_from: bool,
     safety_m: f64,
     profile_name: String,
     phase: Phase,
@@ -254,6 +257,7 @@ impl Director {
             raw_target: Vec3::zeros(),
             failed_now: false,
             placed: false,
+            started_from: false,
             safety_m: profile.safety.actor_distance_m,
             profile_name: profile.name.clone(),
             phase: Phase::NotStarted,
@@ -314,14 +318,26 @@ impl Director {
         }
     }
 
-    /// Where the camera is before the first step (the flight: where the approach left the
-    /// drone, which is a real position: the camera is placed). A first framing that does not
-    /// solve holds it there, instead of at the origin, and when it solves the camera steers
-    /// to it from there rather than jumping. No effect once stepped.
-    pub fn start_from(&mut self, position_m: Vec3) {
+    /// Where the camera is, how it moves, and its heading, before the first step (the flight:
+    /// where the approach's glide left the drone, which is a real position: the camera is
+    /// placed). The camera steers from there to the first framing instead of starting on it
+    /// (the flight steps it before 0 s to settle, [`Director::step`]): against live actors
+    /// the framing has moved since the approach was planned, and on `scene.psl` the
+    /// reference once jumped up to 0.66 m at "action!". A first framing that does not solve
+    /// holds it there, instead of at the origin. No effect once stepped.
+    pub fn start_from(&mut self, position_m: Vec3, velocity_mps: Vec3, heading_rad: f64) {
         if matches!(self.phase, Phase::NotStarted) {
-            self.state.p = position_m;
+            self.state = Kinematics {
+                p: position_m,
+                v: velocity_mps,
+                a: Vec3::zeros(),
+            };
+            self.heading = HeadingState {
+                heading_rad,
+                rate_radps: 0.0,
+            };
             self.placed = true;
+            self.started_from = true;
         }
     }
 
@@ -445,7 +461,12 @@ impl Director {
 
     /// One tick: the sample at `t_s` given the actors' poses at `t_s` (one per actor of the
     /// scene, in declaration order).
+    ///
+    /// Before 0 s the script's clock is held at its start: the camera, placed by
+    /// [`Director::start_from`], steers to the first framing as the actors stand, which a
+    /// flight does while the drone settles before "action!" (`compile` starts at 0 s).
     pub fn step(&mut self, t_s: f64, actors: &[ActorPose]) -> Sample {
+        let clock_s = t_s.max(0.0);
         let first = matches!(self.phase, Phase::NotStarted);
         if first {
             if self.shots.is_empty() {
@@ -457,7 +478,7 @@ impl Director {
             }
         }
         let dt = if first { 0.0 } else { t_s - self.last_t_s };
-        let continuous = self.advance(t_s, actors);
+        let continuous = self.advance(clock_s, actors);
         if !continuous {
             self.last_target = None;
         }
@@ -468,7 +489,7 @@ impl Director {
             self.blend_spare = Some((from, to));
         }
         self.failed_now = false;
-        let target = self.target(t_s, actors, true);
+        let target = self.target(clock_s, actors, true);
         let v_t = match self.held_one_actor() {
             // A one-actor hold moves rigidly with its actor: the exact velocity (camera-math
             // §2), no second solve.
@@ -486,7 +507,7 @@ impl Director {
                     // instead of a second solve.
                     framing::position_m(&v, &ahead, &self.lens, &self.gimbal)
                 } else {
-                    self.target(t_s + EPS_S, &ahead, false)
+                    self.target(clock_s + EPS_S, &ahead, false)
                 };
                 self.ahead = ahead;
                 (target_ahead - target) / EPS_S
@@ -519,7 +540,9 @@ impl Director {
         );
         let target = goal.p;
 
-        if first || dt <= 0.0 || !self.placed {
+        if first && self.started_from {
+            // Placed at rest where the flight put it: steered from there from the next tick.
+        } else if first || dt <= 0.0 || !self.placed {
             // The first shot starts framed: on its target, moving with it (never faster than
             // the camera may fly: live actors' velocities are estimates). So does a first
             // framing that solves only after a few ticks: the camera was never anywhere else.
@@ -561,12 +584,14 @@ impl Director {
         }
 
         // Orientation at the camera's actual position.
-        let (heading_target, pitch_target) = self.look(t_s, actors, &self.state.p.clone());
+        let (heading_target, pitch_target) = self.look(clock_s, actors, &self.state.p.clone());
         let heading_rate_target = match self.last_target {
             Some((t0, _, h0)) if t_s > t0 => wrap_angle_rad(heading_target - h0) / (t_s - t0),
             _ => 0.0,
         };
-        if first || dt <= 0.0 {
+        if first && self.started_from {
+            // The heading it was placed with.
+        } else if first || dt <= 0.0 {
             self.heading = HeadingState {
                 heading_rad: heading_target,
                 rate_radps: 0.0,
