@@ -52,6 +52,11 @@ fn shipped() -> Vec<(String, Script)> {
         .collect()
 }
 
+/// The diagnostics of one kind.
+fn with_code(c: &Compiled, code: Code) -> Vec<&dronecine_grammar::Diagnostic> {
+    c.diagnostics.iter().filter(|d| d.code == code).collect()
+}
+
 fn lens_of(script: &Script) -> Lens {
     let p = ardrone();
     match script.scene.as_ref().unwrap().lens {
@@ -436,6 +441,12 @@ fn a_size_inside_the_safety_distance_is_an_error() {
         .find(|d| d.code == Code::TooClose)
         .expect("too close");
     assert!(d.message.contains("0.50 m"), "{}", d.message);
+    // Too close for the whole shot: told with when it first is (the closest, here).
+    assert!(
+        d.message.contains(" m from A (0.0 s into the shot); "),
+        "{}",
+        d.message
+    );
     // The paper's MS with the AR.Drone's own lens (the profile's) is allowed.
     let (c, _, _) = run(&script_of(
         "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
@@ -460,11 +471,7 @@ fn an_actor_walking_through_the_framing_is_told_at_their_closest() {
          at 2s C walks to (0.9, 3) over 8s\n\
          MS on A front for 12s\n",
     ));
-    let close: Vec<_> = c
-        .diagnostics
-        .iter()
-        .filter(|d| d.code == Code::TooClose)
-        .collect();
+    let close = with_code(&c, Code::TooClose);
     assert_eq!(close.len(), 1, "{close:#?}");
     let m = &close[0].message;
     assert!(
@@ -472,22 +479,6 @@ fn an_actor_walking_through_the_framing_is_told_at_their_closest() {
         "{m}"
     );
     assert!(m.ends_with("ardrone2 keeps 0.50 m from actors"), "{m}");
-    // A framing too close for the whole shot keeps the message it was told with (the
-    // closest is the first), its time included.
-    let (c, _, _) = run(&script_of(
-        "stage 8m x 6m x 3m\ndrone ardrone2\nlens 92deg\nactor A height 1.80m at (0, 0) facing 0deg\n\
-         CU on A front for 4s\n",
-    ));
-    let d = c
-        .diagnostics
-        .iter()
-        .find(|d| d.code == Code::TooClose)
-        .unwrap();
-    assert!(
-        d.message.contains(" m from A (0.0 s into the shot); "),
-        "{}",
-        d.message
-    );
 }
 
 /// A framing the stage's margin holds the drone off is a warning that says by how much and
@@ -502,11 +493,7 @@ fn a_framing_into_the_stages_margin_is_told_with_what_it_costs() {
         )
     };
     let (c, samples, _) = run(&script_of(&src(2.0, "")));
-    let warned: Vec<_> = c
-        .diagnostics
-        .iter()
-        .filter(|d| d.code == Code::InMargin)
-        .collect();
+    let warned = with_code(&c, Code::InMargin);
     assert_eq!(warned.len(), 1, "{:#?}", c.diagnostics);
     assert!(!warned[0].is_error());
     let m = &warned[0].message;
@@ -631,11 +618,7 @@ fn a_hold_that_misses_its_screen_points_is_a_warning_with_the_figure() {
     );
     let (c, _, _) = run(&script);
     assert!(!c.has_errors(), "{:?}", c.diagnostics);
-    let off: Vec<_> = c
-        .diagnostics
-        .iter()
-        .filter(|d| d.code == Code::FramingOff)
-        .collect();
+    let off = with_code(&c, Code::FramingOff);
     assert_eq!(off.len(), 1, "{:?}", c.diagnostics);
     assert!(!off[0].is_error());
     assert_eq!(off[0].span, script.timeline[0].span);
@@ -1140,11 +1123,7 @@ fn before_its_clock_starts_a_placed_camera_steers_onto_the_first_framing() {
 fn an_over_the_shoulder_just_out_of_reach_is_told_with_a_fix_that_works() {
     let src = |b_x_m: f64| over_shoulder(b_x_m, 6.0);
     let (c, _, _) = run(&script_of(&src(1.85)));
-    let told: Vec<_> = c
-        .diagnostics
-        .iter()
-        .filter(|d| d.code == Code::BeyondReach)
-        .collect();
+    let told = with_code(&c, Code::BeyondReach);
     assert_eq!(told.len(), 1, "{:?}", c.diagnostics);
     assert!(!c.has_errors(), "{:?}", c.diagnostics);
     let d = told[0];
