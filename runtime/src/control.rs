@@ -42,7 +42,7 @@ pub struct Measurement {
 pub struct TickInput {
     /// Flight clock at this tick.
     pub t_s: f64,
-    /// Δ[k]: the measured time since the previous tick (mocap timestamps), > 0.
+    /// Δ\[k\]: the measured time since the previous tick (mocap timestamps), > 0.
     pub dt_s: f64,
     /// `None` on a mocap dropout: the filters predict only.
     pub measurement: Option<Measurement>,

@@ -516,7 +516,7 @@ pub fn actors_scene(ns: u64, names: &[String], heights_m: &[f64]) -> Vec<u8> {
 /// The points are written straight into the message text (a one-hour reference has tens of
 /// thousands of them: as a JSON tree they cost about 1.5 kB each, the compile's peak memory):
 /// the message is serialized with empty `points` arrays, and each line's points are spliced
-/// into its array, formatted exactly as [`xyz`] values are.
+/// into its array, formatted exactly as `xyz` values are.
 pub fn path_scene(ns: u64, segments: &[(usize, Vec<[f64; 3]>)]) -> Vec<u8> {
     const EMPTY: &[u8] = b"\"points\":[]";
     let kept: Vec<&(usize, Vec<[f64; 3]>)> = segments

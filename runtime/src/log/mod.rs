@@ -3,13 +3,15 @@
 //!
 //! # Contents
 //!
-//! Metadata record `dronecine.flight`: every field of the [`FlightHeader`] under its own name,
-//! each value the field's JSON text (`"script_name"` → `"\"orbit.psl\""`, `"seed"` → `"42"` or
-//! `"null"`, `"sim_effects_off"` → `["wind","battery"]`, `[]` or `"null"` (absent from logs
-//! written before it was recorded), `"controller"` → `{"kind":"lqg",…}`). Attachment: the script text (`text/plain`,
-//! named after the script). Every channel but `/servo/tick` carries JSON messages with JSON
-//! schemas; `/servo/tick` is CDR with a `ros2msg` schema ([`cdr`]). `log_time =
-//! publish_time =` the tick's `input.t_s` in nanoseconds (negative or non-finite times: 0).
+//! Metadata record `dronecine.flight`: every field of the
+//! [`FlightHeader`](crate::record::FlightHeader) under its own name, each value the field's
+//! JSON text (`"script_name"` → `"\"orbit.psl\""`, `"seed"` → `"42"` or `"null"`,
+//! `"sim_effects_off"` → `["wind","battery"]`, `[]` or `"null"` (absent from logs written
+//! before it was recorded), `"controller"` → `{"kind":"lqg",…}`). Attachment: the script
+//! text (`text/plain`, named after the script). Every channel but `/servo/tick` carries
+//! JSON messages with JSON schemas; `/servo/tick` is CDR with a `ros2msg` schema ([`cdr`]).
+//! `log_time = publish_time =` the tick's `input.t_s` in nanoseconds (negative or non-finite
+//! times: 0).
 //!
 //! | topic | schema | when | fields |
 //! |---|---|---|---|
