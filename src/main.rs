@@ -132,7 +132,8 @@ enum Command {
         /// Keep to the wall clock (by default a simulated flight runs as fast as it can).
         #[arg(long)]
         realtime: bool,
-        /// Control rate, Hz.
+        /// Control rate, Hz, from 10 to 1000 (the simulator's mocap sends 100 frames a second:
+        /// a faster loop predicts between them).
         #[arg(
             long,
             value_name = "HZ",
