@@ -797,6 +797,21 @@ impl<'s, 'b> Flight<'s, 'b> {
             last.heading_rad,
         );
         if let Outcome::Done = outcome {
+            // How far the actors have moved the first framing since the approach was planned
+            // (the log says so: the settle may not close it all before "action!").
+            let (now_first, _, unsolved) = self.probe();
+            let message = match unsolved {
+                None => format!(
+                    "settling on the first framing as the actors stand, {:.2} m from where the \
+                     approach flew ({SETTLE_S:.1} s)",
+                    (Vec3::from(now_first.position_m) - Vec3::from(last.position_m)).norm()
+                ),
+                Some(why) => format!(
+                    "the first framing does not solve as the actors stand ({why}): holding \
+                     where the approach flew until it does"
+                ),
+            };
+            self.event(t, "info", "settle", message);
             // Its last tick one period before "action!", the first shot's at 0 s.
             let action_s = t + SETTLE_S;
             while t < action_s - 1.5 * self.period_s {

@@ -338,6 +338,7 @@ fn an_undisturbed_flight_completes_without_failsafes() {
     for k in [
         "take_off",
         "approach",
+        "settle",
         "action",
         "shot_start",
         "landing",
@@ -1038,7 +1039,7 @@ fn a_first_framing_that_moves_after_the_approach_is_planned_is_steered_to() {
             ..Faults::default()
         },
         None,
-        |_| {},
+        |c| c.effects.actor_deviation = false,
     );
     let r = r.unwrap();
     assert!(r.completed, "{:?}", rec.kinds());
@@ -1047,6 +1048,15 @@ fn a_first_framing_that_moves_after_the_approach_is_planned_is_steered_to() {
         approach < 4.5,
         "the actor steps off after the approach is planned ({approach} s)"
     );
+    // The log says how far the first framing moved: A 0.4 m sideways (the simulator's own
+    // drift of the actors is off), the MS with them.
+    let settle = &rec.first("settle").unwrap().message;
+    let moved_m: f64 = settle
+        .strip_prefix("settling on the first framing as the actors stand, ")
+        .and_then(|m| m.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or(f64::NAN);
+    assert!((moved_m - 0.4).abs() < 0.03, "{settle}");
     // At most the profile's top speed (1.84 m/s) for a 10 ms tick, with room for rounding.
     assert!(
         rec.max_reference_step_m < 0.02,
