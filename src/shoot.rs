@@ -479,28 +479,7 @@ impl Display {
             bar.finish_and_clear();
         }
     }
-}
 
-impl Observer for Display {
-    fn progress(&mut self, p: &Progress) {
-        if self.bar.is_some() {
-            self.show(p, Instant::now());
-        }
-    }
-
-    fn event(&mut self, e: &Event) {
-        if self.quiet || e.level == "info" {
-            return;
-        }
-        let line = format!("{} at {:.2} s: {}", e.level, e.t_s, e.message);
-        match &self.bar {
-            Some(bar) => bar.println(line),
-            None => errln!("{line}"),
-        }
-    }
-}
-
-impl Display {
     /// The progress line at wall time `now`: a new phase or shot at once, else at most every
     /// `DISPLAY_PERIOD`.
     fn show(&mut self, p: &Progress, now: Instant) {
@@ -533,6 +512,25 @@ impl Display {
             "{phase} · t {:.1}/{:.1} s · tracking error {error}",
             p.script_t_s, p.script_duration_s
         ));
+    }
+}
+
+impl Observer for Display {
+    fn progress(&mut self, p: &Progress) {
+        if self.bar.is_some() {
+            self.show(p, Instant::now());
+        }
+    }
+
+    fn event(&mut self, e: &Event) {
+        if self.quiet || e.level == "info" {
+            return;
+        }
+        let line = format!("{} at {:.2} s: {}", e.level, e.t_s, e.message);
+        match &self.bar {
+            Some(bar) => bar.println(line),
+            None => errln!("{line}"),
+        }
     }
 }
 

@@ -125,8 +125,8 @@ pub struct Director {
     diagnostics: Vec<Diagnostic>,
     monitor: Monitor,
     warned: Vec<bool>,
-    too_close: Vec<bool>,
-    /// By timeline index: the closest a `compile::too_close` framing came, told at the end.
+    /// By timeline index: `compile::too_close` told, and the closest that framing came
+    /// (told at the end).
     closest: Vec<Option<Closest>>,
     /// By timeline index: `compile::beyond_reach` told.
     beyond_reach: Vec<bool>,
@@ -271,7 +271,6 @@ impl Director {
             diagnostics: Vec::new(),
             monitor: Monitor::new(profile, scene, script.timeline.len()),
             warned: vec![false; script.timeline.len()],
-            too_close: vec![false; script.timeline.len()],
             closest: vec![None; script.timeline.len()],
             beyond_reach: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
@@ -478,6 +477,9 @@ impl Director {
             }
         }
         let dt = if first { 0.0 } else { t_s - self.last_t_s };
+        // The first step of a camera the flight placed: it stays where it was placed, with
+        // its heading, and is steered from the next tick.
+        let keep_placed = first && self.started_from;
         let continuous = self.advance(clock_s, actors);
         if !continuous {
             self.last_target = None;
@@ -540,8 +542,7 @@ impl Director {
         );
         let target = goal.p;
 
-        if first && self.started_from {
-            // Placed at rest where the flight put it: steered from there from the next tick.
+        if keep_placed {
         } else if first || dt <= 0.0 || !self.placed {
             // The first shot starts framed: on its target, moving with it (never faster than
             // the camera may fly: live actors' velocities are estimates). So does a first
@@ -560,27 +561,20 @@ impl Director {
             );
             // A tick longer than the steering's step is steered in sub-steps toward the goal
             // as it moved during the tick, so the camera is the same at any rate.
-            let n = steering::substeps(dt);
-            let h = dt / n as f64;
-            for k in 0..n {
-                let back_s = (n - 1 - k) as f64 * h;
-                let goal_then = if back_s > 0.0 {
-                    goal.earlier(back_s)
-                } else {
-                    goal
-                };
-                let extra = steering::separation(&self.state.p, &self.axes, self.safety_m, 3.0)
-                    + steering::containment(&self.state.p, &self.stage_lo, &self.stage_hi, 4.0);
-                self.state = steering::step(
-                    &self.state,
-                    &goal_then,
-                    extra,
-                    (&self.stage_lo, &self.stage_hi),
-                    &self.limits,
-                    &self.gains,
-                    h,
-                );
-            }
+            let (axes, safety_m) = (&self.axes, self.safety_m);
+            let (lo, hi) = (&self.stage_lo, &self.stage_hi);
+            self.state = steering::advance(
+                &self.state,
+                &goal,
+                |p| {
+                    steering::separation(p, axes, safety_m, 3.0)
+                        + steering::containment(p, lo, hi, 4.0)
+                },
+                (lo, hi),
+                &self.limits,
+                &self.gains,
+                dt,
+            );
         }
 
         // Orientation at the camera's actual position.
@@ -589,31 +583,21 @@ impl Director {
             Some((t0, _, h0)) if t_s > t0 => wrap_angle_rad(heading_target - h0) / (t_s - t0),
             _ => 0.0,
         };
-        if first && self.started_from {
-            // The heading it was placed with.
+        if keep_placed {
         } else if first || dt <= 0.0 {
             self.heading = HeadingState {
                 heading_rad: heading_target,
                 rate_radps: 0.0,
             };
         } else {
-            let n = steering::substeps(dt);
-            let h = dt / n as f64;
-            for k in 0..n {
-                let back_s = (n - 1 - k) as f64 * h;
-                self.heading = steering::step_heading(
-                    &self.heading,
-                    if back_s > 0.0 {
-                        heading_target - heading_rate_target * back_s
-                    } else {
-                        heading_target
-                    },
-                    heading_rate_target,
-                    &self.limits,
-                    &self.gains,
-                    h,
-                );
-            }
+            self.heading = steering::advance_heading(
+                &self.heading,
+                heading_target,
+                heading_rate_target,
+                &self.limits,
+                &self.gains,
+                dt,
+            );
         }
         self.pitch_rad = pitch_target;
         self.last_target = (!self.failed_now).then_some((t_s, v_t, heading_target));
@@ -1035,13 +1019,11 @@ impl Director {
     /// it): an actor who walks through the camera's spot first comes 0.49 m from it, and the
     /// error said no more than that.
     fn check_clearance(&mut self, index: usize, into_s: f64, p: &Vec3, actors: &[ActorPose]) {
-        if self.too_close[index] {
-            if let Some(c) = self.closest[index].as_mut() {
-                if let Some(a) = actors.get(c.actor) {
-                    let d = framing::body_axis_distance_m(p, a);
-                    if d < c.closest_m {
-                        (c.closest_m, c.closest_s) = (d, into_s);
-                    }
+        if let Some(c) = self.closest[index].as_mut() {
+            if let Some(a) = actors.get(c.actor) {
+                let d = framing::body_axis_distance_m(p, a);
+                if d < c.closest_m {
+                    (c.closest_m, c.closest_s) = (d, into_s);
                 }
             }
             return;
@@ -1049,7 +1031,6 @@ impl Director {
         for (i, a) in actors.iter().enumerate() {
             let d = framing::body_axis_distance_m(p, a);
             if d < self.safety_m - 0.01 {
-                self.too_close[index] = true;
                 self.closest[index] = Some(Closest {
                     diagnostic: self.diagnostics.len(),
                     actor: i,
@@ -1266,6 +1247,7 @@ impl Director {
     pub fn finish(mut self) -> (Vec<ShotTiming>, Vec<Diagnostic>) {
         let shots = std::mem::take(&mut self.shots);
         let mut diags = std::mem::take(&mut self.diagnostics);
+        let too_close: Vec<bool> = self.closest.iter().map(Option::is_some).collect();
         // A framing too close: the closest it came, when it came closer than first told.
         for c in self.closest.iter().flatten() {
             if c.closest_m > c.first_m - 0.005 {
@@ -1284,10 +1266,7 @@ impl Director {
                 );
             }
         }
-        diags.extend(
-            self.monitor
-                .diagnostics(&shots, &self.timings, &self.too_close),
-        );
+        diags.extend(self.monitor.diagnostics(&shots, &self.timings, &too_close));
         diags.sort_by_key(|d| (d.span.start, d.span.end, d.code));
         // The monitor's closeness report repeats a framing already reported as too close.
         diags.dedup_by(|b, a| {

@@ -183,11 +183,7 @@ impl Monitor {
             let into = beyond + self.margin_m;
             if into > 0.0 && into <= self.margin_m {
                 let nearest = (actors.iter().enumerate())
-                    .map(|(i, a)| {
-                        let d =
-                            crate::norm_xy(solved.x - a.position_m[0], solved.y - a.position_m[1]);
-                        (i, d)
-                    })
+                    .map(|(i, a)| (i, crate::framing::body_axis_distance_m(solved, a)))
                     .min_by(|a, b| a.1.total_cmp(&b.1));
                 // Without actors (a path), the shift is the shift: as if 1 m away.
                 let share = into / nearest.map_or(1.0, |(_, d)| d.max(0.1));

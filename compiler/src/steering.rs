@@ -226,6 +226,61 @@ fn truncate_accel(a: Vec3, capped: [bool; 3], limits: &SteerLimits) -> Vec3 {
     out
 }
 
+/// The sub-steps of a tick of `dt_s` ([`substeps`]): each one's length, and how long before
+/// the tick's end it ends.
+fn schedule(dt_s: f64) -> impl Iterator<Item = (f64, f64)> {
+    let n = substeps(dt_s);
+    let h = dt_s / n as f64;
+    (0..n).map(move |k| (h, (n - 1 - k) as f64 * h))
+}
+
+/// A tick of `dt_s` of [`step`] toward `goal`, in [`substeps`] equal steps each toward the
+/// goal as it stood at that step's end ([`Kinematics::earlier`]), with `extra(p)` the
+/// separation and containment pushes at the camera's position `p`. One step, toward `goal`
+/// itself, for a tick of 10 ms or less.
+pub fn advance(
+    state: &Kinematics,
+    goal: &Kinematics,
+    extra: impl Fn(&Vec3) -> Vec3,
+    walls: (&Vec3, &Vec3),
+    limits: &SteerLimits,
+    gains: &SteerGains,
+    dt_s: f64,
+) -> Kinematics {
+    let mut s = *state;
+    for (h, back_s) in schedule(dt_s) {
+        let goal_then = if back_s > 0.0 {
+            goal.earlier(back_s)
+        } else {
+            *goal
+        };
+        s = step(&s, &goal_then, extra(&s.p), walls, limits, gains, h);
+    }
+    s
+}
+
+/// [`advance`] for the heading: [`step_heading`] in [`substeps`] equal steps, each toward the
+/// target as it stood at that step's end.
+pub fn advance_heading(
+    state: &HeadingState,
+    target_rad: f64,
+    target_rate_radps: f64,
+    limits: &SteerLimits,
+    gains: &SteerGains,
+    dt_s: f64,
+) -> HeadingState {
+    let mut s = *state;
+    for (h, back_s) in schedule(dt_s) {
+        let target_then = if back_s > 0.0 {
+            target_rad - target_rate_radps * back_s
+        } else {
+            target_rad
+        };
+        s = step_heading(&s, target_then, target_rate_radps, limits, gains, h);
+    }
+    s
+}
+
 /// One tick of heading steering toward `target_rad` turning at `target_rate_radps`.
 pub fn step_heading(
     state: &HeadingState,
@@ -354,13 +409,11 @@ mod tests {
             for k in 1..=ticks {
                 let t = k as f64 * dt;
                 let goal = target_at(t);
-                let n = if sub { substeps(dt) } else { 1 };
-                let h = dt / n as f64;
-                for j in 0..n {
-                    let back = (n - 1 - j) as f64 * h;
-                    let g = if back > 0.0 { goal.earlier(back) } else { goal };
-                    s = step(&s, &g, Vec3::zeros(), OPEN, &lim, &gains, h);
-                }
+                s = if sub {
+                    advance(&s, &goal, |_| Vec3::zeros(), OPEN, &lim, &gains, dt)
+                } else {
+                    step(&s, &goal, Vec3::zeros(), OPEN, &lim, &gains, dt)
+                };
                 out.push((t, s.p));
             }
             out
