@@ -429,6 +429,41 @@ fn cuts_insert_repositioning_flights_and_pinned_cuts_that_do_not_fit_are_errors(
     );
 }
 
+/// A short repositioning flight that takes seconds is a turn at the yaw-rate limit: the
+/// diagnostic says so, and a turn that does not set the time is not mentioned.
+#[test]
+fn a_repositioning_flight_that_is_a_turn_says_so() {
+    // Each camera stands between the actors, looking at one of them: nearly the same spot,
+    // facing the other way.
+    let base = "stage 10m x 8m x 3m\ndrone ardrone2\n\
+                actor A height 1.80m at (-1.2, 0) facing 0deg\n\
+                actor B height 1.80m at (1.2, 0) facing 180deg\n\
+                MS on A front for 3s\n";
+    let (c, _, _) = run(&script_of(&format!("{base}cut to MS on B front for 3s\n")));
+    let d = with_code(&c, Code::Reposition);
+    assert_eq!(d.len(), 1, "{:?}", c.diagnostics);
+    assert!(
+        d[0].message.contains("(0.8 m and a 180° turn)"),
+        "{}",
+        d[0].message
+    );
+    let (c, _, _) = run(&script_of(&format!(
+        "{base}at 4s cut to MS on B front for 3s\n"
+    )));
+    let d = with_code(&c, Code::CutTooShort);
+    assert_eq!(d.len(), 1, "{:?}", c.diagnostics);
+    assert!(d[0].message.contains("and a 180° turn"), "{}", d[0].message);
+    // A flight along the actor's line, hardly turning: the distance alone.
+    let (c, _, _) = run(&script_of(&format!("{base}cut to LS on A front for 3s\n")));
+    let d = with_code(&c, Code::Reposition);
+    assert_eq!(d.len(), 1, "{:?}", c.diagnostics);
+    assert!(
+        d[0].message.contains(" m) is inserted") && !d[0].message.contains("turn"),
+        "{}",
+        d[0].message
+    );
+}
+
 #[test]
 fn a_size_inside_the_safety_distance_is_an_error() {
     let (c, _, _) = run(&script_of(

@@ -736,6 +736,10 @@ impl Director {
             let t_fly = route.fit_duration(&from, &goal, t0, &self.limits);
             t_fly + t_stop + SETTLE_S
         };
+        let flown = Flown {
+            path_m: path_len,
+            turn_rad: dh,
+        };
         let shot = &self.shots[to];
         let written = if shot.pinned { shot.start_s } else { now_s };
         let arrive = now_s + needed;
@@ -748,7 +752,7 @@ impl Director {
                         shot.span,
                         format!(
                             "the drone needs {needed:.1} s to fly to this shot's first framing \
-                             ({path_len:.1} m), but the shot is pinned to start at {:.1} s, \
+                             ({flown}), but the shot is pinned to start at {:.1} s, \
                              {:.1} s after the previous shot ends",
                             written,
                             (written - now_s).max(0.0)
@@ -778,7 +782,7 @@ impl Director {
                     Code::Reposition,
                     shot.span,
                     format!(
-                        "a {needed:.1} s repositioning flight ({path_len:.1} m) is inserted before \
+                        "a {needed:.1} s repositioning flight ({flown}) is inserted before \
                          this shot: it starts at {end:.1} s instead of {:.1} s",
                         shot.start_s
                     ),
@@ -1361,9 +1365,54 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
     .with_help(help)
 }
 
+/// A repositioning flight in words, for its diagnostics: the length of its route and, when the
+/// camera turns far enough for that to set the flight's time, the turn ("0.4 m and a 165°
+/// turn"): a short flight that needs seconds is a turn at the yaw-rate limit, and the
+/// distance alone does not say so. Formatted only when a diagnostic is written (a flight's
+/// loop allocates nothing for a repositioning it does not tell).
+struct Flown {
+    path_m: f64,
+    turn_rad: f64,
+}
+
+impl Flown {
+    /// Turns below this are not mentioned: at the ardrone2's 100°/s such a turn fits in the
+    /// half second that every repositioning flight takes at least.
+    const TURN_TOLD_DEG: f64 = 15.0;
+}
+
+impl std::fmt::Display for Flown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let deg = self.turn_rad.abs().to_degrees();
+        if deg < Self::TURN_TOLD_DEG {
+            write!(f, "{:.1} m", self.path_m)
+        } else if self.path_m < 0.05 {
+            write!(f, "a {deg:.0}° turn on the spot")
+        } else {
+            write!(f, "{:.1} m and a {deg:.0}° turn", self.path_m)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_repositioning_flight_in_words_names_a_turn_that_counts() {
+        let words = |path_m: f64, turn_deg: f64| {
+            Flown {
+                path_m,
+                turn_rad: turn_deg.to_radians(),
+            }
+            .to_string()
+        };
+        assert_eq!(words(2.345, 14.9), "2.3 m");
+        assert_eq!(words(2.345, -14.9), "2.3 m", "either way round");
+        assert_eq!(words(0.4, 154.2), "0.4 m and a 154° turn");
+        assert_eq!(words(0.4, -154.2), "0.4 m and a 154° turn");
+        assert_eq!(words(0.01, 90.0), "a 90° turn on the spot");
+    }
 
     fn goal(p: [f64; 3], v: [f64; 3]) -> Kinematics {
         Kinematics {
