@@ -50,6 +50,15 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             serde_json::to_string_pretty(&value).unwrap_or_default()
         );
     } else {
+        // The flight's warnings and errors, as `shoot` told them (its events; the script's
+        // text is in the log, so a finding of the director's quotes its line).
+        let script_name = format!("{}.psl", log.header.script_name);
+        for e in log.events.iter().filter(|e| e.level != "info") {
+            errln!(
+                "{}",
+                crate::shoot::event_text(e, &script_name, &log.header.script_text)
+            );
+        }
         // A log cut before the flight's end does not say how the flight ended.
         let ended = log.events.iter().any(|e| e.kind == "flight_end");
         let status = match (ended, r.report.completed) {

@@ -318,7 +318,7 @@ pub fn run(a: &Args) -> ExitCode {
     }) {
         errln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
     }
-    let mut display = Display::new(a.quiet);
+    let mut display = Display::new(a.quiet, &r.name, &r.text);
     let result = match &target {
         Target::Sim => {
             let mut sim = SimConfig::new(seed);
@@ -447,6 +447,8 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
 struct Display {
     bar: Option<indicatif::ProgressBar>,
     quiet: bool,
+    /// The script's name as given and its text: a finding of the director's quotes its line.
+    script: (String, String),
     /// When the line's text was last set, and the phase and shot it showed: the loop offers
     /// progress every tick, and formatting the line each time (a string per tick, and the
     /// bar's lock) took an hour's simulated flight from 0.93 to 1.27 s on a terminal.
@@ -457,7 +459,7 @@ struct Display {
 const DISPLAY_PERIOD: Duration = Duration::from_millis(50);
 
 impl Display {
-    fn new(quiet: bool) -> Self {
+    fn new(quiet: bool, script_name: &str, script_text: &str) -> Self {
         let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
             let bar = indicatif::ProgressBar::new(1000);
             bar.set_style(
@@ -470,6 +472,7 @@ impl Display {
         Display {
             bar,
             quiet,
+            script: (script_name.to_string(), script_text.to_string()),
             shown: None,
         }
     }
@@ -526,12 +529,40 @@ impl Observer for Display {
         if self.quiet || e.level == "info" {
             return;
         }
-        let line = format!("{} at {:.2} s: {}", e.level, e.t_s, e.message);
+        let line = event_text(e, &self.script.0, &self.script.1);
         match &self.bar {
             Some(bar) => bar.println(line),
             None => errln!("{line}"),
         }
     }
+}
+
+/// An event as the terminal shows it (`shoot` as it happens, `replay` from the log): its
+/// level, time and message; for a finding of the director's, the script's line quoted as
+/// `compile` points at it, and the fix.
+///
+/// ```text
+/// error at 70.51 s: shot 10: the drone needs 4.8 s to fly to this shot's first framing (…)
+///   --> shots/scene.psl:27
+///    27 │ at 67s cut to path orbit around Alice radius 2m altitude 1.6m turns 0.5 clockwise …
+///   help: pin the shot at `at 71.3s` or later, or shorten the shot before it by 3.5 s
+/// ```
+pub fn event_text(e: &Event, script_name: &str, script_text: &str) -> String {
+    use std::fmt::Write;
+    let mut s = format!("{} at {:.2} s: {}", e.level, e.t_s, e.message);
+    if let Some(line) = e.line {
+        let _ = write!(s, "\n  --> {script_name}:{line}");
+        let quoted = usize::try_from(line)
+            .ok()
+            .and_then(|n| script_text.lines().nth(n.checked_sub(1)?));
+        if let Some(quoted) = quoted {
+            let _ = write!(s, "\n  {line:>4} │ {}", quoted.trim_end());
+        }
+    }
+    if let Some(help) = &e.help {
+        let _ = write!(s, "\n  help: {help}");
+    }
+    s
 }
 
 /// The report as `shoot` prints it, headed "completed" or "ABORTED".
@@ -619,7 +650,7 @@ mod tests {
     use super::{civil_from_days, effects_off_phrase, first_free, render_report, sim_effects};
     use super::{Display, DISPLAY_PERIOD};
     use dronecine_runtime::flight::Progress;
-    use dronecine_runtime::record::Phase;
+    use dronecine_runtime::record::{Event, Phase};
     use dronecine_runtime::report::{Figures, FlightReport, ShotReport};
     use dronecine_runtime::sim::Effects;
     use std::path::Path;
@@ -632,6 +663,7 @@ mod tests {
         let mut d = Display {
             bar: Some(indicatif::ProgressBar::hidden()),
             quiet: false,
+            script: (String::new(), String::new()),
             shown: None,
         };
         let at = |t_s: f64, phase: Phase, shot: Option<usize>| Progress {
@@ -665,6 +697,42 @@ mod tests {
         // A period after it was set: set.
         d.show(&at(2.7, Phase::Shots, Some(1)), wall(60) + DISPLAY_PERIOD);
         assert!(message(&d).contains("t 2.7/10.0 s"), "{}", message(&d));
+    }
+
+    /// A finding of the director's quotes its line and gives its fix; the flight's own events
+    /// are one line; a line past the script's end (a log of another script) is named, not
+    /// quoted.
+    #[test]
+    fn a_director_finding_quotes_its_line_and_gives_the_fix() {
+        let text =
+            "stage 8m x 6m x 3m\r\nMS on A front for 4s  \nat 9s cut to MS on A back for 4s\n";
+        let mut e = Event {
+            t_s: 12.345,
+            level: "error".into(),
+            kind: "compile::cut_too_short".into(),
+            message: "shot 2: the drone needs 4.8 s".into(),
+            line: Some(3),
+            help: Some("pin the shot at `at 10.2s` or later".into()),
+        };
+        assert_eq!(
+            super::event_text(&e, "shots/x.psl", text),
+            "error at 12.35 s: shot 2: the drone needs 4.8 s\n  --> shots/x.psl:3\n     3 │ at 9s \
+             cut to MS on A back for 4s\n  help: pin the shot at `at 10.2s` or later"
+        );
+        e.line = Some(2);
+        e.help = None;
+        assert_eq!(
+            super::event_text(&e, "x.psl", text),
+            "error at 12.35 s: shot 2: the drone needs 4.8 s\n  --> x.psl:2\n     2 │ MS on A \
+             front for 4s"
+        );
+        e.line = Some(40);
+        assert!(super::event_text(&e, "x.psl", text).ends_with("  --> x.psl:40"));
+        e.line = None;
+        assert_eq!(
+            super::event_text(&e, "x.psl", text),
+            "error at 12.35 s: shot 2: the drone needs 4.8 s"
+        );
     }
 
     #[test]

@@ -475,6 +475,19 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         "{:?}",
         errors[0]
     );
+    // With the script's line of the shot and the fix, as `compile` gives them.
+    let line = std::fs::read_to_string("shots/scene.psl")
+        .unwrap()
+        .lines()
+        .position(|l| l.starts_with("cut to FS on Alice 34right"))
+        .unwrap()
+        + 1;
+    assert_eq!(errors[0].line, Some(line as u32), "{:?}", errors[0]);
+    assert!(
+        (errors[0].help.as_deref()).is_some_and(|h| h.starts_with("use a wider size")),
+        "{:?}",
+        errors[0]
+    );
     // The report counts it (a flight that says "completed" with good figures came too close
     // to an actor for a moment), and the replay counts it again from the log.
     assert_eq!(r["completed"], true, "{r}");
@@ -487,6 +500,15 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         stdout(&o).contains("1 director error against the live actors"),
         "{}",
         stdout(&o)
+    );
+    // And tells it again, from the log, as `shoot` did: the line quoted, the fix.
+    let told = format!("  --> scene.psl:{line}\n  {line:>4} │ cut to FS on Alice 34right");
+    assert!(
+        stderr(&o).contains("error at ")
+            && stderr(&o).contains(&told)
+            && stderr(&o).contains("  help: use a wider size"),
+        "{}",
+        stderr(&o)
     );
 
     // The default seed: the reverse shot is framed throughout, and measured.

@@ -33,7 +33,7 @@ use dronecine_compiler::profile::Profile;
 use dronecine_compiler::route::{self, Keepout, Route};
 use dronecine_compiler::steering::SteerLimits;
 use dronecine_grammar::script::{Scene, Script};
-use dronecine_grammar::Code;
+use dronecine_grammar::{Code, Diagnostic};
 use serde::Serialize;
 
 use crate::backend::{BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame};
@@ -503,12 +503,51 @@ impl<'s, 'b> Flight<'s, 'b> {
     }
 
     fn event(&mut self, t_s: f64, level: &str, kind: &str, message: String) {
-        let e = Event {
+        self.tell(Event {
             t_s,
             level: level.to_string(),
             kind: kind.to_string(),
             message,
+            line: None,
+            help: None,
+        });
+    }
+
+    /// A finding of the director's against the live actors, as an event: its message after
+    /// the shot it is about, the script's line of that shot and its fix (before, the event
+    /// carried the message only, and a director on set read "the shot is pinned to start at
+    /// 67.0 s" without the line, or the time to pin it at instead).
+    fn director_finding(&mut self, t_s: f64, d: &Diagnostic) {
+        let shot = (self.setup.script.timeline.iter())
+            .position(|s| s.span == d.span)
+            .map_or(String::new(), |i| format!("shot {}: ", i + 1));
+        // A repositioning flight is the plan working as written: logged, not printed over
+        // the progress display.
+        let level = match (d.is_error(), d.code) {
+            (true, _) => "error",
+            (false, Code::Reposition) => "info",
+            (false, _) => "warning",
         };
+        let held = if d.code == Code::Unframeable {
+            "; the drone holds where it is until it solves"
+        } else {
+            ""
+        };
+        let line = (!d.span.is_empty())
+            .then(|| self.setup.source.get(..d.span.start))
+            .flatten()
+            .map(|before| 1 + before.bytes().filter(|&b| b == b'\n').count() as u32);
+        self.tell(Event {
+            t_s,
+            level: level.to_string(),
+            kind: d.code.as_str().to_string(),
+            message: format!("{shot}{}{held}", d.message),
+            line,
+            help: d.help.clone(),
+        });
+    }
+
+    fn tell(&mut self, e: Event) {
         self.director_errors += u64::from(e.is_director_error());
         self.observer.event(&e);
         if let Err(err) = self.sink.event(&e) {
@@ -843,23 +882,7 @@ impl<'s, 'b> Flight<'s, 'b> {
                 // the report alone would show only as a thinner framing figure.
                 while let Some(d) = director.diagnostics_so_far().get(told) {
                     told += 1;
-                    let shot = (self.setup.script.timeline.iter())
-                        .position(|s| s.span == d.span)
-                        .map_or(String::new(), |i| format!("shot {}: ", i + 1));
-                    // A repositioning flight is the plan working as written: logged, not
-                    // printed over the progress display.
-                    let level = match (d.is_error(), d.code) {
-                        (true, _) => "error",
-                        (false, Code::Reposition) => "info",
-                        (false, _) => "warning",
-                    };
-                    let held = if d.code == Code::Unframeable {
-                        "; the drone holds where it is until it solves"
-                    } else {
-                        ""
-                    };
-                    let (kind, message) = (d.code.as_str(), format!("{shot}{}{held}", d.message));
-                    self.event(t, level, kind, message);
+                    self.director_finding(t, d);
                 }
                 if current != Some(sample.shot) {
                     current = Some(sample.shot);

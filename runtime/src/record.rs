@@ -116,6 +116,13 @@ pub struct Event {
     /// `deadline_missed`, `fault`, …
     pub kind: String,
     pub message: String,
+    /// The script's line the event is about (1-based): a finding of the director's, at the
+    /// shot it is about. `None` for the flight's own events.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line: Option<u32>,
+    /// How to fix it, as `compile` says it (a finding of the director's that has a fix).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub help: Option<String>,
 }
 
 impl Event {

@@ -315,12 +315,16 @@ fn tick_bits(t: &LoggedTick) -> Vec<u64> {
     v
 }
 
-fn event_bits(e: &Event) -> (u64, String, String, String) {
+/// An event as comparable bits: every field, the time's bits exactly.
+#[allow(clippy::type_complexity)]
+fn event_bits(e: &Event) -> (u64, String, String, String, Option<u32>, Option<String>) {
     (
         bits(e.t_s),
         e.level.clone(),
         e.kind.clone(),
         e.message.clone(),
+        e.line,
+        e.help.clone(),
     )
 }
 
@@ -331,18 +335,24 @@ fn events() -> Vec<Event> {
             level: "info".into(),
             kind: "take_off".into(),
             message: "taking off".into(),
+            line: None,
+            help: None,
         },
         Event {
             t_s: 0.1 + 0.2,
             level: "warning".into(),
             kind: "deadline_missed".into(),
             message: "tick 30 late by 2.5 ms \"quoted\"\n\u{1F3AC}".into(),
+            line: Some(27),
+            help: Some("pin the shot at `at 71.3s` \"or\" later\n\u{1F3AC}".into()),
         },
         Event {
             t_s: f64::NAN,
             level: "error".into(),
             kind: "fault".into(),
             message: String::new(),
+            line: Some(u32::MAX),
+            help: Some(String::new()),
         },
     ]
 }
@@ -674,6 +684,32 @@ fn reference_log() -> &'static [u8] {
         write_log(&path, &ticks, &events());
         std::fs::read(&path).unwrap()
     })
+}
+
+/// A log cut inside its closing magic, after the footer, holds every record, but it was cut
+/// short all the same: flagged as such (it read as whole, with a damage entry that said
+/// "cut", until the property test below cut 3 bytes off).
+#[test]
+fn a_log_cut_inside_its_closing_magic_is_truncated_and_read_whole() {
+    let bytes = reference_log();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cut.mcap");
+    let whole: Vec<LoggedTick> = (0..250).map(|k| flight_tick(k).logged()).collect();
+    for short in 1..=8 {
+        std::fs::write(&path, &bytes[..bytes.len() - short]).unwrap();
+        let log = FlightLog::open(&path).unwrap();
+        assert!(log.truncated, "{short} bytes short: {:?}", log.damage);
+        assert_eq!(log.ticks, whole, "{short} bytes short");
+        assert_eq!(log.events.len(), events().len());
+        assert!(
+            log.damage.len() == 1 && log.damage[0].cut && log.damage[0].resumed_at.is_none(),
+            "{short} bytes short: {:?}",
+            log.damage
+        );
+    }
+    std::fs::write(&path, bytes).unwrap();
+    let log = FlightLog::open(&path).unwrap();
+    assert!(!log.truncated && log.damage.is_empty(), "{:?}", log.damage);
 }
 
 proptest! {

@@ -22,7 +22,7 @@
 //! | `/measurement` | `dronecine.Measurement` | 30 Hz: ticks with a new mocap frame | `t_s` (capture), `frame`, `drone {position_m, heading_rad}` or null, `actors[]` (same, or null) |
 //! | `/command` | `dronecine.Command` | 10 Hz, and every tick whose `failsafe` is set (and the first after) | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
 //! | `/framing` | `dronecine.Framing` | 10 Hz: ticks with framing records | `t_s`, `shot`, `actors[] {actor, name, screen, requested}` (`[x, y]` or null) |
-//! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message` |
+//! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message`; a finding of the director's also `line` (the script's, 1-based) and `help` (its fix, as compile says it) |
 //! | `/servo/tick` | `dronecine/msg/ServoTick` (CDR, [`cdr::SCHEMA`]) | every tick | the phase, the shot, the [`TickInput`](crate::control::TickInput), the [`TickOutput`](crate::control::TickOutput) or the fault, the command sent, the drone's state, the latency, the actors as the director saw them, the framing records: 514 bytes with two actors framed |
 //! | `/tf` | `foxglove.FrameTransforms` | 30 Hz (a frame when it moved) | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
 //! | `/scene/stage`, `/scene/drone`, `/scene/actors` | `foxglove.SceneUpdate` | once (actors again when a height changes) | as compile |

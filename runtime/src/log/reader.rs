@@ -52,8 +52,9 @@ pub struct FlightLog {
     /// Every tick that could be read, in the order written.
     pub ticks: Vec<LoggedTick>,
     pub events: Vec<Event>,
-    /// The file does not end with its footer: cut short (a crash, a copy that did not
-    /// finish), or damaged with nothing intact after the damage. Everything before was read;
+    /// The file does not end with its footer and the closing magic: cut short (a crash, a
+    /// copy that did not finish, even inside the magic's last bytes), or damaged with nothing
+    /// intact after the damage. Everything before was read;
     /// the last entry of `damage` says where and why it ends.
     pub truncated: bool,
     /// The damage met, in file order: each a stretch skipped (reading resumed at the next
@@ -119,6 +120,11 @@ struct RawEvent {
     level: String,
     kind: String,
     message: String,
+    /// Absent from logs written before events carried the script's line and the fix.
+    #[serde(default)]
+    line: Option<u32>,
+    #[serde(default)]
+    help: Option<String>,
 }
 
 /// Which channels the reader decodes.
@@ -211,8 +217,11 @@ impl FlightLog {
                 None => break,
             }
         }
-        let truncated = !state.footer;
-        if truncated && damage.last().is_none_or(|d| d.resumed_at.is_some()) {
+        // Cut inside the closing magic, after the footer: every record was read, but the
+        // file was cut short all the same (a copy that stopped 3 bytes early).
+        let magic_cut = state.footer && damage.last().is_some_and(|d| d.cut);
+        let truncated = !state.footer || magic_cut;
+        if !state.footer && damage.last().is_none_or(|d| d.resumed_at.is_some()) {
             damage.push(Damage {
                 offset: len,
                 detail: "the file ends before its footer".to_string(),
@@ -666,6 +675,8 @@ impl ReadState {
                         level: e.level,
                         kind: e.kind,
                         message: e.message,
+                        line: e.line,
+                        help: e.help,
                     });
                 }
                 None => {}

@@ -168,7 +168,13 @@ pub fn event() -> String {
             "t_s": exact("Flight clock (s)"),
             "level": { "type": "string", "enum": ["info", "warning", "error"] },
             "kind": { "type": "string", "description": "take_off, shot_start, failsafe, …" },
-            "message": { "type": "string" }
+            "message": { "type": "string" },
+            "line": {
+                "type": "integer",
+                "minimum": 1,
+                "description": "The script's line it is about (a finding of the director's)"
+            },
+            "help": { "type": "string", "description": "How to fix it, as compile says it" }
         }),
         &["t_s", "level", "kind", "message"],
     )

@@ -566,6 +566,14 @@ impl FlightLogWriter {
         json::string(&mut text.buf, &event.kind);
         text.raw(b",\"message\":");
         json::string(&mut text.buf, &event.message);
+        if let Some(line) = event.line {
+            text.raw(b",\"line\":");
+            text.raw(itoa::Buffer::new().format(line).as_bytes());
+        }
+        if let Some(help) = &event.help {
+            text.raw(b",\"help\":");
+            json::string(&mut text.buf, help);
+        }
         text.raw(b"}");
         self.put_text(|c| &mut c.events, ns_from_s(event.t_s))
     }
