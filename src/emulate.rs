@@ -58,25 +58,22 @@ pub fn run(a: &Args) -> ExitCode {
         ));
     };
     let mut sim = SimConfig::new(a.seed);
-    let (scene, profile, names) = match a.script {
+    let loaded = match a.script {
+        None => None,
+        Some(path) => match crate::compile::load_scene(path, a.color, "emulated", false) {
+            Ok(l) => Some(l),
+            Err(code) => return code,
+        },
+    };
+    let (scene, profile, names) = match &loaded {
         None => (
             empty_scene(),
             Profile::builtin(DEFAULT_NAME).expect("the default profile is built in"),
             Vec::new(),
         ),
-        Some(path) => {
-            let loaded = match crate::compile::load_scene(path, a.color, "emulated", false) {
-                Ok(l) => l,
-                Err(code) => return code,
-            };
+        Some(loaded) => {
             let scene = loaded.scene();
             let names = scene.actors.iter().map(|x| x.name.clone()).collect();
-            // The drone stands below its first framing, as the embedded simulator's does
-            // (at the origin it could stand on an actor's mark, which `shoot` refuses).
-            if !loaded.script().timeline.is_empty() {
-                (sim.start_position_m, sim.start_heading_rad) =
-                    session::start_pose(loaded.script(), scene, &loaded.profile);
-            }
             (scene.clone(), loaded.profile.clone(), names)
         }
     };
@@ -87,6 +84,13 @@ pub fn run(a: &Args) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
+    // The drone stands below its first framing, clear of the actors, as the embedded
+    // simulator's does (at the origin it could stand on an actor's mark, which `shoot`
+    // refuses).
+    if let Some(script) = (loaded.as_ref().map(|l| l.script())).filter(|s| !s.timeline.is_empty()) {
+        (sim.start_position_m, sim.start_heading_rad) =
+            session::start_pose(script, &scene, &profile, sim.actor_reach_m());
+    }
     let effects_off = sim.effects.off();
     let config = EmulatorConfig {
         host: a.host,

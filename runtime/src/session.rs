@@ -49,14 +49,88 @@ pub fn controller_for(
 }
 
 /// Where the simulated drone waits on the floor: below the first framing (against the
-/// actors' opening positions), facing the way it will film.
-pub fn start_pose(script: &Script, scene: &Scene, profile: &Profile) -> ([f64; 3], f64) {
+/// actors' opening marks), facing the way it will film; but never nearer an actor's mark
+/// than the profile's actor distance and `clear_m` more (the simulated actors stand off
+/// their marks by up to [`SimConfig::actor_reach_m`]). There it stands at the nearest spot
+/// that is clear, inside the stage less its margin ([`clear_spot`]).
+///
+/// Below a close-up the drone stood under the actor's nose: an MCU from 0.55 m, an actor
+/// standing 7 cm off the mark, and `shoot`'s pre-flight check refused the flight with
+/// "the drone stands 0.48 m from A: place it further away", which on the simulator nobody
+/// can do.
+pub fn start_pose(
+    script: &Script,
+    scene: &Scene,
+    profile: &Profile,
+    clear_m: f64,
+) -> ([f64; 3], f64) {
     let blocking = Blocking::new(scene);
-    let first = Director::new(script, scene, profile).step(0.0, &blocking.poses(0.0));
-    (
-        [first.position_m[0], first.position_m[1], 0.0],
-        first.heading_rad,
-    )
+    let marks = blocking.poses(0.0);
+    let first = Director::new(script, scene, profile).step(0.0, &marks);
+    let marks: Vec<[f64; 2]> = (marks.iter())
+        .map(|a| [a.position_m[0], a.position_m[1]])
+        .collect();
+    let margin_m = profile.safety.stage_margin_m;
+    let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
+    let [x, y] = clear_spot(
+        [first.position_m[0], first.position_m[1]],
+        &marks,
+        profile.safety.actor_distance_m + clear_m.max(0.0),
+        [lo[0] + margin_m, lo[1] + margin_m],
+        [hi[0] - margin_m, hi[1] - margin_m],
+    );
+    ([x, y, 0.0], first.heading_rad)
+}
+
+/// The nearest spot to `spot` at least `keep_m` from every mark and inside the floor's box
+/// `lo..hi`: `spot` itself when it is, else the first found on rings around it, 2 cm apart,
+/// each searched from the direction away from the nearest mark. `spot` when no spot is
+/// (a stage too small for its actors: the pre-flight check then says why).
+pub fn clear_spot(
+    spot: [f64; 2],
+    marks: &[[f64; 2]],
+    keep_m: f64,
+    lo: [f64; 2],
+    hi: [f64; 2],
+) -> [f64; 2] {
+    let clear = |p: [f64; 2]| {
+        (0..2).all(|i| p[i] >= lo[i] && p[i] <= hi[i])
+            && marks
+                .iter()
+                .all(|m| crate::math::hypot(p[0] - m[0], p[1] - m[1]) >= keep_m)
+    };
+    if clear(spot) {
+        return spot;
+    }
+    let away = marks
+        .iter()
+        .map(|m| (crate::math::hypot(spot[0] - m[0], spot[1] - m[1]), m))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or(0.0, |(_, m)| {
+            crate::math::atan2(spot[1] - m[1], spot[0] - m[0])
+        });
+    const STEP_M: f64 = 0.02;
+    const DIRECTIONS: i32 = 72;
+    let reach_m = crate::math::hypot(hi[0] - lo[0], hi[1] - lo[1]);
+    let rings = (reach_m / STEP_M).ceil().min(2000.0) as i32;
+    for ring in 1..=rings {
+        let r = f64::from(ring) * STEP_M;
+        // Away from the nearest mark first, then turning either way.
+        for k in 0..=DIRECTIONS / 2 {
+            for side in [1, -1] {
+                let a = away + f64::from(side * k) * std::f64::consts::TAU / f64::from(DIRECTIONS);
+                let (sin, cos) = crate::math::sin_cos(a);
+                let p = [spot[0] + r * cos, spot[1] + r * sin];
+                if clear(p) {
+                    return p;
+                }
+                if k == 0 || k == DIRECTIONS / 2 {
+                    break;
+                }
+            }
+        }
+    }
+    spot
 }
 
 pub struct SimFlight<'a> {
@@ -132,7 +206,8 @@ pub fn fly_simulated(
 ) -> Result<FlightReport, SessionError> {
     let mut controller = servo(&f.controller, f.profile, f.rate_hz)?;
     let mut config = f.sim.clone();
-    (config.start_position_m, config.start_heading_rad) = start_pose(f.script, f.scene, f.profile);
+    (config.start_position_m, config.start_heading_rad) =
+        start_pose(f.script, f.scene, f.profile, config.actor_reach_m());
     // The actors wait on their marks until the flight loop's "action!".
     config.wait_for_action = true;
     let sim = Simulator::new(&config, f.plant.unwrap_or(f.profile), f.scene)
@@ -270,6 +345,34 @@ mod tests {
 
     fn ardrone2() -> Profile {
         Profile::builtin("ardrone2").unwrap()
+    }
+
+    /// The simulated drone's spot: below the framing when that is clear, else the nearest
+    /// clear spot, away from the actor first, inside the box, never on another mark.
+    #[test]
+    fn the_drone_waits_at_the_nearest_spot_clear_of_every_mark() {
+        let (lo, hi) = ([-3.7, -2.7], [3.7, 2.7]);
+        let dist = |p: [f64; 2], m: [f64; 2]| (p[0] - m[0]).hypot(p[1] - m[1]);
+        // Clear: unchanged, bit for bit.
+        let spot = [1.234, -0.5];
+        assert_eq!(clear_spot(spot, &[[0.0, 0.0]], 0.7, lo, hi), spot);
+        // 0.3 m east of a mark: straight away from it, to the first ring past 0.7 m.
+        let p = clear_spot([0.3, 0.0], &[[0.0, 0.0]], 0.7, lo, hi);
+        assert!(
+            p[1].abs() < 1e-12 && p[0] >= 0.7 && p[0] < 0.7 + 0.021,
+            "{p:?}"
+        );
+        // Between two marks 1 m apart: clear of both (sideways).
+        let marks = [[-0.5, 0.0], [0.5, 0.0]];
+        let p = clear_spot([0.1, 0.0], &marks, 0.7, lo, hi);
+        assert!(marks.iter().all(|&m| dist(p, m) >= 0.7), "{p:?}");
+        assert!(dist(p, [0.1, 0.0]) < 0.6, "the nearest: {p:?}");
+        // Against a wall, away from the mark is out of the box: along it instead.
+        let p = clear_spot([3.6, 0.0], &[[3.3, 0.0]], 0.7, lo, hi);
+        assert!(p[0] <= hi[0] && dist(p, [3.3, 0.0]) >= 0.7, "{p:?}");
+        // No spot is clear (a box inside the keep-out): where it was.
+        let p = clear_spot([0.1, 0.0], &[[0.0, 0.0]], 5.0, [-1.0, -1.0], [1.0, 1.0]);
+        assert_eq!(p, [0.1, 0.0]);
     }
 
     #[test]

@@ -251,6 +251,25 @@ impl SimConfig {
         }
     }
 
+    /// How far from their marks the simulated actors may be measured standing: the place
+    /// offset's bound on both floor axes (when the actors deviate) and four σ of the mocap's
+    /// noise. The simulated drone waits at least this much further from every mark than
+    /// the actor distance (`session::start_pose`), so that the pre-flight check, which
+    /// measures both, passes.
+    pub fn actor_reach_m(&self) -> f64 {
+        let offset_m = if self.effects.actor_deviation {
+            std::f64::consts::SQRT_2 * self.actor_offset_max_m.max(0.0)
+        } else {
+            0.0
+        };
+        let noise_m = if self.effects.mocap_noise {
+            4.0 * self.mocap_position_sigma_m.max(0.0)
+        } else {
+            0.0
+        };
+        offset_m + noise_m
+    }
+
     /// Every value checked; the first bad one is reported.
     pub fn validate(&self) -> Result<(), SimError> {
         use Expect::*;
