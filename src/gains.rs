@@ -254,7 +254,7 @@ fn text(name: &str, r: &GainsReport) -> String {
     poles.sort_by(|a, b| b.total_cmp(a));
     let _ = write!(out, "{:>8}", "");
     for p in poles {
-        let _ = write!(out, "{p:>13.6}");
+        let _ = write!(out, "{:>13}", pole_text(p));
     }
     let _ = writeln!(out);
     let _ = writeln!(
@@ -262,11 +262,23 @@ fn text(name: &str, r: &GainsReport) -> String {
         "\nSteady-state Kalman gain (state × measured position):"
     );
     matrix(&mut out, &r.kalman_gain, &state, &["x", "y", "z"]);
-    let _ = writeln!(out, "\nk2, the heading pole per tick: {:.6}", r.k2);
+    let _ = writeln!(out, "\nk2, the heading pole per tick: {}", pole_text(r.k2));
     let _ = writeln!(
         out,
         "DARE residual: {:.3e} (relative, {} doublings)",
         r.residual, r.iterations
     );
     out
+}
+
+/// A pole magnitude as printed: six decimals, or, within 5e-7 of 1 (a tick far shorter than
+/// the model's time constants: `--dt 1e-6`), its distance below 1 (`1 − 3.2e-9`), so that a
+/// stable pole never reads as `1.000000`, on the stability limit.
+fn pole_text(m: f64) -> String {
+    let below = 1.0 - m;
+    if m.is_finite() && below > 0.0 && below < 5e-7 {
+        format!("1 − {below:.1e}")
+    } else {
+        format!("{m:.6}")
+    }
 }

@@ -131,6 +131,40 @@ fn text_output_is_aligned() {
     assert!(block[1].trim_start().starts_with("roll"));
 }
 
+/// A tick far shorter than the model's time constants puts every pole within 1e-8 of 1: the
+/// text says how far below 1 (it printed `1.000000`, which reads as on the stability limit),
+/// and the JSON's magnitudes are all below 1.
+#[test]
+fn poles_next_to_one_print_their_distance_below_it() {
+    let o = dronecine(&["gains", "--dt", "1e-9"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let lines: Vec<&str> = out.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.starts_with("Closed-loop pole"))
+        .unwrap();
+    let poles = lines[at + 1];
+    assert_eq!(poles.matches("1 − ").count(), 6, "{poles}");
+    assert!(!poles.contains("1.000000"), "{poles}");
+    assert!(out.contains("heading pole per tick: 1 − "), "{out}");
+    let j = json(&["--dt", "1e-9"]);
+    let magnitudes = j["closed_loop_pole_magnitudes"].as_array().unwrap();
+    assert!(magnitudes.iter().all(|m| m.as_f64().unwrap() < 1.0), "{j}");
+    // At the servo's rates, six decimals.
+    let o = dronecine(&["gains"]);
+    let out = stdout(&o);
+    let poles = out
+        .lines()
+        .skip_while(|l| !l.starts_with("Closed-loop pole"))
+        .nth(1)
+        .unwrap();
+    assert!(
+        !poles.contains(" − ") && out.contains("heading pole per tick: 0."),
+        "{out}"
+    );
+}
+
 #[test]
 fn profile_files_are_read() {
     let o = dronecine(&[
