@@ -718,8 +718,8 @@ impl Director {
         let dz = (goal.z - from.z).abs();
         let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();
         let speed = self.state.v.norm();
-        let needed = if path_len < 0.03 && dh < 0.05 && speed < 0.05 {
-            0.0
+        let (needed, turn_sets_time) = if path_len < 0.03 && dh < 0.05 && speed < 0.05 {
+            (0.0, false)
         } else {
             // A min-jerk flight peaks at 1.875·L/T in speed and 5.77·L/T² in acceleration;
             // keep both under 80% of the limits, plus the time to stop from the current speed
@@ -734,11 +734,12 @@ impl Director {
             // The flight may curve round the pivot: measure its peaks (centripetal
             // acceleration included) and stretch it until they fit.
             let t_fly = route.fit_duration(&from, &goal, t0, &self.limits);
-            t_fly + t_stop + SETTLE_S
+            (t_fly + t_stop + SETTLE_S, t_yaw > 0.5 && t_yaw >= t0)
         };
         let flown = Flown {
             path_m: path_len,
             turn_rad: dh,
+            turn_sets_time,
         };
         let shot = &self.shots[to];
         let written = if shot.pinned { shot.start_s } else { now_s };
@@ -1366,25 +1367,28 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
 }
 
 /// A repositioning flight in words, for its diagnostics: the length of its route and, when the
-/// camera turns far enough for that to set the flight's time, the turn ("0.4 m and a 165°
+/// camera turns visibly or the turn sets the flight's time, the turn ("0.4 m and a 165°
 /// turn"): a short flight that needs seconds is a turn at the yaw-rate limit, and the
 /// distance alone does not say so. Formatted only when a diagnostic is written (a flight's
 /// loop allocates nothing for a repositioning it does not tell).
 struct Flown {
     path_m: f64,
     turn_rad: f64,
+    /// The turn at the yaw-rate limit takes longer than the flight's other bounds (a slow
+    /// yaw profile's small turn too).
+    turn_sets_time: bool,
 }
 
 impl Flown {
-    /// Turns below this are not mentioned: at the ardrone2's 100°/s such a turn fits in the
-    /// half second that every repositioning flight takes at least.
+    /// Smaller turns are mentioned only when they set the time: at the ardrone2's 100°/s such
+    /// a turn fits in the half second that every repositioning flight takes at least.
     const TURN_TOLD_DEG: f64 = 15.0;
 }
 
 impl std::fmt::Display for Flown {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let deg = self.turn_rad.abs().to_degrees();
-        if deg < Self::TURN_TOLD_DEG {
+        if (deg < Self::TURN_TOLD_DEG && !self.turn_sets_time) || deg < 0.5 {
             write!(f, "{:.1} m", self.path_m)
         } else if self.path_m < 0.05 {
             write!(f, "a {deg:.0}° turn on the spot")
@@ -1400,18 +1404,22 @@ mod tests {
 
     #[test]
     fn a_repositioning_flight_in_words_names_a_turn_that_counts() {
-        let words = |path_m: f64, turn_deg: f64| {
+        let words = |path_m: f64, turn_deg: f64, turn_sets_time: bool| {
             Flown {
                 path_m,
                 turn_rad: turn_deg.to_radians(),
+                turn_sets_time,
             }
             .to_string()
         };
-        assert_eq!(words(2.345, 14.9), "2.3 m");
-        assert_eq!(words(2.345, -14.9), "2.3 m", "either way round");
-        assert_eq!(words(0.4, 154.2), "0.4 m and a 154° turn");
-        assert_eq!(words(0.4, -154.2), "0.4 m and a 154° turn");
-        assert_eq!(words(0.01, 90.0), "a 90° turn on the spot");
+        assert_eq!(words(2.345, 14.9, false), "2.3 m");
+        assert_eq!(words(2.345, -14.9, false), "2.3 m", "either way round");
+        assert_eq!(words(0.4, 154.2, true), "0.4 m and a 154° turn");
+        assert_eq!(words(0.4, -154.2, false), "0.4 m and a 154° turn");
+        assert_eq!(words(0.01, 90.0, true), "a 90° turn on the spot");
+        // A small turn that sets the time (a slow yaw): told.
+        assert_eq!(words(0.2, 12.0, true), "0.2 m and a 12° turn");
+        assert_eq!(words(0.2, 0.2, true), "0.2 m");
     }
 
     fn goal(p: [f64; 3], v: [f64; 3]) -> Kinematics {
