@@ -449,6 +449,8 @@ struct Display {
     quiet: bool,
     /// The script's name as given and its text: a finding of the director's quotes its line.
     script: (String, String),
+    /// How many of each kind of event were shown.
+    told: EventTally,
     /// When the line's text was last set, and the phase and shot it showed: the loop offers
     /// progress every tick, and formatting the line each time (a string per tick, and the
     /// bar's lock) took an hour's simulated flight from 0.93 to 1.27 s on a terminal.
@@ -473,6 +475,7 @@ impl Display {
             bar,
             quiet,
             script: (script_name.to_string(), script_text.to_string()),
+            told: EventTally::default(),
             shown: None,
         }
     }
@@ -529,7 +532,9 @@ impl Observer for Display {
         if self.quiet || e.level == "info" {
             return;
         }
-        let line = event_text(e, &self.script.0, &self.script.1);
+        let Some(line) = self.told.text(e, &self.script.0, &self.script.1) else {
+            return;
+        };
         match &self.bar {
             Some(bar) => bar.println(line),
             None => errln!("{line}"),
@@ -563,6 +568,45 @@ pub fn event_text(e: &Event, script_name: &str, script_text: &str) -> String {
         let _ = write!(s, "\n  help: {help}");
     }
     s
+}
+
+/// How many events of one kind the terminal shows. A loop that keeps missing its deadline on a
+/// loaded machine, or a controller refusing tick after tick, raises one event a tick: shown
+/// all, they scrolled the rest out of sight. The log keeps every one and the report counts
+/// them.
+const SHOWN_PER_KIND: u32 = 10;
+
+/// Counts the events shown, per kind, for [`SHOWN_PER_KIND`].
+#[derive(Default)]
+pub struct EventTally {
+    shown: Vec<(String, u32)>,
+}
+
+impl EventTally {
+    /// The text to print for `e` ([`event_text`]): the first [`SHOWN_PER_KIND`] of its kind,
+    /// the last of them saying that the rest are in the log only; then `None`.
+    pub fn text(&mut self, e: &Event, script_name: &str, script_text: &str) -> Option<String> {
+        let at = match self.shown.iter().position(|(k, _)| *k == e.kind) {
+            Some(at) => at,
+            None => {
+                self.shown.push((e.kind.clone(), 0));
+                self.shown.len() - 1
+            }
+        };
+        let n = &mut self.shown[at].1;
+        if *n >= SHOWN_PER_KIND {
+            return None;
+        }
+        *n += 1;
+        let mut text = event_text(e, script_name, script_text);
+        if *n == SHOWN_PER_KIND {
+            text.push_str(&format!(
+                "\n  (further `{}` events are not shown: the log's /events has every one)",
+                e.kind
+            ));
+        }
+        Some(text)
+    }
 }
 
 /// The report as `shoot` prints it, headed "completed" or "ABORTED".
@@ -648,7 +692,7 @@ pub fn render_report_as(
 #[cfg(test)]
 mod tests {
     use super::{civil_from_days, effects_off_phrase, first_free, render_report, sim_effects};
-    use super::{Display, DISPLAY_PERIOD};
+    use super::{Display, EventTally, DISPLAY_PERIOD};
     use dronecine_runtime::flight::Progress;
     use dronecine_runtime::record::{Event, Phase};
     use dronecine_runtime::report::{Figures, FlightReport, ShotReport};
@@ -664,6 +708,7 @@ mod tests {
             bar: Some(indicatif::ProgressBar::hidden()),
             quiet: false,
             script: (String::new(), String::new()),
+            told: EventTally::default(),
             shown: None,
         };
         let at = |t_s: f64, phase: Phase, shot: Option<usize>| Progress {
@@ -733,6 +778,33 @@ mod tests {
             super::event_text(&e, "x.psl", text),
             "error at 12.35 s: shot 2: the drone needs 4.8 s"
         );
+    }
+
+    /// Ten events of a kind are shown, the tenth saying that the rest are in the log; other
+    /// kinds are counted apart.
+    #[test]
+    fn events_of_one_kind_are_shown_ten_times_at_most() {
+        let event = |kind: &str, k: u32| Event {
+            t_s: f64::from(k),
+            level: "warning".into(),
+            kind: kind.into(),
+            message: format!("number {k}"),
+            line: None,
+            help: None,
+        };
+        let mut told = EventTally::default();
+        let shown: Vec<String> = (1..=25)
+            .filter_map(|k| told.text(&event("deadline_missed", k), "x.psl", ""))
+            .collect();
+        assert_eq!(shown.len(), 10);
+        assert!(shown[8].ends_with("number 9"), "{}", shown[8]);
+        assert!(
+            shown[9].starts_with("warning at 10.00 s: number 10\n")
+                && shown[9].ends_with("events are not shown: the log's /events has every one)"),
+            "{}",
+            shown[9]
+        );
+        assert!(told.text(&event("fault", 26), "x.psl", "").is_some());
     }
 
     #[test]
