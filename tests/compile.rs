@@ -429,6 +429,30 @@ fn cuts_insert_repositioning_flights_and_pinned_cuts_that_do_not_fit_are_errors(
     );
 }
 
+/// An over-the-shoulder held while the foreground actor walks toward the other: its two
+/// possible cameras came to miss the profile equally, the solve flipped from one to the
+/// other, and compile refused the script ("this shot needs 2122.41 m/s", "0.36 m from B":
+/// the camera target crossed 2.1 m of stage in one tick, to B's side). The framing now keeps
+/// its camera: no error, and the reference moves as smoothly as the actors.
+#[test]
+fn an_over_the_shoulder_does_not_jump_between_its_two_cameras() {
+    let src = "stage 8m x 8m x 3m\nlens 84deg 16:9\ndrone ardrone2\n\
+               actor A height 1.82m at (-1.04, 0.21) facing 19deg\n\
+               actor B height 1.82m at (0.5, -0.3) facing -167deg\n\
+               at 0s B walks to (-0.24, -0.45) over 3s\n\
+               high angle MLS on B 34left MLS on A 34backright for 2s\n";
+    let (c, samples, _) = run(&script_of(src));
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+    let step_m = samples
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (w[0].position_m, w[1].position_m);
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        })
+        .fold(0.0f64, f64::max);
+    assert!(step_m < 0.005, "{step_m} m in one sample");
+}
+
 /// A short repositioning flight that takes seconds is a turn at the yaw-rate limit: the
 /// diagnostic says so, and a turn that does not set the time is not mentioned.
 #[test]

@@ -137,6 +137,9 @@ pub struct Director {
     framed: Vec<[Vec<usize>; 2]>,
     /// Per plan, each end's composition prepared for solving (`None` for paths).
     prepared: Vec<[Option<framing::Prepared>; 2]>,
+    /// Per plan, each end's last over-the-shoulder solve: the next keeps its root
+    /// ([`framing::Prepared::solve_near`]).
+    held: Vec<[Option<framing::TwoVisual>; 2]>,
     /// The last few composition solves (see [`Solved`]), replaced round robin.
     solved: Vec<Solved>,
     /// The boxes of the last tick's blended visual, reused by the next one.
@@ -242,6 +245,7 @@ impl Director {
                 _ => [None, None],
             })
             .collect();
+        let held = vec![[None; 2]; plans.len()];
         let (stage_lo, stage_hi) =
             route::stage_less_margin(&scene.stage, profile.safety.stage_margin_m);
         Director {
@@ -275,6 +279,7 @@ impl Director {
             beyond_reach: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
             axes: Vec::with_capacity(scene.actors.len()),
+            held,
             framed,
             prepared,
             solved: Vec::with_capacity(SOLVED_SLOTS),
@@ -910,10 +915,19 @@ impl Director {
                 subjects: 0,
             });
         };
+        let near = self.held[index][end].map(framing::Visual::Two);
         let result = match &self.prepared[index][end] {
-            Some(prepared) => prepared.solve(comp, actors, &self.lens, &self.gimbal),
+            Some(prepared) => {
+                let (lens, gimbal) = (&self.lens, &self.gimbal);
+                prepared.solve_near(comp, actors, lens, gimbal, near.as_ref(), self.safety_m)
+            }
             None => framing::solve(comp, &self.names, actors, &self.lens, &self.gimbal),
         };
+        if let Ok(framing::Visual::Two(t)) = &result {
+            if t.over_shoulder {
+                self.held[index][end] = Some(*t);
+            }
+        }
         if known {
             // A full memo reuses the oldest slot and its pose buffer: no allocation per tick.
             let slot = if self.solved.len() < SOLVED_SLOTS {

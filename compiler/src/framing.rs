@@ -42,7 +42,10 @@
 //!   and the foreground's profile direction (or, without one, C − B and the background's
 //!   profile direction; without either, φ = elevation on the side of the screen order and the
 //!   root nearer the foreground actor). Screens are exact up to the roll-free error below; the
-//!   profile holds as well as the torus allows. Primary = background actor.
+//!   profile holds as well as the torus allows. Primary = background actor. Held tick after
+//!   tick ([`Prepared::solve_near`], as the director solves), the framing keeps its root until
+//!   the other frames the profile [`BRANCH_KEEP_RAD`] better: two roots that miss it alike
+//!   would otherwise trade places across the stage from one tick to the next.
 //! - **Two-actor orientation** (no roll, §4): the primary's aim point lands exactly at its
 //!   screen point (heading and pitch from [`orient`]); the other actor lands exactly too when
 //!   both aim points are at the camera's height (equal heights and φ = 0 or π, e.g. eye-level
@@ -436,6 +439,30 @@ impl Prepared {
         lens: &Lens,
         gimbal: &Gimbal,
     ) -> Result<Visual, FramingError> {
+        self.solve_near(comp, actors, lens, gimbal, None, 0.0)
+    }
+
+    /// [`Prepared::solve`] for a framing held tick after tick, `near` the visual it was
+    /// solved at last. An over-the-shoulder has up to two cameras that frame the background
+    /// actor at its size, and the solve keeps the one nearer the profile written; as live
+    /// actors move, the two can come to frame it equally badly, and the choice then flipped
+    /// from one to the other, across the stage in one tick (2.1 m, a target at 2,100 m/s,
+    /// found by flying random scripts through `dronecine emulate`). With `near`, the root
+    /// nearer the last solve is kept while the other frames the profile less than
+    /// [`BRANCH_KEEP_RAD`] better. And of the two, one whose camera comes within `clear_m` of
+    /// an actor's body axis is not chosen while the other is clear (a foreground actor walking
+    /// toward the other brings one camera onto their own shoulder: 0.00 m from them, the
+    /// other 2 m away framing the profile as well). Without `near` and with `clear_m` 0, or
+    /// for other compositions, as `solve`.
+    pub fn solve_near(
+        &self,
+        comp: &Composition,
+        actors: &[ActorPose],
+        lens: &Lens,
+        gimbal: &Gimbal,
+        near: Option<&Visual>,
+        clear_m: f64,
+    ) -> Result<Visual, FramingError> {
         check_lens(lens)?;
         let subjects: usize = comp.framings.iter().map(|f| f.subjects.len()).sum();
         let unsupported = FramingError::Unsupported {
@@ -472,7 +499,14 @@ impl Prepared {
             [fg, bg] if fg.subjects.len() == 1 && bg.subjects.len() == 1 => {
                 let (sa, sb) = (&fg.subjects[0], &bg.subjects[0]);
                 let pair = pair_of(sa, sb, (fg.size, bg.size))?;
-                solve_over_shoulder(pair, sa, sb, bg.size, actors, lens).map(Visual::Two)
+                let near = match near {
+                    Some(Visual::Two(t)) if t.over_shoulder => {
+                        Some((t.toric.theta_rad, t.toric.phi_rad))
+                    }
+                    _ => None,
+                };
+                solve_over_shoulder(pair, sa, sb, bg.size, actors, lens, near, clear_m)
+                    .map(Visual::Two)
             }
             _ => Err(unsupported),
         }
@@ -803,6 +837,14 @@ fn solve_together(
 /// `scene.psl`), so 27 of 30 flights held the camera, unframed, for part of the shot.
 pub const OVER_SHOULDER_REACH: f64 = 1.15;
 
+/// How much nearer its profile (radians) the other root of an over-the-shoulder must frame
+/// before a held framing leaves its own (see [`Prepared::solve_near`]).
+pub const BRANCH_KEEP_RAD: f64 = 0.35;
+
+/// `near`: the (θ, φ) this composition was solved at last (a hold, solved again each tick);
+/// `clear_m`: how far from each actor's body axis a root's camera must be to be preferred
+/// (see [`Prepared::solve_near`]).
+#[allow(clippy::too_many_arguments)]
 fn solve_over_shoulder(
     mut pair: Pair,
     sa: &Subject,
@@ -810,6 +852,8 @@ fn solve_over_shoulder(
     bg_size: Size,
     actors: &[ActorPose],
     lens: &Lens,
+    near: Option<(f64, f64)>,
+    clear_m: f64,
 ) -> Result<TwoVisual, FramingError> {
     let ab = pair.ab();
     let alpha = pair.alpha;
@@ -863,16 +907,6 @@ fn solve_over_shoulder(
             Err(_) => f64::INFINITY,
         }
     };
-    let best_in = |lo: f64, hi: f64| -> (f64, f64, f64) {
-        let mut best = (f64::NAN, f64::NAN, f64::INFINITY);
-        for &th in &thetas {
-            let (phi, v) = minimise(|phi| cost(th, phi), lo, hi);
-            if v < best.2 {
-                best = (th, phi, v);
-            }
-        }
-        best
-    };
     let (lo, hi) = if !pair.order_fixed {
         (-PI, PI)
     } else if pair.a_left() {
@@ -880,7 +914,63 @@ fn solve_over_shoulder(
     } else {
         (FRAC_PI_2, 3.0 * FRAC_PI_2)
     };
-    let (theta, phi, _) = best_in(lo, hi);
+    // Each root with its best φ (at most two: on the stack, this runs every tick), and the
+    // best of them (the first on a tie).
+    let mut found = [(f64::NAN, f64::NAN, f64::INFINITY); 2];
+    let mut count = 0;
+    for &th in thetas.iter().take(found.len()) {
+        let (phi, v) = minimise(|phi| cost(th, phi), lo, hi);
+        found[count] = (th, phi, v);
+        count += 1;
+    }
+    let mut roots: &[(f64, f64, f64)] = &found[..count];
+    // A root whose camera stands inside an actor's distance gives way to one that does not.
+    if clear_m > 0.0 && count == 2 {
+        let (a, b) = (&actors[pair.a], &actors[pair.b]);
+        let clear = |r: &(f64, f64, f64)| {
+            toric::position(
+                &ma,
+                &mb,
+                &Toric {
+                    alpha_rad: alpha,
+                    theta_rad: r.0,
+                    phi_rad: r.1,
+                },
+            )
+            .is_ok_and(|c| {
+                body_axis_distance_m(&c, a) >= clear_m && body_axis_distance_m(&c, b) >= clear_m
+            })
+        };
+        match (clear(&roots[0]), clear(&roots[1])) {
+            (true, false) => roots = &roots[..1],
+            (false, true) => roots = &roots[1..],
+            _ => {}
+        }
+    }
+    let mut best = (f64::NAN, f64::NAN, f64::INFINITY);
+    for &r in roots {
+        if r.2 < best.2 {
+            best = r;
+        }
+    }
+    // A held framing keeps its root while the other is not clearly better.
+    let (theta, phi, _) = match near {
+        Some((theta0, phi0)) => {
+            let apart =
+                |r: &(f64, f64, f64)| (r.0 - theta0).abs() + wrap_angle_rad(r.1 - phi0).abs();
+            let held = roots
+                .iter()
+                .copied()
+                .min_by(|x, y| apart(x).total_cmp(&apart(y)))
+                .unwrap_or(best);
+            if held.2 <= best.2 + BRANCH_KEEP_RAD {
+                held
+            } else {
+                best
+            }
+        }
+        None => best,
+    };
     let phi = wrap_angle_rad(phi);
     pair.agree_with_side(phi)?;
     let theta = pair.refine_theta(lens, theta, phi, Primary::B);

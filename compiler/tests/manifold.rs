@@ -922,3 +922,155 @@ fn body_axis_distance_is_to_the_segment() {
         (body_axis_distance_m(&Vec3::new(1.3, 2.4, -1.0), &a) - 0.5f64.hypot(1.0)).abs() < 1e-12
     );
 }
+
+/// `high angle MLS on B 34left MLS on A 34backright`, as a random script wrote it.
+fn ots_written_across() -> Composition {
+    comp(
+        CameraAngle::High,
+        vec![
+            (
+                Size::MLS,
+                vec![subject("B", Some(Profile::ThreeQuarterLeft), None, None)],
+            ),
+            (
+                Size::MLS,
+                vec![subject(
+                    "A",
+                    Some(Profile::ThreeQuarterBackRight),
+                    None,
+                    None,
+                )],
+            ),
+        ],
+    )
+}
+
+/// An over-the-shoulder has up to two cameras that frame the background actor at its size;
+/// the solve keeps the one nearer the profile. With B walking toward A, the two came to miss
+/// the profile equally (by 47°), and the solve flipped from one to the other: the camera
+/// target crossed 2.1 m of stage in one 10 ms tick (compile refused the script with "this
+/// shot needs 2122 m/s"; on set, through `dronecine emulate`, the camera was sent next to B).
+/// Held tick after tick (`solve_near`, as the director does), the framing keeps its camera.
+#[test]
+fn a_held_over_the_shoulder_keeps_its_camera_when_both_frame_alike() {
+    let (l, g) = (lens(84.0), Gimbal::None);
+    let c = ots_written_across();
+    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    let at = |k: usize| {
+        // B walks from (0.5, −0.3) toward A, 1 cm a tick.
+        let s = k as f64 * 0.01;
+        [
+            actor(-1.04, 0.21, 19.0, 1.82),
+            actor(0.5 - 0.98 * s, -0.3 - 0.2 * s, -168.0, 1.82),
+        ]
+    };
+    let (mut plain_jump_m, mut held_jump_m) = (0.0f64, 0.0f64);
+    let (mut plain_prev, mut held_prev): (Option<Vec3>, Option<(Visual, Vec3)>) = (None, None);
+    for k in 0..=80 {
+        let actors = at(k);
+        let plain = prepared.solve(&c, &actors, &l, &g).unwrap();
+        let p = framing::position_m(&plain, &actors, &l, &g);
+        if let Some(q) = plain_prev {
+            plain_jump_m = plain_jump_m.max((p - q).norm());
+        }
+        plain_prev = Some(p);
+        let near = held_prev.as_ref().map(|(v, _)| v);
+        let held = prepared.solve_near(&c, &actors, &l, &g, near, 0.0).unwrap();
+        let p = framing::position_m(&held, &actors, &l, &g);
+        if let Some((_, q)) = &held_prev {
+            held_jump_m = held_jump_m.max((p - q).norm());
+        }
+        held_prev = Some((held, p));
+    }
+    assert!(
+        plain_jump_m > 1.0,
+        "the case flips unheld: {plain_jump_m:.3} m"
+    );
+    assert!(held_jump_m < 0.05, "held: {held_jump_m:.3} m in a tick");
+}
+
+/// Keeping its camera is not sticking to it: an actor who turns round moves the profile's
+/// side, and when the other camera frames it clearly better (by `BRANCH_KEEP_RAD`), the held
+/// framing goes there too, as the unheld solve does.
+#[test]
+fn a_held_over_the_shoulder_changes_camera_when_the_other_is_clearly_better() {
+    let (l, g) = (lens(84.0), Gimbal::None);
+    let c = ots_written_across();
+    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    let at = |facing_deg: f64| {
+        [
+            actor(-1.04, 0.21, 19.0, 1.82),
+            actor(0.2, -0.35, facing_deg, 1.82),
+        ]
+    };
+    let mut held: Option<Visual> = None;
+    let mut changes = 0;
+    let mut prev_theta: Option<f64> = None;
+    // B turns round twice, 2° a tick.
+    for k in 0..=360 {
+        let actors = at(-168.0 + 2.0 * k as f64);
+        let Ok(v) = prepared.solve_near(&c, &actors, &l, &g, held.as_ref(), 0.0) else {
+            held = None;
+            continue;
+        };
+        let Visual::Two(t) = &v else { panic!("{v:?}") };
+        if let Some(th) = prev_theta {
+            if (t.toric.theta_rad - th).abs() > 1.0 {
+                changes += 1;
+                // It changed to the camera the unheld solve picks.
+                let Visual::Two(best) = prepared.solve(&c, &actors, &l, &g).unwrap() else {
+                    unreachable!()
+                };
+                assert!(
+                    (best.toric.theta_rad - t.toric.theta_rad).abs() < 1e-9,
+                    "{best:?} against {t:?}"
+                );
+            }
+        }
+        prev_theta = Some(t.toric.theta_rad);
+        held = Some(v);
+    }
+    assert!(changes >= 2, "{changes} changes of camera in two turns");
+}
+
+/// Of an over-the-shoulder's two cameras, one standing inside an actor's distance gives way
+/// to one that does not: with the foreground actor walked up toward the other, the camera
+/// nearer the profile stood on their shoulder (the director said "0.00 m from B" on set,
+/// through `dronecine emulate`), while the other, 2 m away, framed it as well.
+#[test]
+fn an_over_the_shoulder_camera_inside_an_actor_gives_way_to_one_clear_of_both() {
+    let (l, g) = (lens(84.0), Gimbal::None);
+    let c = ots_written_across();
+    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    let actors = [
+        actor(-1.06, 0.32, 19.0, 1.82),
+        actor(-0.10, -0.40, -168.0, 1.82),
+    ];
+    let nearest_m = |v: &Visual| {
+        let p = framing::position_m(v, &actors, &l, &g);
+        actors
+            .iter()
+            .map(|a| body_axis_distance_m(&p, a))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let unkept = prepared.solve_near(&c, &actors, &l, &g, None, 0.0).unwrap();
+    assert!(nearest_m(&unkept) < 0.5, "{}", nearest_m(&unkept));
+    let kept = prepared.solve_near(&c, &actors, &l, &g, None, 0.5).unwrap();
+    assert!(nearest_m(&kept) >= 0.5, "{}", nearest_m(&kept));
+    // The background actor's size is kept all the same (the same toric distance to A).
+    let (Visual::Two(u), Visual::Two(k)) = (&unkept, &kept) else {
+        panic!()
+    };
+    let to_a = |t: &framing::TwoVisual| {
+        assert_eq!(t.b, 0, "A is the background actor");
+        let [x, y, _] = actors[t.b].position_m;
+        let aim = Vec3::new(x, y, (t.band_b_m[0] + t.band_b_m[1]) / 2.0);
+        (framing::position_m(&Visual::Two(*t), &actors, &l, &g) - aim).norm()
+    };
+    assert!(
+        (to_a(u) - to_a(k)).abs() < 1e-6,
+        "{} against {}",
+        to_a(u),
+        to_a(k)
+    );
+}
