@@ -945,6 +945,14 @@ fn ots_written_across() -> Composition {
     )
 }
 
+/// [`ots_written_across`] prepared, with its lens (84°) and a level camera.
+fn ots_written_across_prepared() -> (Lens, Gimbal, Composition, framing::Prepared) {
+    let l = lens(84.0);
+    let c = ots_written_across();
+    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    (l, Gimbal::None, c, prepared)
+}
+
 /// An over-the-shoulder has up to two cameras that frame the background actor at its size;
 /// the solve keeps the one nearer the profile. With B walking toward A, the two came to miss
 /// the profile equally (by 47°), and the solve flipped from one to the other: the camera
@@ -953,9 +961,7 @@ fn ots_written_across() -> Composition {
 /// Held tick after tick (`solve_near`, as the director does), the framing keeps its camera.
 #[test]
 fn a_held_over_the_shoulder_keeps_its_camera_when_both_frame_alike() {
-    let (l, g) = (lens(84.0), Gimbal::None);
-    let c = ots_written_across();
-    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    let (l, g, c, prepared) = ots_written_across_prepared();
     let at = |k: usize| {
         // B walks from (0.5, −0.3) toward A, 1 cm a tick.
         let s = k as f64 * 0.01;
@@ -994,9 +1000,7 @@ fn a_held_over_the_shoulder_keeps_its_camera_when_both_frame_alike() {
 /// framing goes there too, as the unheld solve does.
 #[test]
 fn a_held_over_the_shoulder_changes_camera_when_the_other_is_clearly_better() {
-    let (l, g) = (lens(84.0), Gimbal::None);
-    let c = ots_written_across();
-    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    let (l, g, c, prepared) = ots_written_across_prepared();
     let at = |facing_deg: f64| {
         [
             actor(-1.04, 0.21, 19.0, 1.82),
@@ -1039,9 +1043,7 @@ fn a_held_over_the_shoulder_changes_camera_when_the_other_is_clearly_better() {
 /// through `dronecine emulate`), while the other, 2 m away, framed it as well.
 #[test]
 fn an_over_the_shoulder_camera_inside_an_actor_gives_way_to_one_clear_of_both() {
-    let (l, g) = (lens(84.0), Gimbal::None);
-    let c = ots_written_across();
-    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    let (l, g, c, prepared) = ots_written_across_prepared();
     let actors = [
         actor(-1.06, 0.32, 19.0, 1.82),
         actor(-0.10, -0.40, -168.0, 1.82),
