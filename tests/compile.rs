@@ -453,6 +453,48 @@ fn an_over_the_shoulder_does_not_jump_between_its_two_cameras() {
     assert!(step_m < 0.005, "{step_m} m in one sample");
 }
 
+/// A move from one actor's framing to another's, while the first turns round: the shorter
+/// way round the actors changes side and the framing jumps 2.38 m in one tick. Said as a jump
+/// (before: "this shot needs 2406.73 m/s", help "make it at least 9902.0 s", which no length
+/// of move fixes), with what does fix it.
+#[test]
+fn a_framing_that_jumps_is_told_as_a_jump_not_as_a_speed() {
+    let src = "stage 14m x 10m x 3m\ndrone ardrone2\n\
+               actor A height 1.98m at (-2.71, 0.47) facing -118deg\n\
+               actor B height 2.01m at (1.39, 0.16) facing -7deg\n\
+               at 6s A turns to -30deg over 1s\n\
+               at 12s A turns to 149deg over 1s\n\
+               low angle MS on A 34right for 3s\n\
+               then follow B to LS on B over 12s\n";
+    let (c, _, _) = run(&script_of(src));
+    let d = with_code(&c, Code::Infeasible);
+    assert_eq!(d.len(), 1, "{:?}", c.diagnostics);
+    assert!(
+        d[0].is_error()
+            && d[0]
+                .message
+                .starts_with("the framing jumps 2.38 m from one sample to the next (9.5 s into")
+            && d[0]
+                .help
+                .as_deref()
+                .is_some_and(|h| h.contains("split the move")),
+        "{:?}",
+        d[0]
+    );
+    // The same move while A stands still: no jump, only a move too fast for its length
+    // (3.01 m/s), whose help retimes it as before.
+    let still = src.replace("at 12s A turns to 149deg over 1s\n", "");
+    let (c, _, _) = run(&script_of(&still));
+    let d = with_code(&c, Code::Infeasible);
+    assert!(
+        d.len() == 1
+            && d[0].message.starts_with("this shot needs 3.01 m/s")
+            && d[0].help.as_deref() == Some("make it at least 35.0 s"),
+        "{:?}",
+        c.diagnostics
+    );
+}
+
 /// A short repositioning flight that takes seconds is a turn at the yaw-rate limit: the
 /// diagnostic says so, and a turn that does not set the time is not mentioned.
 #[test]

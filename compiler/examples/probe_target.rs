@@ -18,7 +18,7 @@ fn main() {
     let blocking = Blocking::new(scene);
     let mut d = Director::new(&script, scene, &profile);
     let mut prev: Option<[f64; 3]> = None;
-    for k in 0..=200 {
+    for k in 0..=1600 {
         let t = k as f64 * 0.01;
         let poses = blocking.poses(t);
         let s = d.step(t, &poses);

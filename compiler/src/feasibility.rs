@@ -40,6 +40,10 @@ impl Peak {
 struct ShotStats {
     demand_speed: Peak,
     demand_accel: Peak,
+    /// The largest step of the target as solved from one sample to the next that no drone
+    /// could make ([`JUMP_MIN_M`], [`JUMP_SPEEDS`]), and the last sample's target.
+    jump: Peak,
+    last_solved: Option<(f64, Vec3)>,
     speed: Peak,
     tilt: Peak,
     vz: Peak,
@@ -66,6 +70,14 @@ struct ShotStats {
     in_margin_m: f64,
     in_margin_actor: Option<(usize, f64)>,
 }
+
+/// A step of the solved target between two samples is a jump, not a fast framing, from this
+/// long and this many times the drone's top speed over the samples' interval: a framing that
+/// changes side of the actors (a move's shorter way round them, an over-the-shoulder's other
+/// camera) in one tick. Longer shots do not help such a shot, and the retiming help said to
+/// make a 12 s move last 9,902 s.
+pub const JUMP_MIN_M: f64 = 0.3;
+pub const JUMP_SPEEDS: f64 = 10.0;
 
 /// Per-shot peaks of everything checked.
 pub struct Monitor {
@@ -136,6 +148,14 @@ impl Monitor {
             st.demand_speed.see(crate::norm_xy(goal.v.x, goal.v.y), t);
             st.demand_accel.see(crate::norm_xy(goal.a.x, goal.a.y), t);
             st.lag.see((goal.p - p).norm(), t);
+            if let Some((t0, p0)) = st.last_solved {
+                let step_m = (solved - p0).norm();
+                if t > t0 && step_m > JUMP_MIN_M && step_m > JUMP_SPEEDS * self.speed_max * (t - t0)
+                {
+                    st.jump.see(step_m, t);
+                }
+            }
+            st.last_solved = Some((t, *solved));
         }
         st.speed.see(crate::norm_xy(v.x, v.y), t);
         let x = self.tau * a.x + v.x;
@@ -240,7 +260,32 @@ impl Monitor {
                 .max((st.demand_accel.value / self.accel_max).sqrt())
                 * 1.05;
             let mut demand_reported = false;
-            if st.demand_speed.value > self.speed_max * SLACK {
+            if st.jump.value > 0.0 {
+                // A jump sets the demand: said as such, with what changes it.
+                demand_reported = true;
+                out.push(
+                    Diagnostic::error(
+                        Code::Infeasible,
+                        shot.span,
+                        format!(
+                            "the framing jumps {:.2} m from one sample to the next ({}): no \
+                             drone follows that, {} flies {:.2} m/s",
+                            st.jump.value,
+                            at(st.jump.t_s),
+                            self.profile,
+                            self.speed_max
+                        ),
+                    )
+                    .with_label("the framing jumps here")
+                    .with_help(
+                        "as the actors move, the camera's way round them changes side (the \
+                         shorter way round in a move, or an over-the-shoulder's other camera): \
+                         split the move, write a profile their movement does not turn round, \
+                         or cut to the new framing",
+                    ),
+                );
+            }
+            if !demand_reported && st.demand_speed.value > self.speed_max * SLACK {
                 demand_reported = true;
                 let need = st.demand_speed.value;
                 let help = if retimeable {
