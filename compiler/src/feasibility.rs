@@ -259,31 +259,33 @@ impl Monitor {
             let retime = (st.demand_speed.value / self.speed_max)
                 .max((st.demand_accel.value / self.accel_max).sqrt())
                 * 1.05;
+            // What the shot asks that the drone cannot give: an error on its line, with what
+            // the label points at and the fix.
+            let infeasible = |message: String, label: &str, help: String| {
+                Diagnostic::error(Code::Infeasible, shot.span, message)
+                    .with_label(label)
+                    .with_help(help)
+            };
             let mut demand_reported = false;
             if st.jump.value > 0.0 {
                 // A jump sets the demand: said as such, with what changes it.
                 demand_reported = true;
-                out.push(
-                    Diagnostic::error(
-                        Code::Infeasible,
-                        shot.span,
-                        format!(
-                            "the framing jumps {:.2} m from one sample to the next ({}): no \
-                             drone follows that, {} flies {:.2} m/s",
-                            st.jump.value,
-                            at(st.jump.t_s),
-                            self.profile,
-                            self.speed_max
-                        ),
-                    )
-                    .with_label("the framing jumps here")
-                    .with_help(
-                        "as the actors move, the camera's way round them changes side (the \
-                         shorter way round in a move, or an over-the-shoulder's other camera): \
-                         split the move, write a profile their movement does not turn round, \
-                         or cut to the new framing",
+                out.push(infeasible(
+                    format!(
+                        "the framing jumps {:.2} m from one sample to the next ({}): no drone \
+                         follows that, {} flies {:.2} m/s",
+                        st.jump.value,
+                        at(st.jump.t_s),
+                        self.profile,
+                        self.speed_max
                     ),
-                );
+                    "the framing jumps here",
+                    "as the actors move, the camera's way round them changes side (the shorter \
+                     way round in a move, or an over-the-shoulder's other camera): split the \
+                     move, write a profile their movement does not turn round, or cut to the \
+                     new framing"
+                        .to_string(),
+                ));
             }
             if !demand_reported && st.demand_speed.value > self.speed_max * SLACK {
                 demand_reported = true;
@@ -295,20 +297,16 @@ impl Monitor {
                      use a wider size"
                         .to_string()
                 };
-                out.push(
-                    Diagnostic::error(
-                        Code::Infeasible,
-                        shot.span,
-                        format!(
-                            "this shot needs {need:.2} m/s ({}); {} flies {:.2} m/s",
-                            at(st.demand_speed.t_s),
-                            self.profile,
-                            self.speed_max
-                        ),
-                    )
-                    .with_label("too fast for the drone")
-                    .with_help(help),
-                );
+                out.push(infeasible(
+                    format!(
+                        "this shot needs {need:.2} m/s ({}); {} flies {:.2} m/s",
+                        at(st.demand_speed.t_s),
+                        self.profile,
+                        self.speed_max
+                    ),
+                    "too fast for the drone",
+                    help,
+                ));
             }
             if !demand_reported && st.demand_accel.value > self.accel_max * SLACK {
                 demand_reported = true;
@@ -320,44 +318,36 @@ impl Monitor {
                      `over`) or use a wider size"
                         .to_string()
                 };
-                out.push(
-                    Diagnostic::error(
-                        Code::Infeasible,
-                        shot.span,
-                        format!(
-                            "this shot needs {need:.2} m/s² ({}); {} accelerates at most {:.2} m/s²",
-                            at(st.demand_accel.t_s),
-                            self.profile,
-                            self.accel_max
-                        ),
-                    )
-                    .with_label("too abrupt for the drone")
-                    .with_help(help),
-                );
+                out.push(infeasible(
+                    format!(
+                        "this shot needs {need:.2} m/s² ({}); {} accelerates at most {:.2} m/s²",
+                        at(st.demand_accel.t_s),
+                        self.profile,
+                        self.accel_max
+                    ),
+                    "too abrupt for the drone",
+                    help,
+                ));
             }
             if !demand_reported && !is_held_off(i) && st.lag.value > TRACKING_TOLERANCE_M {
                 demand_reported = true;
-                out.push(
-                    Diagnostic::error(
-                        Code::Infeasible,
-                        shot.span,
-                        format!(
-                            "the drone falls {:.2} m behind the framing ({}) within {}'s limits",
-                            st.lag.value,
-                            at(st.lag.t_s),
-                            self.profile
-                        ),
-                    )
-                    .with_label("the framing is lost here")
-                    .with_help(if retimeable {
+                out.push(infeasible(
+                    format!(
+                        "the drone falls {:.2} m behind the framing ({}) within {}'s limits",
+                        st.lag.value,
+                        at(st.lag.t_s),
+                        self.profile
+                    ),
+                    "the framing is lost here",
+                    if retimeable {
                         format!(
                             "make it longer (at least {:.1} s)",
                             round_up_1(duration * 1.5)
                         )
                     } else {
                         "slow the actors' movements or use a wider size".to_string()
-                    }),
-                );
+                    },
+                ));
             }
             let checks = [
                 (st.tilt, self.tilt_max, "tilt", "rad"),
