@@ -53,11 +53,9 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
         // The flight's warnings and errors, as `shoot` told them (its events; the script's
         // text is in the log, so a finding of the director's quotes its line).
         let script_name = format!("{}.psl", log.header.script_name);
-        let mut told = crate::shoot::EventTally::default();
-        for e in log.events.iter().filter(|e| e.level != "info") {
-            if let Some(text) = told.text(e, &script_name, &log.header.script_text) {
-                errln!("{text}");
-            }
+        let mut told = crate::shoot::EventTally::new(&script_name, &log.header.script_text);
+        for text in log.events.iter().filter_map(|e| told.text(e)) {
+            errln!("{text}");
         }
         // A log cut before the flight's end does not say how the flight ended.
         let ended = log.events.iter().any(|e| e.kind == "flight_end");

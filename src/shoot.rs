@@ -447,9 +447,7 @@ fn civil_from_days(z: i64) -> (i64, u32, u32) {
 struct Display {
     bar: Option<indicatif::ProgressBar>,
     quiet: bool,
-    /// The script's name as given and its text: a finding of the director's quotes its line.
-    script: (String, String),
-    /// How many of each kind of event were shown.
+    /// The warnings and errors as they are shown.
     told: EventTally,
     /// When the line's text was last set, and the phase and shot it showed: the loop offers
     /// progress every tick, and formatting the line each time (a string per tick, and the
@@ -474,8 +472,7 @@ impl Display {
         Display {
             bar,
             quiet,
-            script: (script_name.to_string(), script_text.to_string()),
-            told: EventTally::default(),
+            told: EventTally::new(script_name, script_text),
             shown: None,
         }
     }
@@ -529,10 +526,10 @@ impl Observer for Display {
     }
 
     fn event(&mut self, e: &Event) {
-        if self.quiet || e.level == "info" {
+        if self.quiet {
             return;
         }
-        let Some(line) = self.told.text(e, &self.script.0, &self.script.1) else {
+        let Some(line) = self.told.text(e) else {
             return;
         };
         match &self.bar {
@@ -576,16 +573,32 @@ pub fn event_text(e: &Event, script_name: &str, script_text: &str) -> String {
 /// them.
 const SHOWN_PER_KIND: u32 = 10;
 
-/// Counts the events shown, per kind, for [`SHOWN_PER_KIND`].
-#[derive(Default)]
+/// What the terminal shows of a flight's events (`shoot` as they happen, `replay` from the
+/// log): its warnings and errors, [`SHOWN_PER_KIND`] of each kind at most, a finding of the
+/// director's quoting its line of the script.
 pub struct EventTally {
+    script_name: String,
+    script_text: String,
+    /// Per kind, how many were shown.
     shown: Vec<(String, u32)>,
 }
 
 impl EventTally {
-    /// The text to print for `e` ([`event_text`]): the first [`SHOWN_PER_KIND`] of its kind,
-    /// the last of them saying that the rest are in the log only; then `None`.
-    pub fn text(&mut self, e: &Event, script_name: &str, script_text: &str) -> Option<String> {
+    pub fn new(script_name: &str, script_text: &str) -> EventTally {
+        EventTally {
+            script_name: script_name.to_string(),
+            script_text: script_text.to_string(),
+            shown: Vec::new(),
+        }
+    }
+
+    /// The text to print for `e` ([`event_text`]), `None` for an info event: the first
+    /// [`SHOWN_PER_KIND`] of its kind, the last of them saying that the rest are in the log
+    /// only; then `None`.
+    pub fn text(&mut self, e: &Event) -> Option<String> {
+        if e.level == "info" {
+            return None;
+        }
         let at = match self.shown.iter().position(|(k, _)| *k == e.kind) {
             Some(at) => at,
             None => {
@@ -598,12 +611,14 @@ impl EventTally {
             return None;
         }
         *n += 1;
-        let mut text = event_text(e, script_name, script_text);
+        let mut text = event_text(e, &self.script_name, &self.script_text);
         if *n == SHOWN_PER_KIND {
-            text.push_str(&format!(
+            use std::fmt::Write;
+            let _ = write!(
+                text,
                 "\n  (further `{}` events are not shown: the log's /events has every one)",
                 e.kind
-            ));
+            );
         }
         Some(text)
     }
@@ -707,8 +722,7 @@ mod tests {
         let mut d = Display {
             bar: Some(indicatif::ProgressBar::hidden()),
             quiet: false,
-            script: (String::new(), String::new()),
-            told: EventTally::default(),
+            told: EventTally::new("", ""),
             shown: None,
         };
         let at = |t_s: f64, phase: Phase, shot: Option<usize>| Progress {
@@ -781,7 +795,7 @@ mod tests {
     }
 
     /// Ten events of a kind are shown, the tenth saying that the rest are in the log; other
-    /// kinds are counted apart.
+    /// kinds are counted apart; info events are not shown.
     #[test]
     fn events_of_one_kind_are_shown_ten_times_at_most() {
         let event = |kind: &str, k: u32| Event {
@@ -792,9 +806,9 @@ mod tests {
             line: None,
             help: None,
         };
-        let mut told = EventTally::default();
+        let mut told = EventTally::new("x.psl", "");
         let shown: Vec<String> = (1..=25)
-            .filter_map(|k| told.text(&event("deadline_missed", k), "x.psl", ""))
+            .filter_map(|k| told.text(&event("deadline_missed", k)))
             .collect();
         assert_eq!(shown.len(), 10);
         assert!(shown[8].ends_with("number 9"), "{}", shown[8]);
@@ -804,7 +818,13 @@ mod tests {
             "{}",
             shown[9]
         );
-        assert!(told.text(&event("fault", 26), "x.psl", "").is_some());
+        assert!(told.text(&event("fault", 26)).is_some());
+        // Info events are the log's only.
+        let info = Event {
+            level: "info".into(),
+            ..event("shot_start", 27)
+        };
+        assert_eq!(told.text(&info), None);
     }
 
     #[test]

@@ -548,6 +548,7 @@ impl Director {
         let target = goal.p;
 
         if keep_placed {
+            // Where the flight placed it, moving as it did: steered from the next tick.
         } else if first || dt <= 0.0 || !self.placed {
             // The first shot starts framed: on its target, moving with it (never faster than
             // the camera may fly: live actors' velocities are estimates). So does a first
@@ -589,6 +590,7 @@ impl Director {
             _ => 0.0,
         };
         if keep_placed {
+            // With the heading the flight placed it at.
         } else if first || dt <= 0.0 {
             self.heading = HeadingState {
                 heading_rad: heading_target,

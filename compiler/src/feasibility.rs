@@ -76,8 +76,8 @@ struct ShotStats {
 /// changes side of the actors (a move's shorter way round them, an over-the-shoulder's other
 /// camera) in one tick. Longer shots do not help such a shot, and the retiming help said to
 /// make a 12 s move last 9,902 s.
-pub const JUMP_MIN_M: f64 = 0.3;
-pub const JUMP_SPEEDS: f64 = 10.0;
+const JUMP_MIN_M: f64 = 0.3;
+const JUMP_SPEEDS: f64 = 10.0;
 
 /// Per-shot peaks of everything checked.
 pub struct Monitor {

@@ -234,6 +234,16 @@ fn schedule(dt_s: f64) -> impl Iterator<Item = (f64, f64)> {
     (0..n).map(move |k| (h, (n - 1 - k) as f64 * h))
 }
 
+/// `one(state, h, back_s)` over the [`schedule`] of a tick of `dt_s`, each sub-step from the
+/// state the one before left.
+fn substepped<S: Copy>(state: &S, dt_s: f64, one: impl Fn(&S, f64, f64) -> S) -> S {
+    let mut s = *state;
+    for (h, back_s) in schedule(dt_s) {
+        s = one(&s, h, back_s);
+    }
+    s
+}
+
 /// A tick of `dt_s` of [`step`] toward `goal`, in [`substeps`] equal steps each toward the
 /// goal as it stood at that step's end ([`Kinematics::earlier`]), with `extra(p)` the
 /// separation and containment pushes at the camera's position `p`. One step, toward `goal`
@@ -247,16 +257,14 @@ pub fn advance(
     gains: &SteerGains,
     dt_s: f64,
 ) -> Kinematics {
-    let mut s = *state;
-    for (h, back_s) in schedule(dt_s) {
+    substepped(state, dt_s, |s, h, back_s| {
         let goal_then = if back_s > 0.0 {
             goal.earlier(back_s)
         } else {
             *goal
         };
-        s = step(&s, &goal_then, extra(&s.p), walls, limits, gains, h);
-    }
-    s
+        step(s, &goal_then, extra(&s.p), walls, limits, gains, h)
+    })
 }
 
 /// [`advance`] for the heading: [`step_heading`] in [`substeps`] equal steps, each toward the
@@ -269,16 +277,14 @@ pub fn advance_heading(
     gains: &SteerGains,
     dt_s: f64,
 ) -> HeadingState {
-    let mut s = *state;
-    for (h, back_s) in schedule(dt_s) {
+    substepped(state, dt_s, |s, h, back_s| {
         let target_then = if back_s > 0.0 {
             target_rad - target_rate_radps * back_s
         } else {
             target_rad
         };
-        s = step_heading(&s, target_then, target_rate_radps, limits, gains, h);
-    }
-    s
+        step_heading(s, target_then, target_rate_radps, limits, gains, h)
+    })
 }
 
 /// One tick of heading steering toward `target_rad` turning at `target_rate_radps`.

@@ -33,7 +33,7 @@ use dronecine_compiler::profile::Profile;
 use dronecine_compiler::route::{self, Keepout, Route};
 use dronecine_compiler::steering::SteerLimits;
 use dronecine_grammar::script::{Scene, Script};
-use dronecine_grammar::{Code, Diagnostic};
+use dronecine_grammar::{Code, Diagnostic, LineIndex};
 use serde::Serialize;
 
 use crate::backend::{BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame};
@@ -533,10 +533,11 @@ impl<'s, 'b> Flight<'s, 'b> {
         } else {
             ""
         };
-        let line = (!d.span.is_empty())
-            .then(|| self.setup.source.get(..d.span.start))
-            .flatten()
-            .map(|before| 1 + before.bytes().filter(|&b| b == b'\n').count() as u32);
+        let source = self.setup.source;
+        let line = (!d.span.is_empty() && d.span.start <= source.len()).then(|| {
+            let (line, _) = LineIndex::new(source).line_col(source, d.span.start);
+            u32::try_from(line).unwrap_or(u32::MAX)
+        });
         self.tell(Event {
             t_s,
             level: level.to_string(),

@@ -115,18 +115,14 @@ pub fn clear_spot(
     let rings = (reach_m / STEP_M).ceil().min(2000.0) as i32;
     for ring in 1..=rings {
         let r = f64::from(ring) * STEP_M;
-        // Away from the nearest mark first, then turning either way.
-        for k in 0..=DIRECTIONS / 2 {
-            for side in [1, -1] {
-                let a = away + f64::from(side * k) * std::f64::consts::TAU / f64::from(DIRECTIONS);
-                let (sin, cos) = crate::math::sin_cos(a);
-                let p = [spot[0] + r * cos, spot[1] + r * sin];
-                if clear(p) {
-                    return p;
-                }
-                if k == 0 || k == DIRECTIONS / 2 {
-                    break;
-                }
+        // Away from the nearest mark first, then turning either way: 0, +1, −1, +2, …, +36.
+        for j in 0..DIRECTIONS {
+            let k = if j % 2 == 1 { (j + 1) / 2 } else { -(j / 2) };
+            let a = away + f64::from(k) * std::f64::consts::TAU / f64::from(DIRECTIONS);
+            let (sin, cos) = crate::math::sin_cos(a);
+            let p = [spot[0] + r * cos, spot[1] + r * sin];
+            if clear(p) {
+                return p;
             }
         }
     }
