@@ -144,6 +144,9 @@ pub struct Director {
     solved: Vec<Solved>,
     /// The boxes of the last tick's blended visual, reused by the next one.
     blend_spare: Option<(Box<framing::Visual>, Box<framing::Visual>)>,
+    /// The move being flown (by plan) and the way round its blend went on the last tick
+    /// ([`framing::BlendWay`]): the next tick goes on the same way.
+    way: Option<(usize, framing::BlendWay)>,
     next_solved: usize,
 }
 
@@ -284,6 +287,7 @@ impl Director {
             prepared,
             solved: Vec::with_capacity(SOLVED_SLOTS),
             blend_spare: None,
+            way: None,
             next_solved: 0,
         }
     }
@@ -1008,7 +1012,17 @@ impl Director {
                 let p = match &b {
                     None => framing::position_m(&a, actors, &self.lens, &self.gimbal),
                     Some((b, s)) => {
-                        framing::position_between_m(&a, b, *s, actors, &self.lens, &self.gimbal)
+                        let last = match self.way {
+                            Some((plan, way)) if plan == index => way,
+                            _ => framing::BlendWay::default(),
+                        };
+                        let (lens, gimbal) = (&self.lens, &self.gimbal);
+                        let (p, way) =
+                            framing::position_between_way_m(&a, b, *s, actors, lens, gimbal, &last);
+                        if keep {
+                            self.way = Some((index, way));
+                        }
+                        p
                     }
                 };
                 if keep {

@@ -73,8 +73,8 @@ struct ShotStats {
 
 /// A step of the solved target between two samples is a jump, not a fast framing, from this
 /// long and this many times the drone's top speed over the samples' interval: a framing that
-/// changes side of the actors (a move's shorter way round them, an over-the-shoulder's other
-/// camera) in one tick. Longer shots do not help such a shot, and the retiming help said to
+/// changes side of the actors (an over-the-shoulder's other camera; before moves kept their
+/// way round, `framing::BlendWay`, a move's shorter way round them) in one tick. Longer shots do not help such a shot, and the retiming help said to
 /// make a 12 s move last 9,902 s.
 const JUMP_MIN_M: f64 = 0.3;
 const JUMP_SPEEDS: f64 = 10.0;
@@ -280,10 +280,10 @@ impl Monitor {
                         self.speed_max
                     ),
                     "the framing jumps here",
-                    "as the actors move, the camera's way round them changes side (the shorter \
-                     way round in a move, or an over-the-shoulder's other camera): split the \
-                     move, write a profile their movement does not turn round, or cut to the \
-                     new framing"
+                    "as the actors move, the framing's camera changes to its other side (an \
+                     over-the-shoulder's other camera frames the profile better): cut to the \
+                     framing as it is after the turn, or write a profile their movement does \
+                     not turn round"
                         .to_string(),
                 ));
             }

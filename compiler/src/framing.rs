@@ -1119,6 +1119,21 @@ pub fn position_m(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal
     place_impl(v, actors, lens, gimbal, false).position_m
 }
 
+/// Which way round a move's blend goes, carried from one tick to the next. Each angle a
+/// [`Visual::Blend`] interpolates — the cylindrical blend's angle about the actors, or the
+/// toric blend's yaw about each of the two actors — goes the short way round on the move's
+/// first tick ([`BlendWay::default`]) and from then on the way nearest the last tick's
+/// ([`toric::nearest_turn_rad`]). When an end swings through the opposite side (an actor
+/// turning round during the move), the short way changes side: the camera's target crossed
+/// the actors in one tick (2.4 m), which no drone flies. The director keeps one per move.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BlendWay {
+    /// The cylindrical blend's turn about the actors' centroid.
+    about_centre_rad: Option<f64>,
+    /// The toric blend's turns about actor A and about actor B.
+    about_pair_rad: [Option<f64>; 2],
+}
+
 /// `position_m(&interpolate(a, b, s), …)`, bit for bit, without building the blend.
 pub fn position_between_m(
     a: &Visual,
@@ -1128,22 +1143,39 @@ pub fn position_between_m(
     lens: &Lens,
     gimbal: &Gimbal,
 ) -> Vec3 {
+    position_between_way_m(a, b, s, actors, lens, gimbal, &BlendWay::default()).0
+}
+
+/// [`position_between_m`] going round the way nearest `way` (the last tick's); also returns
+/// the way it went, for the next tick. With `BlendWay::default()` it is
+/// [`position_between_m`], bit for bit; so it is whenever the short way is the nearest.
+pub fn position_between_way_m(
+    a: &Visual,
+    b: &Visual,
+    s: f64,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    way: &BlendWay,
+) -> (Vec3, BlendWay) {
     let s = if s.is_nan() { 0.0 } else { s.clamp(0.0, 1.0) };
     if s == 0.0 {
-        return position_m(a, actors, lens, gimbal);
+        return (position_m(a, actors, lens, gimbal), *way);
     }
     if s == 1.0 {
-        return position_m(b, actors, lens, gimbal);
+        return (position_m(b, actors, lens, gimbal), *way);
     }
     if let (Visual::One(x), Visual::One(y)) = (a, b) {
         if x.actor == y.actor {
-            return position_m(&Visual::One(lerp_one(x, y, s)), actors, lens, gimbal);
+            let v = Visual::One(lerp_one(x, y, s));
+            return (position_m(&v, actors, lens, gimbal), *way);
         }
     }
     if !(valid_indices(a, actors.len()) && valid_indices(b, actors.len())) {
-        return Vec3::zeros();
+        return (Vec3::zeros(), *way);
     }
-    place_blend(a, b, s, None, actors, lens, gimbal).position_m
+    let (p, way) = place_blend(a, b, s, None, actors, lens, gimbal, way);
+    (p.position_m, way)
 }
 
 /// [`place`], with the orientation (and its flags) only when `orient`.
@@ -1169,7 +1201,18 @@ fn place_impl(
         Visual::One(o) => place_one(o, actors, lens, gimbal, orient),
         Visual::Two(t) => place_two(t, actors, lens, gimbal, orient),
         Visual::Blend { from, to, s } => {
-            place_blend(from, to, *s, orient.then_some(v), actors, lens, gimbal)
+            let short = BlendWay::default();
+            place_blend(
+                from,
+                to,
+                *s,
+                orient.then_some(v),
+                actors,
+                lens,
+                gimbal,
+                &short,
+            )
+            .0
         }
     }
 }
@@ -1196,7 +1239,8 @@ fn oriented(
 }
 
 /// The placement of `Visual::Blend { from, to, s }` (indices already checked), oriented for
-/// `whole` when given.
+/// `whole` when given, going round the way nearest `way`; and the way it went.
+#[allow(clippy::too_many_arguments)]
 fn place_blend(
     from: &Visual,
     to: &Visual,
@@ -1205,12 +1249,13 @@ fn place_blend(
     actors: &[ActorPose],
     lens: &Lens,
     gimbal: &Gimbal,
-) -> Placement {
+    way: &BlendWay,
+) -> (Placement, BlendWay) {
     let orient = whole.is_some();
     let p0 = place_impl(from, actors, lens, gimbal, orient);
     let p1 = place_impl(to, actors, lens, gimbal, orient);
     let flags = p0.flags.union(p1.flags);
-    if let Some(mut c) = toric_blend_position(from, to, s, actors) {
+    if let Some((mut c, turns)) = toric_blend_position(from, to, s, actors, way) {
         if fixed_pitch(gimbal) {
             // Level camera: blend the ends' altitude corrections (place_two).
             let correction = |p: &Placement, v: &Visual| match v {
@@ -1224,7 +1269,11 @@ fn place_blend(
             };
             c.z += lerp(correction(&p0, from), correction(&p1, to), s);
         }
-        return oriented(c, whole, flags, actors, lens, gimbal);
+        let way = BlendWay {
+            about_pair_rad: turns.map(Some),
+            ..*way
+        };
+        return (oriented(c, whole, flags, actors, lens, gimbal), way);
     }
     // Cylindrical blend about the actors involved.
     let centre = blend_centre(from, to, s, actors);
@@ -1234,9 +1283,18 @@ fn place_blend(
     };
     let (r0, a0, z0) = cyl(&p0.position_m);
     let (r1, a1, z1) = cyl(&p1.position_m);
-    let (r, a, z) = (lerp(r0, r1, s), lerp_angle(a0, a1, s), lerp(z0, z1, s));
+    let turn = toric::nearest_turn_rad(wrap_angle_rad(a1 - a0), way.about_centre_rad);
+    let (r, a, z) = (
+        lerp(r0, r1, s),
+        wrap_angle_rad(a0 + turn * s),
+        lerp(z0, z1, s),
+    );
     let c = centre + Vec3::new(r * math::cos(a), r * math::sin(a), z);
-    oriented(c, whole, flags, actors, lens, gimbal)
+    let way = BlendWay {
+        about_centre_rad: Some(turn),
+        ..*way
+    };
+    (oriented(c, whole, flags, actors, lens, gimbal), way)
 }
 
 /// The aim points of a one- or two-actor visual, on the stack (`None` for a blend).
@@ -1437,7 +1495,13 @@ pub fn swap_pair(t: &TwoVisual) -> TwoVisual {
 /// bands (the midpoint of the two candidates is used as is: it is near, not on, the torus of
 /// the interpolated α, and never collapses onto an actor the way a projection onto the torus
 /// does when the move crosses the line of action). `None` for any other blend.
-fn toric_blend_position(from: &Visual, to: &Visual, s: f64, actors: &[ActorPose]) -> Option<Vec3> {
+fn toric_blend_position(
+    from: &Visual,
+    to: &Visual,
+    s: f64,
+    actors: &[ActorPose],
+    way: &BlendWay,
+) -> Option<(Vec3, [f64; 2])> {
     let (Visual::Two(t0), Visual::Two(t1)) = (from, to) else {
         return None;
     };
@@ -1460,6 +1524,7 @@ fn toric_blend_position(from: &Visual, to: &Visual, s: f64, actors: &[ActorPose]
         t0.toric.alpha_rad,
         t1.toric.alpha_rad,
         s,
+        way.about_pair_rad,
     ))
 }
 

@@ -276,13 +276,16 @@ pub const PULL_FADE_RAD: f64 = 0.2;
 
 /// Interpolation between two toric viewpoints `c0` (angle `alpha0_rad`) and `c1`
 /// (`alpha1_rad`) of the same actors A and B at parameter `s` ∈ [0, 1] (§3, Lino & Christie
-/// 2015): for each actor X, the yaw of C − X is interpolated the short way round, its
-/// elevation and length linearly; α is linear in s; the length is then pulled toward the toric
+/// 2015): for each actor X, the yaw of C − X is interpolated the short way round (or, given
+/// `last_turns_rad` — the turn from `c0`'s yaw to `c1`'s about A and about B on the tick
+/// before —, the way nearest it: see [`nearest_turn_rad`]), its elevation and length linearly; α is linear in s; the length is then pulled toward the toric
 /// distance for the current α along that direction (fully, except within [`PULL_FADE_RAD`] of
 /// the edge of the torus, where the pull fades linearly to none so the path stays continuous;
 /// the linear length beyond the edge); the result is the midpoint of the two candidates, from
 /// A and from B. The endpoints are `c0` and `c1` exactly when they lie on
-/// their tori.
+/// their tori. Returns the position and the two turns taken (about A, about B), for the next
+/// tick's `last_turns_rad`.
+#[allow(clippy::too_many_arguments)]
 pub fn interpolate(
     a_m: &Vec3,
     b_m: &Vec3,
@@ -291,16 +294,18 @@ pub fn interpolate(
     alpha0_rad: f64,
     alpha1_rad: f64,
     s: f64,
-) -> Vec3 {
+    last_turns_rad: [Option<f64>; 2],
+) -> (Vec3, [f64; 2]) {
     let alpha = alpha0_rad + (alpha1_rad - alpha0_rad) * s;
-    let candidate = |x: &Vec3, y: &Vec3| -> Vec3 {
+    let candidate = |x: &Vec3, y: &Vec3, last: Option<f64>| -> (Vec3, f64) {
         let v0 = c0_m - x;
         let v1 = c1_m - x;
         let yaw0 = math::atan2(v0.y, v0.x);
         let yaw1 = math::atan2(v1.y, v1.x);
         let el0 = math::atan2(v0.z, math::hypot(v0.x, v0.y));
         let el1 = math::atan2(v1.z, math::hypot(v1.x, v1.y));
-        let yaw = yaw0 + wrap_angle_rad(yaw1 - yaw0) * s;
+        let turn = nearest_turn_rad(wrap_angle_rad(yaw1 - yaw0), last);
+        let yaw = yaw0 + turn * s;
         let el = el0 + (el1 - el0) * s;
         let u = Vec3::new(
             math::cos(el) * math::cos(yaw),
@@ -316,14 +321,62 @@ pub fn interpolate(
             }
             None => linear,
         };
-        x + u * d
+        (x + u * d, turn)
     };
-    (candidate(a_m, b_m) + candidate(b_m, a_m)) / 2.0
+    let (from_a, turn_a) = candidate(a_m, b_m, last_turns_rad[0]);
+    let (from_b, turn_b) = candidate(b_m, a_m, last_turns_rad[1]);
+    ((from_a + from_b) / 2.0, [turn_a, turn_b])
+}
+
+/// The turn `short_rad + 2πn` (`short_rad` wrapped to (−π, π]) nearest `last_rad`: `short_rad`
+/// itself, bit for bit, when that is the nearest or when there is no `last_rad`. An
+/// interpolated angle whose ends swing through the opposite side between two ticks (an actor
+/// turning round) then keeps going the way it went, instead of flipping to the other side
+/// of the actors in one tick. One turn past the short way is kept for as long as it lasts;
+/// the move's end still lands on its end, since the turn is a whole number of turns away.
+pub fn nearest_turn_rad(short_rad: f64, last_rad: Option<f64>) -> f64 {
+    match last_rad {
+        Some(last) if last.is_finite() && short_rad.is_finite() => {
+            let near = last + wrap_angle_rad(short_rad - last);
+            if (near - short_rad).abs() < PI {
+                short_rad
+            } else {
+                near
+            }
+        }
+        _ => short_rad,
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The way round: the short turn itself, bit for bit, while it is the nearest (or with
+    /// nothing to be near); past ±π, the turn the last one went on to, a whole turn from the
+    /// short one.
+    #[test]
+    fn a_turn_goes_on_the_way_it_went() {
+        for short in [-3.0, -0.4, 0.0, 1.3, PI] {
+            assert_eq!(nearest_turn_rad(short, None).to_bits(), short.to_bits());
+            assert_eq!(
+                nearest_turn_rad(short, Some(f64::NAN)).to_bits(),
+                short.to_bits()
+            );
+            assert_eq!(
+                nearest_turn_rad(short, Some(short + 1.0)).to_bits(),
+                short.to_bits()
+            );
+        }
+        // 170° last tick, −175° (the short way now the other side) this tick: 185°.
+        let got = nearest_turn_rad((-175f64).to_radians(), Some(170f64.to_radians()));
+        assert!((got - 185f64.to_radians()).abs() < 1e-12, "{got}");
+        // Wound one and a half turns round, and on round.
+        let got = nearest_turn_rad(0.5, Some(2.0 * PI + 0.4));
+        assert!((got - (2.0 * PI + 0.5)).abs() < 1e-12, "{got}");
+        let got = nearest_turn_rad(-3.0, Some(-2.0 * PI - 3.1));
+        assert!((got - (-2.0 * PI - 3.0)).abs() < 1e-12, "{got}");
+    }
 
     /// `position`'s closed form is `A + |AC|/|AB|·Rot(n, φ)·Rot(t, β)·(B − A)` with the
     /// rotations as matrices (camera-math §3), over the whole (θ, φ) range and tilted pairs.

@@ -1076,3 +1076,121 @@ fn an_over_the_shoulder_camera_inside_an_actor_gives_way_to_one_clear_of_both() 
         to_a(k)
     );
 }
+
+/// A move between two framings while an actor turns round, one tick at a time: the largest
+/// step of the camera target, short way round on every tick (`position_between_m`), with the
+/// way carried from tick to tick as the director does (`position_between_way_m`), and of
+/// either of the move's two ends. Ticks where an end does not solve restart the count.
+fn move_steps_while_turning(from: &Composition, to: &Composition, s: f64) -> [f64; 3] {
+    let l = lens(84.0);
+    let g = Gimbal::None;
+    // A turns round twice, 1° a tick; B stands.
+    let at = |k: usize| {
+        [
+            actor(-2.71, 0.47, -118.0 + k as f64, 1.98),
+            actor(1.39, 0.16, -7.0, 2.01),
+        ]
+    };
+    let mut steps_m = [0.0f64; 3];
+    let mut way = framing::BlendWay::default();
+    let mut prev: Option<[Vec3; 4]> = None;
+    for k in 0..=720 {
+        let actors = at(k);
+        let (Ok(a), Ok(b)) = (
+            solve(from, &NAMES, &actors, &l, &g),
+            solve(to, &NAMES, &actors, &l, &g),
+        ) else {
+            prev = None;
+            continue;
+        };
+        let short = framing::position_between_m(&a, &b, s, &actors, &l, &g);
+        let (kept, next) = framing::position_between_way_m(&a, &b, s, &actors, &l, &g, &way);
+        // With the way of its first tick, the same position, bit for bit.
+        if way == framing::BlendWay::default() {
+            assert_eq!(short, kept);
+        }
+        way = next;
+        let now = [
+            short,
+            kept,
+            framing::position_m(&a, &actors, &l, &g),
+            framing::position_m(&b, &actors, &l, &g),
+        ];
+        if let Some(before) = prev {
+            for i in 0..4 {
+                steps_m[i.min(2)] = steps_m[i.min(2)].max((now[i] - before[i]).norm());
+            }
+        }
+        prev = Some(now);
+    }
+    steps_m
+}
+
+/// A move from one actor's framing to another's (cylindrical blend about the actors): with
+/// A turning round, its end swings through the far side of the centroid, and the short way
+/// round flipped the camera across the actors in one tick (`tests/compile.rs` has the script
+/// a random generator wrote). Carried from tick to tick, the way round keeps going: the
+/// target moves a few centimetres a tick, as A's end does.
+#[test]
+fn a_move_between_actors_keeps_its_way_round_while_one_turns() {
+    let from = comp(
+        CameraAngle::EyeLevel,
+        vec![(
+            Size::MS,
+            vec![subject("A", Some(Profile::ThreeQuarterRight), None, None)],
+        )],
+    );
+    let to = comp(
+        CameraAngle::EyeLevel,
+        vec![(Size::LS, vec![subject("B", None, None, None)])],
+    );
+    let [short_m, kept_m, ends_m] = move_steps_while_turning(&from, &to, 0.3);
+    assert!(
+        short_m > 1.0,
+        "the case flips the short way: {short_m:.3} m"
+    );
+    assert!(
+        kept_m < 0.05,
+        "kept: {kept_m:.3} m in a tick, the ends {ends_m:.3} m"
+    );
+}
+
+/// The same for a move between two framings of the same pair (the toric blend, which
+/// interpolates the camera's yaw about each actor): with one end circling A (A turning round
+/// with a profile written on them), the short way flipped the blend across the actors where
+/// the end passed opposite the other end; the kept way follows it round.
+#[test]
+fn the_toric_blend_keeps_its_way_round_while_one_end_circles() {
+    let a = Vec3::new(0.0, 0.0, 1.5);
+    let b = Vec3::new(2.0, 0.0, 1.5);
+    let c1 = Vec3::new(1.0, -4.0, 1.6);
+    let alpha = 0.5;
+    let mut turns = [None, None];
+    let (mut short_m, mut kept_m, mut end_m) = (0.0f64, 0.0f64, 0.0f64);
+    let mut prev: Option<(Vec3, Vec3, Vec3)> = None;
+    // c0 circles A at 5 m, 1° a tick, twice round.
+    for k in 0..=720 {
+        let phi = (k as f64).to_radians();
+        let c0 = a + Vec3::new(5.0 * phi.cos(), 5.0 * phi.sin(), 0.1);
+        let (short, _) = toric::interpolate(&a, &b, &c0, &c1, alpha, alpha, 0.5, [None, None]);
+        let (kept, next) = toric::interpolate(&a, &b, &c0, &c1, alpha, alpha, 0.5, turns);
+        if k == 0 {
+            assert_eq!(short, kept);
+        }
+        turns = next.map(Some);
+        if let Some((s0, k0, e0)) = prev {
+            short_m = short_m.max((short - s0).norm());
+            kept_m = kept_m.max((kept - k0).norm());
+            end_m = end_m.max((c0 - e0).norm());
+        }
+        prev = Some((short, kept, c0));
+    }
+    assert!(
+        short_m > 1.0,
+        "the case flips the short way: {short_m:.3} m"
+    );
+    assert!(
+        kept_m < 1.5 * end_m,
+        "kept: {kept_m:.3} m in a tick, the end {end_m:.3} m"
+    );
+}
