@@ -137,8 +137,8 @@ pub struct Director {
     framed: Vec<[Vec<usize>; 2]>,
     /// Per plan, each end's composition prepared for solving (`None` for paths).
     prepared: Vec<[Option<framing::Prepared>; 2]>,
-    /// Per plan, each end's last over-the-shoulder solve: the next keeps its root
-    /// ([`framing::Prepared::solve_near`]).
+    /// Per plan, each end's last two-actor solve: the next keeps its root, an
+    /// over-the-shoulder's camera or a two-shot's θ ([`framing::Prepared::solve_near`]).
     held: Vec<[Option<framing::TwoVisual>; 2]>,
     /// The last few composition solves (see [`Solved`]), replaced round robin.
     solved: Vec<Solved>,
@@ -930,9 +930,7 @@ impl Director {
             None => framing::solve(comp, &self.names, actors, &self.lens, &self.gimbal),
         };
         if let Ok(framing::Visual::Two(t)) = &result {
-            if t.over_shoulder {
-                self.held[index][end] = Some(*t);
-            }
+            self.held[index][end] = Some(*t);
         }
         if known {
             // A full memo reuses the oldest slot and its pose buffer: no allocation per tick.

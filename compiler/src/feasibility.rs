@@ -280,10 +280,10 @@ impl Monitor {
                         self.speed_max
                     ),
                     "the framing jumps here",
-                    "as the actors move, the framing's camera changes to its other side (an \
-                     over-the-shoulder's other camera frames the profile better): cut to the \
-                     framing as it is after the turn, or write a profile their movement does \
-                     not turn round"
+                    "as the actors move, the framing's camera has to change place at once (an \
+                     over-the-shoulder's other camera frames the profile better, or a two-shot's \
+                     size passes to the other actor, who is now nearer): cut to the framing as \
+                     it is after the change, or block the actors so that it does not happen"
                         .to_string(),
                 ));
             }

@@ -1194,3 +1194,69 @@ fn the_toric_blend_keeps_its_way_round_while_one_end_circles() {
         "kept: {kept_m:.3} m in a tick, the end {end_m:.3} m"
     );
 }
+
+/// A two-shot of two actors walking apart (found among random walks): of its roots (θ where
+/// the nearer actor is at the size), the one nearest the symmetric θ changed sides of the arc
+/// as they walked, and the camera crossed 7.3 m in one 10 ms tick. Held tick after tick
+/// (`solve_near` with the last solve, as the director does), the camera follows its root,
+/// 2 mm a tick, both actors on their screen points throughout.
+#[test]
+fn a_held_two_shot_follows_its_root_as_the_actors_walk() {
+    let l = lens(84.0);
+    let g = Gimbal::None;
+    let c = comp(
+        CameraAngle::Low,
+        vec![(
+            Size::LS,
+            vec![
+                subject("A", None, None, None),
+                subject("B", None, None, None),
+            ],
+        )],
+    );
+    let prepared = framing::Prepared::new(&c, &NAMES, &l);
+    let at = |k: usize| {
+        let t = k as f64 * 0.01;
+        [
+            actor(-0.16 - 0.45 * t, -1.77 - 0.45 * t, 0.0, 1.69),
+            actor(-1.78 - 0.12 * t, 0.96 + 0.10 * t, 172.0, 1.72),
+        ]
+    };
+    let (mut plain_jump_m, mut held_jump_m) = (0.0f64, 0.0f64);
+    let mut plain_prev: Option<Vec3> = None;
+    let mut held_prev: Option<(Visual, Vec3)> = None;
+    for k in 0..=400 {
+        let actors = at(k);
+        let plain = prepared.solve(&c, &actors, &l, &g).unwrap();
+        let p = framing::position_m(&plain, &actors, &l, &g);
+        if let Some(q) = plain_prev {
+            plain_jump_m = plain_jump_m.max((p - q).norm());
+        }
+        plain_prev = Some(p);
+        let near = held_prev.as_ref().map(|(v, _)| v);
+        let held = prepared.solve_near(&c, &actors, &l, &g, near, 0.0).unwrap();
+        let p = framing::position_m(&held, &actors, &l, &g);
+        if let Some((_, q)) = &held_prev {
+            held_jump_m = held_jump_m.max((p - q).norm());
+        } else {
+            // The first solve is the unheld one.
+            assert_eq!(held, plain);
+        }
+        // Both actors framed where the two-shot puts them, at every tick.
+        let placed = place(&held, &actors, &l, &g);
+        let cam = pose(&placed);
+        for t in screen_targets(&held, &actors, &l, &g, &placed.position_m) {
+            let s = cam.project(&l, &t.point_m).unwrap();
+            assert!(
+                (s[0] - t.screen[0]).hypot(s[1] - t.screen[1]) < 0.05,
+                "{k}: {s:?}"
+            );
+        }
+        held_prev = Some((held, p));
+    }
+    assert!(
+        plain_jump_m > 5.0,
+        "the case jumps unheld: {plain_jump_m:.3} m"
+    );
+    assert!(held_jump_m < 0.05, "held: {held_jump_m:.3} m in a tick");
+}
