@@ -155,8 +155,9 @@ pub struct Director {
 const SOLVED_SLOTS: usize = 8;
 
 /// A memoised `framing::solve`: it is a pure function of the composition and of the poses of
-/// the actors the composition names, so while those actors stand still (and for the 1 ms
-/// look-ahead of a still actor, which is the same pose) the solve is reused, bit for bit.
+/// the actors the composition names (and of the held solve, which for the same poses is the
+/// solve itself), so while those actors stand still (and for the 1 ms look-ahead of a still
+/// actor, which is the same pose) the solve is reused, bit for bit.
 struct Solved {
     plan: usize,
     end: usize,
