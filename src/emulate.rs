@@ -89,7 +89,7 @@ pub fn run(a: &Args) -> ExitCode {
     // refuses).
     if let Some(script) = (loaded.as_ref().map(|l| l.script())).filter(|s| !s.timeline.is_empty()) {
         (sim.start_position_m, sim.start_heading_rad) =
-            session::start_pose(script, &scene, &profile, sim.actor_reach_m());
+            session::start_pose(script, &scene, &profile, &sim);
     }
     let effects_off = sim.effects.off();
     let config = EmulatorConfig {

@@ -151,6 +151,7 @@ pub fn step(
     // steering on it instead of on v keeps a jerk-limited camera from overshooting.
     let v_pred = state.v + state.a * (state.a.norm() / (2.0 * limits.jerk_mps3));
     let a_des = a_ff + gains.k_v * (v_des - v_pred) + extra;
+    let (a_des, capped) = stop_before_walls(a_des, capped, &state.p, &v_pred, walls, limits);
     let a_des = truncate_accel(a_des, capped, limits);
     let jerk = truncate((a_des - state.a) / dt_s, limits.jerk_mps3);
     let (dt2, dt3) = (dt_s * dt_s, dt_s * dt_s * dt_s);
@@ -205,6 +206,54 @@ pub fn brake_for_walls(
         }
     }
     (v, a, capped)
+}
+
+/// The acceleration `a` with, on each axis where the camera (its velocity `v`) comes at a
+/// face of the box `walls` faster than [`brake_for_walls`]'s cap allows (late: a target that
+/// rushed at the face, or the camera's own momentum), at least the deceleration that stops it
+/// before the face, the jerk ramp's distance allowed for; those axes are marked braking. The
+/// cap's law alone brakes in proportion to how far over the cap the camera is, which near
+/// the face is little: a camera coming at the margin at 1.9 m/s (a repositioning flight
+/// whose end the director held on the margin) ran 0.25 m into it, and the drone, a few
+/// centimetres behind its reference, out of the stage.
+fn stop_before_walls(
+    mut a: Vec3,
+    mut capped: [bool; 3],
+    p: &Vec3,
+    v: &Vec3,
+    walls: (&Vec3, &Vec3),
+    limits: &SteerLimits,
+) -> (Vec3, [bool; 3]) {
+    let (lo, hi) = walls;
+    for i in 0..3 {
+        let accel = if i == 2 {
+            limits.accel_v_mps2
+        } else {
+            limits.accel_h_mps2
+        };
+        // Toward the face ahead: its room, and the speed toward it.
+        let (room, speed, sign) = if v[i] > 0.0 {
+            (hi[i] - p[i], v[i], 1.0)
+        } else {
+            (p[i] - lo[i], -v[i], -1.0)
+        };
+        if speed.is_nan() || speed <= 0.0 {
+            continue;
+        }
+        // While the deceleration ramps up at the jerk limit, the camera goes on at about its
+        // speed for half the ramp.
+        let ramp_m = speed * accel / (2.0 * limits.jerk_mps3);
+        let need = speed * speed / (2.0 * (room - ramp_m).max(1e-3));
+        if need > 0.4 * accel {
+            a[i] = if sign > 0.0 {
+                a[i].min(-need)
+            } else {
+                a[i].max(need)
+            };
+            capped[i] = true;
+        }
+    }
+    (a, capped)
 }
 
 /// [`truncate_hv`] for an acceleration, except that when exactly one horizontal axis is
@@ -532,6 +581,69 @@ mod tests {
             furthest = furthest.max(s.p.y - face);
         }
         furthest
+    }
+
+    /// The furthest past the face y = `face` a camera gets chasing a target that comes at the
+    /// face at `speed_mps` (a repositioning flight's route whose end the director holds on
+    /// the face) while turning along it (`ax` the target's acceleration along the face), with
+    /// `lim` the drone's limits.
+    fn overshoot_fast(face: f64, speed_mps: f64, ax: f64, lim: &SteerLimits) -> f64 {
+        let gains = SteerGains::default();
+        let dt = 0.01;
+        let (lo, hi) = (Vec3::new(-50.0, -50.0, 0.0), Vec3::new(50.0, face, 3.0));
+        let at = |t: f64| {
+            let y = face - 3.0 + speed_mps * t;
+            let on_face = y >= face;
+            Kinematics {
+                p: Vec3::new(0.6 * t + ax * t * t / 2.0, y.min(face), 1.0),
+                v: Vec3::new(0.6 + ax * t, if on_face { 0.0 } else { speed_mps }, 0.0),
+                a: Vec3::new(ax, 0.0, 0.0),
+            }
+        };
+        let mut s = at(0.0);
+        let mut furthest = f64::NEG_INFINITY;
+        for k in 1..800 {
+            s = step(
+                &s,
+                &at(k as f64 * dt),
+                Vec3::zeros(),
+                (&lo, &hi),
+                lim,
+                &gains,
+                dt,
+            );
+            furthest = furthest.max(s.p.y - face);
+        }
+        furthest
+    }
+
+    /// A camera that comes at the face fast (a repositioning flight's route whose end the
+    /// director holds on the margin, found on set: the drone left the stage) stops before it,
+    /// with the outdoor AR.Drone's limits: the cap's law alone let it run 5–11 cm past at
+    /// 1–2.5 m/s, 0.77 m at 3 m/s, while the target turned along the face.
+    #[test]
+    fn a_camera_that_comes_at_a_wall_fast_stops_before_it() {
+        let outdoor = SteerLimits {
+            speed_h_mps: 3.06,
+            speed_v_mps: 1.0,
+            accel_h_mps2: 1.8,
+            accel_v_mps2: 1.8,
+            jerk_mps3: 5.0,
+            yaw_rate_radps: 3.5,
+            yaw_accel_radps2: 3.0,
+        };
+        for speed in [0.7, 1.0, 1.5, 1.9, 2.5] {
+            for ax in [0.0, -1.3, 1.3] {
+                let past = overshoot_fast(2.7, speed, ax, &outdoor);
+                assert!(
+                    past < 0.035,
+                    "{speed} m/s, along {ax} m/s²: {past:.3} m past"
+                );
+            }
+        }
+        // At full speed with 3 m to go (2.5 m to stop, and the jerk ramp) it cannot stop in
+        // time, but it brakes at once.
+        assert!(overshoot_fast(2.7, 3.0, -1.3, &outdoor) < 0.2);
     }
 
     #[test]

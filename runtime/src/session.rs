@@ -48,11 +48,13 @@ pub fn controller_for(
     }
 }
 
-/// Where the simulated drone waits on the floor: below the first framing (against the
-/// actors' opening marks), facing the way it will film; but never nearer an actor's mark
-/// than the profile's actor distance and `clear_m` more (the simulated actors stand off
-/// their marks by up to [`SimConfig::actor_reach_m`]). There it stands at the nearest spot
-/// that is clear, inside the stage less its margin ([`clear_spot`]).
+/// Where the drone simulated by `sim` waits on the floor: below the first framing (against
+/// the actors' opening marks), facing the way it will film; but never nearer an actor's mark
+/// than the profile's actor distance and [`SimConfig::actor_reach_m`] more (how far off
+/// their marks the simulated actors stand), nor nearer a wall than the stage's margin or
+/// [`SimConfig::takeoff_drift_m`] (how far it drifts taking off), whichever is more (but
+/// never more than half the stage). There it stands at the nearest spot that is clear
+/// ([`clear_spot`]).
 ///
 /// Below a close-up the drone stood under the actor's nose: an MCU from 0.55 m, an actor
 /// standing 7 cm off the mark, and `shoot`'s pre-flight check refused the flight with
@@ -62,7 +64,7 @@ pub fn start_pose(
     script: &Script,
     scene: &Scene,
     profile: &Profile,
-    clear_m: f64,
+    sim: &SimConfig,
 ) -> ([f64; 3], f64) {
     let blocking = Blocking::new(scene);
     let marks = blocking.poses(0.0);
@@ -70,14 +72,15 @@ pub fn start_pose(
     let marks: Vec<[f64; 2]> = (marks.iter())
         .map(|a| [a.position_m[0], a.position_m[1]])
         .collect();
-    let margin_m = profile.safety.stage_margin_m;
     let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
+    let wall_m = profile.safety.stage_margin_m.max(sim.takeoff_drift_m());
+    let inset = |i: usize| wall_m.min((hi[i] - lo[i]) / 2.0);
     let [x, y] = clear_spot(
         [first.position_m[0], first.position_m[1]],
         &marks,
-        profile.safety.actor_distance_m + clear_m.max(0.0),
-        [lo[0] + margin_m, lo[1] + margin_m],
-        [hi[0] - margin_m, hi[1] - margin_m],
+        profile.safety.actor_distance_m + sim.actor_reach_m().max(0.0),
+        [lo[0] + inset(0), lo[1] + inset(1)],
+        [hi[0] - inset(0), hi[1] - inset(1)],
     );
     ([x, y, 0.0], first.heading_rad)
 }
@@ -203,7 +206,7 @@ pub fn fly_simulated(
     let mut controller = servo(&f.controller, f.profile, f.rate_hz)?;
     let mut config = f.sim.clone();
     (config.start_position_m, config.start_heading_rad) =
-        start_pose(f.script, f.scene, f.profile, config.actor_reach_m());
+        start_pose(f.script, f.scene, f.profile, &config);
     // The actors wait on their marks until the flight loop's "action!".
     config.wait_for_action = true;
     let sim = Simulator::new(&config, f.plant.unwrap_or(f.profile), f.scene)

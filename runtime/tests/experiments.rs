@@ -204,8 +204,9 @@ fn the_scene_is_flown_to_its_end_with_actors_exactly_on_their_marks() {
         assert_eq!(r.failsafes, 0, "seed {seed}");
     }
     // What the director asks stays inside the stage less its margin (the steering, braking
-    // for the walls, overshoots a target on the margin by under 2 cm; 5 cm before it did),
-    // compiled against the script's blocking.
+    // for the walls as hard as stopping before them takes, overshoots a target on the margin
+    // by under 1 mm; by 1.9 cm when it braked only in proportion to how far over its cap it
+    // was, 5 cm before it braked for walls at all), compiled against the script's blocking.
     let (lo, hi) = (stage.min_m(), stage.max_m());
     dronecine_compiler::compile::compile(
         &script,
@@ -215,7 +216,7 @@ fn the_scene_is_flown_to_its_end_with_actors_exactly_on_their_marks() {
             for i in 0..3 {
                 let p = s.position_m[i];
                 assert!(
-                    p >= lo[i] + margin_m - 0.025 && p <= hi[i] - margin_m + 0.025,
+                    p >= lo[i] + margin_m - 0.001 && p <= hi[i] - margin_m + 0.001,
                     "axis {i} at {p:.3} m, {:.2} s",
                     s.t_s
                 );
@@ -231,10 +232,12 @@ fn the_scene_is_flown_to_its_end_with_actors_exactly_on_their_marks() {
 /// framing slides toward the stage's margin at 0.7 m/s while the camera speeds up along it,
 /// and the steering braked on its distance to the target (metres along the wall), not on its
 /// distance to the wall (centimetres), and kept following the target's acceleration toward
-/// it. Now the steering brakes for the walls: both complete, and the reference never comes
-/// within 10 cm of a wall (20 cm on seed 4). Without the braking, 10 of seeds 1–30 leave the
-/// stage (now that the reverse shot is framed throughout, more than when it failed at
-/// moments); with it, none.
+/// it. Now the steering brakes for the walls: both complete. Without the braking, 10 of
+/// seeds 1–30 leave the stage (now that the reverse shot is framed throughout, more than when
+/// it failed at moments); with it, none. It braked in proportion to how far over its cap
+/// the camera was, and on seed 58 the reference came within 4.7 cm of a wall (19 cm on seed
+/// 4); braking as hard as stopping before the margin takes, no nearer than 0.296 m on seeds
+/// 1–60 (the margin is 0.3 m).
 #[test]
 fn the_scene_stays_on_the_stage_on_the_seeds_that_left_it() {
     /// The reference's closest approach to the stage's walls (floor and ceiling included).
@@ -260,7 +263,7 @@ fn the_scene_stays_on_the_stage_on_the_seeds_that_left_it() {
     let (text, script) = load("shots/scene.psl");
     let scene = script.scene.as_ref().unwrap();
     let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
-    for seed in [4, 12] {
+    for seed in [4, 12, 58] {
         let mut closest = Closest {
             lo,
             hi,
@@ -270,7 +273,7 @@ fn the_scene_stays_on_the_stage_on_the_seeds_that_left_it() {
         assert!(r.completed, "seed {seed}: {r:#?}");
         assert_eq!(r.failsafes, 0, "seed {seed}");
         assert!(
-            closest.room_m > 0.10,
+            closest.room_m > 0.28,
             "seed {seed}: the reference came {:.3} m from a wall",
             closest.room_m
         );
@@ -297,12 +300,51 @@ fn a_script_that_opens_on_a_close_up_takes_off_on_every_seed() {
     let safety_m = profile.safety.actor_distance_m;
     for seed in 1..=6 {
         let sim = SimConfig::new(seed);
-        let (start_m, _) =
-            dronecine_runtime::session::start_pose(&script, scene, &profile, sim.actor_reach_m());
+        let (start_m, _) = dronecine_runtime::session::start_pose(&script, scene, &profile, &sim);
         let from_mark_m = start_m[0].hypot(start_m[1]);
         assert!(
             from_mark_m >= safety_m + sim.actor_reach_m(),
             "seed {seed}: waits {from_mark_m:.3} m from the mark"
+        );
+        let r = fly_sim(text, &script, "lqg", sim);
+        assert!(r.completed, "seed {seed}: {r:#?}");
+        assert_eq!(r.failsafes, 0, "seed {seed}");
+    }
+}
+
+/// A script whose first framing is on the stage's margin (a two-shot from 4 m that the
+/// director holds on the margin, 0.3 m from the wall) takes off clear of the walls. The
+/// simulated drone waited below that framing, and the firmware's take-off holds velocity,
+/// not position: on the wind it drifted (0.31 m median, up to 1.1 m over 300 seeds) out of
+/// the stage before the servo took over, and the stage failsafe landed it (seed 515 found by
+/// flying random scripts; seed 5 of 1–16 with the actors exactly on their marks). Now it
+/// waits `takeoff_drift_m` (1.2 m) inside the walls and flies to the framing from there.
+/// (With the actors' deviations, the framing is beyond the wall on some seeds, and the
+/// pre-flight check refuses those, as it should.)
+#[test]
+fn a_script_that_opens_on_the_margin_takes_off_clear_of_the_walls() {
+    let text = "stage 10m x 10m x 4m\ndrone ardrone2\n\
+                actor A height 1.8m at (1.74, 0.53) facing -82deg\n\
+                actor B height 1.85m at (-1.81, -1.53) facing 178deg\n\
+                LS on A and B for 8s\nthen hold for 6s\n";
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    let script = dronecine_grammar::check(text, &opts).script.unwrap();
+    let scene = script.scene.as_ref().unwrap();
+    let profile = profile_of(&script);
+    let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
+    for (seed, deviations) in [(515, true), (5, false), (1, false), (2, false), (3, false)] {
+        let mut sim = SimConfig::new(seed);
+        sim.effects.actor_deviation = deviations;
+        let (start_m, _) = dronecine_runtime::session::start_pose(&script, scene, &profile, &sim);
+        let wall_m = (0..2)
+            .map(|i| (start_m[i] - lo[i]).min(hi[i] - start_m[i]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            wall_m >= sim.takeoff_drift_m() - 1e-9 && sim.takeoff_drift_m() >= 1.2 - 1e-9,
+            "seed {seed}: waits {wall_m:.3} m from a wall"
         );
         let r = fly_sim(text, &script, "lqg", sim);
         assert!(r.completed, "seed {seed}: {r:#?}");

@@ -248,8 +248,7 @@ fn fly_at(
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
     let mut cfg = SimConfig::new(3);
-    (cfg.start_position_m, cfg.start_heading_rad) =
-        start_pose(&script, scene, &profile, cfg.actor_reach_m());
+    (cfg.start_position_m, cfg.start_heading_rad) = start_pose(&script, scene, &profile, &cfg);
     cfg.wait_for_action = true;
     config(&mut cfg);
     let sim = Simulator::new(&cfg, &profile, scene).unwrap();
