@@ -32,6 +32,17 @@ fn run(script: &Script) -> (Compiled, Vec<Sample>, Vec<Vec<ActorPose>>) {
     (c, samples, actors)
 }
 
+/// The largest step of the reference's position from one sample to the next.
+fn largest_step_m(samples: &[Sample]) -> f64 {
+    samples
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (w[0].position_m, w[1].position_m);
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        })
+        .fold(0.0f64, f64::max)
+}
+
 fn script_of(src: &str) -> Script {
     let checked = dronecine_grammar::check(src, &Default::default());
     assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
@@ -443,13 +454,7 @@ fn an_over_the_shoulder_does_not_jump_between_its_two_cameras() {
                high angle MLS on B 34left MLS on A 34backright for 2s\n";
     let (c, samples, _) = run(&script_of(src));
     assert!(!c.has_errors(), "{:?}", c.diagnostics);
-    let step_m = samples
-        .windows(2)
-        .map(|w| {
-            let (a, b) = (w[0].position_m, w[1].position_m);
-            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-        })
-        .fold(0.0f64, f64::max);
+    let step_m = largest_step_m(&samples);
     assert!(step_m < 0.005, "{step_m} m in one sample");
 }
 
@@ -499,13 +504,7 @@ fn a_two_shot_of_walking_actors_follows_them_without_a_jump() {
                LS on A and B for 6s\n";
     let (c, samples, _) = run(&script_of(src));
     assert!(c.diagnostics.is_empty(), "{:?}", c.diagnostics);
-    let step_m = samples
-        .windows(2)
-        .map(|w| {
-            let (a, b) = (w[0].position_m, w[1].position_m);
-            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-        })
-        .fold(0.0f64, f64::max);
+    let step_m = largest_step_m(&samples);
     assert!(step_m < 0.02, "{step_m} m in one sample");
 }
 

@@ -547,25 +547,16 @@ mod tests {
         assert!(worst < 2e-3, "{worst}");
     }
 
-    /// The furthest past the face y = `face` that a camera gets when it chases a target
-    /// sliding toward that face at 0.7 m/s (and along it at 0.5 m/s, speeding up), held on
-    /// the face once it gets there, as the director keeps its target inside the stage less
-    /// its margin.
-    fn overshoot_past(face: f64, walls: (&Vec3, &Vec3)) -> f64 {
-        let lim = limits();
+    /// The furthest past the face y = `face` that a camera gets, with `lim` the drone's
+    /// limits and `walls` the box it brakes for, chasing the target `at(t)` for 8 s at 100 Hz.
+    fn furthest_past(
+        face: f64,
+        walls: (&Vec3, &Vec3),
+        lim: &SteerLimits,
+        at: impl Fn(f64) -> Kinematics,
+    ) -> f64 {
         let gains = SteerGains::default();
         let dt = 0.01;
-        let at = |t: f64| {
-            let y = 1.0 + 0.7 * t;
-            let (vx, ax) = (0.5 + 0.3 * t, 0.3);
-            let p = Vec3::new(0.5 * t + 0.15 * t * t, y.min(face), 1.0);
-            let on_face = y >= face;
-            Kinematics {
-                p,
-                v: Vec3::new(vx, if on_face { 0.0 } else { 0.7 }, 0.0),
-                a: Vec3::new(ax, 0.0, 0.0),
-            }
-        };
         let mut s = at(0.0);
         let mut furthest = f64::NEG_INFINITY;
         for k in 1..800 {
@@ -574,7 +565,7 @@ mod tests {
                 &at(k as f64 * dt),
                 Vec3::zeros(),
                 walls,
-                &lim,
+                lim,
                 &gains,
                 dt,
             );
@@ -583,15 +574,29 @@ mod tests {
         furthest
     }
 
+    /// The furthest past the face y = `face` that a camera gets when it chases a target
+    /// sliding toward that face at 0.7 m/s (and along it at 0.5 m/s, speeding up), held on
+    /// the face once it gets there, as the director keeps its target inside the stage less
+    /// its margin.
+    fn overshoot_past(face: f64, walls: (&Vec3, &Vec3)) -> f64 {
+        furthest_past(face, walls, &limits(), |t| {
+            let y = 1.0 + 0.7 * t;
+            let on_face = y >= face;
+            Kinematics {
+                p: Vec3::new(0.5 * t + 0.15 * t * t, y.min(face), 1.0),
+                v: Vec3::new(0.5 + 0.3 * t, if on_face { 0.0 } else { 0.7 }, 0.0),
+                a: Vec3::new(0.3, 0.0, 0.0),
+            }
+        })
+    }
+
     /// The furthest past the face y = `face` a camera gets chasing a target that comes at the
-    /// face at `speed_mps` (a repositioning flight's route whose end the director holds on
-    /// the face) while turning along it (`ax` the target's acceleration along the face), with
-    /// `lim` the drone's limits.
+    /// face at `speed_mps` from 3 m (a repositioning flight's route whose end the director
+    /// holds on the face) while turning along it (`ax` the target's acceleration along the
+    /// face), with `lim` the drone's limits.
     fn overshoot_fast(face: f64, speed_mps: f64, ax: f64, lim: &SteerLimits) -> f64 {
-        let gains = SteerGains::default();
-        let dt = 0.01;
         let (lo, hi) = (Vec3::new(-50.0, -50.0, 0.0), Vec3::new(50.0, face, 3.0));
-        let at = |t: f64| {
+        furthest_past(face, (&lo, &hi), lim, |t| {
             let y = face - 3.0 + speed_mps * t;
             let on_face = y >= face;
             Kinematics {
@@ -599,22 +604,7 @@ mod tests {
                 v: Vec3::new(0.6 + ax * t, if on_face { 0.0 } else { speed_mps }, 0.0),
                 a: Vec3::new(ax, 0.0, 0.0),
             }
-        };
-        let mut s = at(0.0);
-        let mut furthest = f64::NEG_INFINITY;
-        for k in 1..800 {
-            s = step(
-                &s,
-                &at(k as f64 * dt),
-                Vec3::zeros(),
-                (&lo, &hi),
-                lim,
-                &gains,
-                dt,
-            );
-            furthest = furthest.max(s.p.y - face);
-        }
-        furthest
+        })
     }
 
     /// A camera that comes at the face fast (a repositioning flight's route whose end the

@@ -953,6 +953,39 @@ fn ots_written_across_prepared() -> (Lens, Gimbal, Composition, framing::Prepare
     (l, Gimbal::None, c, prepared)
 }
 
+/// The largest step of the camera from one tick to the next, with the actors at `at(k)` on
+/// ticks `k` in `0..=ticks`: solved afresh each tick, and held (`solve_near` with the last
+/// solve, as the director does). `each` sees every tick's actors, fresh solve and held solve.
+fn plain_and_held_steps_m(
+    prepared: &framing::Prepared,
+    c: &Composition,
+    (l, g): (&Lens, &Gimbal),
+    ticks: usize,
+    at: impl Fn(usize) -> [ActorPose; 2],
+    mut each: impl FnMut(usize, &[ActorPose], &Visual, &Visual),
+) -> (f64, f64) {
+    let (mut plain_m, mut held_m) = (0.0f64, 0.0f64);
+    let mut prev: Option<(Vec3, Visual, Vec3)> = None;
+    for k in 0..=ticks {
+        let actors = at(k);
+        let plain = prepared.solve(c, &actors, l, g).unwrap();
+        let held = prepared
+            .solve_near(c, &actors, l, g, prev.as_ref().map(|(_, v, _)| v), 0.0)
+            .unwrap();
+        let (p, q) = (
+            framing::position_m(&plain, &actors, l, g),
+            framing::position_m(&held, &actors, l, g),
+        );
+        if let Some((p0, _, q0)) = &prev {
+            plain_m = plain_m.max((p - p0).norm());
+            held_m = held_m.max((q - q0).norm());
+        }
+        each(k, &actors, &plain, &held);
+        prev = Some((p, held, q));
+    }
+    (plain_m, held_m)
+}
+
 /// An over-the-shoulder has up to two cameras that frame the background actor at its size;
 /// the solve keeps the one nearer the profile. With B walking toward A, the two came to miss
 /// the profile equally (by 47°), and the solve flipped from one to the other: the camera
@@ -970,24 +1003,8 @@ fn a_held_over_the_shoulder_keeps_its_camera_when_both_frame_alike() {
             actor(0.5 - 0.98 * s, -0.3 - 0.2 * s, -168.0, 1.82),
         ]
     };
-    let (mut plain_jump_m, mut held_jump_m) = (0.0f64, 0.0f64);
-    let (mut plain_prev, mut held_prev): (Option<Vec3>, Option<(Visual, Vec3)>) = (None, None);
-    for k in 0..=80 {
-        let actors = at(k);
-        let plain = prepared.solve(&c, &actors, &l, &g).unwrap();
-        let p = framing::position_m(&plain, &actors, &l, &g);
-        if let Some(q) = plain_prev {
-            plain_jump_m = plain_jump_m.max((p - q).norm());
-        }
-        plain_prev = Some(p);
-        let near = held_prev.as_ref().map(|(v, _)| v);
-        let held = prepared.solve_near(&c, &actors, &l, &g, near, 0.0).unwrap();
-        let p = framing::position_m(&held, &actors, &l, &g);
-        if let Some((_, q)) = &held_prev {
-            held_jump_m = held_jump_m.max((p - q).norm());
-        }
-        held_prev = Some((held, p));
-    }
+    let (plain_jump_m, held_jump_m) =
+        plain_and_held_steps_m(&prepared, &c, (&l, &g), 80, at, |_, _, _, _| {});
     assert!(
         plain_jump_m > 1.0,
         "the case flips unheld: {plain_jump_m:.3} m"
@@ -1222,38 +1239,29 @@ fn a_held_two_shot_follows_its_root_as_the_actors_walk() {
             actor(-1.78 - 0.12 * t, 0.96 + 0.10 * t, 172.0, 1.72),
         ]
     };
-    let (mut plain_jump_m, mut held_jump_m) = (0.0f64, 0.0f64);
-    let mut plain_prev: Option<Vec3> = None;
-    let mut held_prev: Option<(Visual, Vec3)> = None;
-    for k in 0..=400 {
-        let actors = at(k);
-        let plain = prepared.solve(&c, &actors, &l, &g).unwrap();
-        let p = framing::position_m(&plain, &actors, &l, &g);
-        if let Some(q) = plain_prev {
-            plain_jump_m = plain_jump_m.max((p - q).norm());
-        }
-        plain_prev = Some(p);
-        let near = held_prev.as_ref().map(|(v, _)| v);
-        let held = prepared.solve_near(&c, &actors, &l, &g, near, 0.0).unwrap();
-        let p = framing::position_m(&held, &actors, &l, &g);
-        if let Some((_, q)) = &held_prev {
-            held_jump_m = held_jump_m.max((p - q).norm());
-        } else {
-            // The first solve is the unheld one.
-            assert_eq!(held, plain);
-        }
-        // Both actors framed where the two-shot puts them, at every tick.
-        let placed = place(&held, &actors, &l, &g);
-        let cam = pose(&placed);
-        for t in screen_targets(&held, &actors, &l, &g, &placed.position_m) {
-            let s = cam.project(&l, &t.point_m).unwrap();
-            assert!(
-                (s[0] - t.screen[0]).hypot(s[1] - t.screen[1]) < 0.05,
-                "{k}: {s:?}"
-            );
-        }
-        held_prev = Some((held, p));
-    }
+    let (plain_jump_m, held_jump_m) = plain_and_held_steps_m(
+        &prepared,
+        &c,
+        (&l, &g),
+        400,
+        at,
+        |k, actors, plain, held| {
+            if k == 0 {
+                // The first solve is the unheld one.
+                assert_eq!(held, plain);
+            }
+            // Both actors framed where the two-shot puts them, at every tick.
+            let placed = place(held, actors, &l, &g);
+            let cam = pose(&placed);
+            for t in screen_targets(held, actors, &l, &g, &placed.position_m) {
+                let s = cam.project(&l, &t.point_m).unwrap();
+                assert!(
+                    (s[0] - t.screen[0]).hypot(s[1] - t.screen[1]) < 0.05,
+                    "{k}: {s:?}"
+                );
+            }
+        },
+    );
     assert!(
         plain_jump_m > 5.0,
         "the case jumps unheld: {plain_jump_m:.3} m"

@@ -27,6 +27,17 @@ fn load(path: &str) -> (String, Script) {
     (text, checked.script.expect("the shipped script is valid"))
 }
 
+/// A script written in the test, checked: it must be valid.
+fn parse(text: &str) -> Script {
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    let checked = dronecine_grammar::check(text, &opts);
+    assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
+    checked.script.expect("a valid script")
+}
+
 fn profile_of(script: &Script) -> Profile {
     match script.scene.as_ref().and_then(|s| s.drone.as_ref()) {
         Some(DroneRef::Builtin { name }) => Profile::builtin(name).unwrap(),
@@ -290,11 +301,7 @@ fn the_scene_stays_on_the_stage_on_the_seeds_that_left_it() {
 fn a_script_that_opens_on_a_close_up_takes_off_on_every_seed() {
     let text = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
                 MCU on A front for 3s\nthen dolly to MS on A 34left over 4s\n";
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let script = dronecine_grammar::check(text, &opts).script.unwrap();
+    let script = parse(text);
     let scene = script.scene.as_ref().unwrap();
     let profile = profile_of(&script);
     let safety_m = profile.safety.actor_distance_m;
@@ -327,11 +334,7 @@ fn a_script_that_opens_on_the_margin_takes_off_clear_of_the_walls() {
                 actor A height 1.8m at (1.74, 0.53) facing -82deg\n\
                 actor B height 1.85m at (-1.81, -1.53) facing 178deg\n\
                 LS on A and B for 8s\nthen hold for 6s\n";
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let script = dronecine_grammar::check(text, &opts).script.unwrap();
+    let script = parse(text);
     let scene = script.scene.as_ref().unwrap();
     let profile = profile_of(&script);
     let (lo, hi) = (scene.stage.min_m(), scene.stage.max_m());
