@@ -14,8 +14,7 @@ use dronecine_compiler::preview::{self, PreviewInput, ShotInfo, ShotKind};
 use dronecine_compiler::profile::{Profile, ProfileError, DEFAULT_NAME};
 use dronecine_compiler::reference::{ActorPose, Sample};
 use dronecine_grammar::diag;
-use dronecine_grammar::script::{DroneRef, Scene, Script, ShotContent, Transition};
-use dronecine_grammar::vocab::MoveKind;
+use dronecine_grammar::script::{DroneRef, Scene, Script, ShotContent};
 use dronecine_grammar::Severity;
 
 use crate::check;
@@ -376,9 +375,9 @@ fn shot_infos(script: &Script, src: &str, timings: &[ShotTiming]) -> Vec<ShotInf
             .unwrap_or("")
             .trim()
             .to_string();
-        let kind = match (&shot.content, &shot.transition) {
-            (ShotContent::Path(_), _) => ShotKind::Path,
-            (_, Transition::Move { kind, .. }) if *kind != MoveKind::Hold => ShotKind::Transition,
+        let kind = match &shot.content {
+            ShotContent::Path(_) => ShotKind::Path,
+            _ if script.moves_camera(t.index) => ShotKind::Transition,
             _ => ShotKind::Hold,
         };
         out.push(ShotInfo {

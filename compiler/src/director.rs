@@ -20,8 +20,8 @@
 
 use crate::math;
 use dronecine_grammar::script::{Composition, Scene, Script, Shot, ShotContent, Transition};
+use dronecine_grammar::vocab::wrap_angle_rad;
 use dronecine_grammar::vocab::Size;
-use dronecine_grammar::vocab::{wrap_angle_rad, MoveKind};
 use dronecine_grammar::{Code, Diagnostic, Span};
 
 use crate::blocking::min_jerk;
@@ -204,21 +204,17 @@ impl Director {
         };
         let mut plans = Vec::with_capacity(script.timeline.len());
         let mut last_comp: Option<&Composition> = None;
-        for shot in &script.timeline {
-            let plan = match (&shot.content, &shot.transition) {
-                (ShotContent::Composition(c), Transition::Move { kind, .. })
-                    if *kind != MoveKind::Hold =>
-                {
-                    match last_comp {
-                        Some(from) => Plan::Move {
-                            from: from.clone(),
-                            to: c.clone(),
-                        },
-                        None => Plan::Hold(c.clone()),
-                    }
-                }
-                (ShotContent::Composition(c), _) => Plan::Hold(c.clone()),
-                (ShotContent::Path(_), _) => Plan::PathPending,
+        for (i, shot) in script.timeline.iter().enumerate() {
+            let plan = match &shot.content {
+                ShotContent::Composition(c) if script.moves_camera(i) => match last_comp {
+                    Some(from) => Plan::Move {
+                        from: from.clone(),
+                        to: c.clone(),
+                    },
+                    None => Plan::Hold(c.clone()),
+                },
+                ShotContent::Composition(c) => Plan::Hold(c.clone()),
+                ShotContent::Path(_) => Plan::PathPending,
             };
             last_comp = match &shot.content {
                 ShotContent::Composition(c) => Some(c),
@@ -688,6 +684,18 @@ impl Director {
         if matches!(self.plans[index], Plan::PathPending) {
             // The camera's position when the path starts (the origin before the first tick).
             self.begin_shot_plan_only(index, actors);
+        }
+        // A shot that continues the one before (`then`) starts from the two-actor solve that
+        // one ended on: a fresh solve could take the other root (the one nearest the symmetric
+        // θ, or the other camera of an over-the-shoulder) while the held one had kept its
+        // own, and the framing would step at the boundary.
+        let continues = matches!(self.shots[index].transition, Transition::Move { .. });
+        if continues && index > 0 && self.held[index][0].is_none() {
+            let last_end = match self.plans[index - 1] {
+                Plan::Move { .. } => 1,
+                _ => 0,
+            };
+            self.held[index][0] = self.held[index - 1][last_end];
         }
         let reposition = match self.phase {
             Phase::Reposition { start_s, end_s, .. } => Some((start_s, end_s)),

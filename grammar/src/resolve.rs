@@ -110,6 +110,8 @@ struct Pending {
     transition: Transition,
     content: Option<ShotContent>,
     duration_s: Option<f64>,
+    /// A camera move (`script::moves_camera`): timed with `over`.
+    is_move: bool,
 }
 
 struct Resolver<'o, 'a> {
@@ -1066,14 +1068,17 @@ impl<'o, 'a> Resolver<'o, 'a> {
             } else if body.duration().is_none() {
                 let end = body.span().end;
                 self.err(
-                    Diagnostic::error(Code::MissingDuration, Span::new(end, end), "this shot has no duration")
-                        .with_label("add how long it lasts")
-                        .with_help(match body {
-                            ShotBody::Framed(f) if matches!(f.transition.as_ref().map(|t| &t.kind), Some(TransitionKind::Move { kind, .. }) if *kind != MoveKind::Hold) => {
-                                "end the line with `over 6s`: how long the move takes"
-                            }
-                            _ => "end the line with `for 4s`: how long the shot lasts",
-                        }),
+                    Diagnostic::error(
+                        Code::MissingDuration,
+                        Span::new(end, end),
+                        "this shot has no duration",
+                    )
+                    .with_label("add how long it lasts")
+                    .with_help(if pending.is_move {
+                        "end the line with `over 6s`: how long the move takes"
+                    } else {
+                        "end the line with `for 4s`: how long the shot lasts"
+                    }),
                 );
             }
 
@@ -1191,19 +1196,40 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 let content = self
                     .composition(&f.composition, declared, annotation, cast)
                     .map(ShotContent::Composition);
+                // A move, as `script::moves_camera` tells it: `then hold to` another
+                // composition than the one before moves there, as every `then … to` does.
+                let is_move = match (&transition, prev, &content) {
+                    (
+                        Transition::Move { kind, .. },
+                        Some((_, Some(ShotContent::Composition(from)))),
+                        Some(ShotContent::Composition(to)),
+                    ) => *kind != MoveKind::Hold || from != to,
+                    (Transition::Move { kind, .. }, _, _) => *kind != MoveKind::Hold,
+                    _ => false,
+                };
                 let duration_s = f.duration.as_ref().and_then(|d| {
-                    let is_move = matches!(&transition, Transition::Move { kind, .. } if *kind != MoveKind::Hold);
                     if is_move && d.keyword == DurationKeyword::For {
                         self.err(
-                            Diagnostic::warning(Code::DurationKeyword, d.span, "a camera move is timed with `over`")
-                                .with_label("`for` holds a composition")
-                                .with_help(format!("write `over {}`: the move takes that long", quantity_text(&d.value))),
+                            Diagnostic::warning(
+                                Code::DurationKeyword,
+                                d.span,
+                                "a camera move is timed with `over`",
+                            )
+                            .with_label("`for` holds a composition")
+                            .with_help(format!(
+                                "write `over {}`: the move takes that long",
+                                quantity_text(&d.value)
+                            )),
                         );
                     } else if !is_move && d.keyword == DurationKeyword::Over {
                         self.err(
-                            Diagnostic::warning(Code::DurationKeyword, d.span, "a held composition is timed with `for`")
-                                .with_label("`over` times a camera move")
-                                .with_help(format!("write `for {}`", quantity_text(&d.value))),
+                            Diagnostic::warning(
+                                Code::DurationKeyword,
+                                d.span,
+                                "a held composition is timed with `for`",
+                            )
+                            .with_label("`over` times a camera move")
+                            .with_help(format!("write `for {}`", quantity_text(&d.value))),
                         );
                     }
                     self.duration(d)
@@ -1212,6 +1238,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     transition,
                     content,
                     duration_s,
+                    is_move,
                 }
             }
             ShotBody::Hold(h) => {
@@ -1228,6 +1255,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     },
                     content,
                     duration_s,
+                    is_move: false,
                 }
             }
             ShotBody::Path(p) => {
@@ -1253,6 +1281,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     },
                     content,
                     duration_s,
+                    is_move: false,
                 }
             }
         }

@@ -27,6 +27,34 @@ impl Script {
     pub fn is_annotation(&self) -> bool {
         self.scene.is_none()
     }
+
+    /// [`moves_camera`] of this script's shot `index`.
+    pub fn moves_camera(&self, index: usize) -> bool {
+        moves_camera(&self.timeline, index)
+    }
+}
+
+/// Whether shot `index` of `timeline` is a camera move: a `then … to` another composition than
+/// the framing before it, which it reaches over its duration, the visual parameters
+/// interpolated (psl.md). `hold` is one of those moves: `then hold to MS on A` after another
+/// framing moves there as `then dolly to` does (it stepped to it at once, and the drone,
+/// metres off its framing, flew a straight line to it through whatever stood between).
+/// `then hold for` and a `then hold to` the same composition hold the framing; so does a
+/// `then` after a path, which has no framing to move from.
+pub fn moves_camera(timeline: &[Shot], index: usize) -> bool {
+    let Some(shot) = timeline.get(index) else {
+        return false;
+    };
+    let Transition::Move { kind, .. } = &shot.transition else {
+        return false;
+    };
+    let before = index.checked_sub(1).and_then(|i| timeline.get(i));
+    match (before.map(|b| &b.content), &shot.content) {
+        (Some(ShotContent::Composition(from)), ShotContent::Composition(to)) => {
+            *kind != MoveKind::Hold || from != to
+        }
+        _ => false,
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -201,3 +201,33 @@ fn diagnostics_come_in_source_order() {
     assert_eq!(starts, sorted);
     assert_eq!(c.diagnostics.len(), 3);
 }
+
+/// Which shots move the camera (`script::moves_camera`): every `then … to` another
+/// composition, `hold` included (psl.md: `then <move> to <composition> over Ns` interpolates);
+/// `then hold for`, a `then hold to` the same composition, cuts and the first shot hold. The
+/// duration keyword follows: a `then hold to` another composition is timed with `over`.
+#[test]
+fn a_then_hold_to_another_composition_is_a_move() {
+    let s = ok("MS on A front for 4s\n\
+                then hold to MS on A 34backright over 6s\n\
+                then hold for 2s\n\
+                then hold to MS on A 34backright for 2s\n\
+                then dolly to MLS on A over 3s\n\
+                cut to MS on B for 2s\n");
+    let moves: Vec<bool> = (0..s.timeline.len()).map(|i| s.moves_camera(i)).collect();
+    assert_eq!(moves, [false, true, false, false, true, false]);
+    assert!(!s.moves_camera(99));
+    // Timed as moves are, and as holds are.
+    assert!(
+        codes("MS on A front for 4s\nthen hold to MS on A 34backright for 6s\n")
+            .contains(&Code::DurationKeyword)
+    );
+    assert!(
+        !codes("MS on A front for 4s\nthen hold to MS on A 34backright over 6s\n")
+            .contains(&Code::DurationKeyword)
+    );
+    assert!(
+        !codes("MS on A front for 4s\nthen hold to MS on A front for 6s\n")
+            .contains(&Code::DurationKeyword)
+    );
+}
