@@ -152,6 +152,18 @@ impl Loaded {
     }
 }
 
+/// The script check's warnings (it had no errors, or nothing is compiled) and the compiler's
+/// diagnostics, in the order of the script's lines (stable: each side keeps its own order
+/// where two share a place).
+pub fn with_script_warnings(
+    checked: &[diag::Diagnostic],
+    compiled: &[diag::Diagnostic],
+) -> Vec<diag::Diagnostic> {
+    let mut all: Vec<diag::Diagnostic> = checked.iter().chain(compiled).cloned().collect();
+    all.sort_by_key(|d| d.span.start);
+    all
+}
+
 /// Checks `path`, requires a scene (and with `shots`, a shot), loads its profile; prints the
 /// diagnostics otherwise and ends with "nothing was {what}". `emulate` takes a scene without
 /// shots (its actors and their blocking); `compile` and `shoot` need shots.
@@ -268,11 +280,11 @@ pub fn run(a: &Args) -> ExitCode {
             d.severity = Severity::Warning;
         }
     }
-    if !compiled.diagnostics.is_empty() {
-        err!(
-            "{}",
-            diag::render(&r.name, &r.text, &compiled.diagnostics, a.color, 100)
-        );
+    // The language's warnings (a move timed with `for`, …) with the compiler's, in the
+    // script's order: `compile` showed only the compiler's.
+    let shown = with_script_warnings(&r.checked.diagnostics, &compiled.diagnostics);
+    if !shown.is_empty() {
+        err!("{}", diag::render(&r.name, &r.text, &shown, a.color, 100));
     }
     if errors && !a.allow_infeasible {
         errln!(

@@ -150,7 +150,7 @@ fn warnings_line(diagnostics: &[diag::Diagnostic], name: &str, rate: &str) -> Op
         .collect();
     let s = if total > 1 { "s" } else { "" };
     Some(format!(
-        "warning: `{name}` is flown as written with {total} compiler warning{s} ({})\n  \
+        "warning: `{name}` is flown as written with {total} warning{s} ({})\n  \
          help: `dronecine compile {name}{rate} -o OUT.mcap` tells each, with its fix",
         list.join(", ")
     ))
@@ -247,7 +247,9 @@ pub fn run(a: &Args) -> ExitCode {
         return ExitCode::FAILURE;
     }
     if !a.quiet {
-        if let Some(line) = warnings_line(&compiled.diagnostics, &r.name, &rate) {
+        let warned =
+            crate::compile::with_script_warnings(&r.checked.diagnostics, &compiled.diagnostics);
+        if let Some(line) = warnings_line(&warned, &r.name, &rate) {
             errln!("{line}");
         }
     }

@@ -279,6 +279,58 @@ fn compile_writes_mcap_csv_and_previews() {
     );
 }
 
+/// `compile` tells the language's warnings with its own, in the script's order, and `shoot`
+/// counts them in its one line: both dropped them (`check` alone told them), so a move timed
+/// with `for` went unremarked.
+#[test]
+fn compile_and_shoot_tell_the_languages_warnings_too() {
+    let dir = temp_dir("compile-warnings");
+    let script = dir.join("timed.psl");
+    std::fs::write(
+        &script,
+        "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+         high angle MS on A front for 4s\nthen dolly to MS on A 34left for 6s\n",
+    )
+    .unwrap();
+    let o = dronecine(&[
+        "compile",
+        script.to_str().unwrap(),
+        "-o",
+        dir.join("timed.mcap").to_str().unwrap(),
+        "--color",
+        "never",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let told = stderr(&o);
+    let codes: Vec<&str> = told
+        .lines()
+        .filter(|l| l.starts_with("psl::") || l.starts_with("compile::"))
+        .collect();
+    // Line 4's camera angle (the compiler's), then line 5's `for` (the language's).
+    assert_eq!(
+        codes,
+        ["compile::angle_not_rendered", "psl::duration_keyword"],
+        "{told}"
+    );
+    let o = dronecine(&[
+        "shoot",
+        script.to_str().unwrap(),
+        "--log",
+        dir.join("timed-flight.mcap").to_str().unwrap(),
+        "--color",
+        "never",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "is flown as written with 2 warnings (compile::angle_not_rendered, \
+             psl::duration_keyword)"
+        ),
+        "{}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn compile_bad_inputs_are_clear_errors_not_panics() {
     let dir = temp_dir("compile-bad");
