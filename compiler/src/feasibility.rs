@@ -80,8 +80,9 @@ struct ShotStats {
 
 /// A step of the solved target between two samples is a jump, not a fast framing, from this
 /// long and this many times the drone's top speed over the samples' interval: a framing that
-/// changes side of the actors (an over-the-shoulder's other camera; before moves kept their
-/// way round, `framing::BlendWay`, a move's shorter way round them) in one tick. Longer shots do not help such a shot, and the retiming help said to
+/// changes place at once (an over-the-shoulder's other camera, a two-shot's size passing to
+/// the other actor; a move's short way round the actors did, before moves kept their way,
+/// `framing::BlendWay`). Longer shots do not help such a shot, and the retiming help said to
 /// make a 12 s move last 9,902 s.
 const JUMP_MIN_M: f64 = 0.3;
 const JUMP_SPEEDS: f64 = 10.0;

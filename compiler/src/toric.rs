@@ -278,8 +278,9 @@ pub const PULL_FADE_RAD: f64 = 0.2;
 /// (`alpha1_rad`) of the same actors A and B at parameter `s` ∈ [0, 1] (§3, Lino & Christie
 /// 2015): for each actor X, the yaw of C − X is interpolated the short way round (or, given
 /// `last_turns_rad` — the turn from `c0`'s yaw to `c1`'s about A and about B on the tick
-/// before —, the way nearest it: see [`nearest_turn_rad`]), its elevation and length linearly; α is linear in s; the length is then pulled toward the toric
-/// distance for the current α along that direction (fully, except within [`PULL_FADE_RAD`] of
+/// before —, the way nearest it: see [`nearest_turn_rad`]), its elevation and length
+/// linearly; α is linear in s; the length is then pulled toward the toric distance for the
+/// current α along that direction (fully, except within [`PULL_FADE_RAD`] of
 /// the edge of the torus, where the pull fades linearly to none so the path stays continuous;
 /// the linear length beyond the edge); the result is the midpoint of the two candidates, from
 /// A and from B. The endpoints are `c0` and `c1` exactly when they lie on
