@@ -142,7 +142,7 @@ pub fn step(
     // the camera can still brake from (√(2·a·d), with a margin for the jerk ramp).
     let e = target.p - state.p;
     let d = e.norm();
-    let brake = (2.0 * 0.4 * limits.accel_h_mps2.min(limits.accel_v_mps2) * d).sqrt();
+    let brake = (2.0 * BRAKE_SHARE * limits.accel_h_mps2.min(limits.accel_v_mps2) * d).sqrt();
     let closing = truncate(gains.k_p * e, brake);
     let v_des = target.v + closing;
     let v_des = truncate_hv(v_des, limits.speed_h_mps, limits.speed_v_mps);
@@ -159,6 +159,20 @@ pub fn step(
         p: state.p + state.v * dt_s + state.a * (dt2 / 2.0) + jerk * (dt3 / 6.0),
         v: state.v + state.a * dt_s + jerk * (dt2 / 2.0),
         a: state.a + jerk * dt_s,
+    }
+}
+
+/// The share of the acceleration limit that arrival and the walls' speed cap plan to brake
+/// with (`√(2·BRAKE_SHARE·a·d)` from `d` away); the rest is left for the jerk ramp and the
+/// other axes.
+const BRAKE_SHARE: f64 = 0.4;
+
+/// The acceleration limit on axis `i` (x, y, z): the vertical one on z.
+fn axis_accel_mps2(limits: &SteerLimits, i: usize) -> f64 {
+    if i == 2 {
+        limits.accel_v_mps2
+    } else {
+        limits.accel_h_mps2
     }
 }
 
@@ -182,12 +196,8 @@ pub fn brake_for_walls(
     let (lo, hi) = walls;
     let mut capped = [false; 3];
     for i in 0..3 {
-        let accel = if i == 2 {
-            limits.accel_v_mps2
-        } else {
-            limits.accel_h_mps2
-        };
-        let allowed = |room: f64| (2.0 * 0.4 * accel * room.max(0.0)).sqrt();
+        let accel = axis_accel_mps2(limits, i);
+        let allowed = |room: f64| (2.0 * BRAKE_SHARE * accel * room.max(0.0)).sqrt();
         if v[i] >= 0.0 {
             let cap = allowed(hi[i] - p[i]);
             if v[i] >= cap {
@@ -226,11 +236,7 @@ fn stop_before_walls(
 ) -> (Vec3, [bool; 3]) {
     let (lo, hi) = walls;
     for i in 0..3 {
-        let accel = if i == 2 {
-            limits.accel_v_mps2
-        } else {
-            limits.accel_h_mps2
-        };
+        let accel = axis_accel_mps2(limits, i);
         // Toward the face ahead: its room, and the speed toward it.
         let (room, speed, sign) = if v[i] > 0.0 {
             (hi[i] - p[i], v[i], 1.0)
@@ -244,7 +250,7 @@ fn stop_before_walls(
         // speed for half the ramp.
         let ramp_m = speed * accel / (2.0 * limits.jerk_mps3);
         let need = speed * speed / (2.0 * (room - ramp_m).max(1e-3));
-        if need > 0.4 * accel {
+        if need > BRAKE_SHARE * accel {
             a[i] = if sign > 0.0 {
                 a[i].min(-need)
             } else {

@@ -1198,12 +1198,14 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     .map(ShotContent::Composition);
                 // A move, as `script::moves_camera` tells it: `then hold to` another
                 // composition than the one before moves there, as every `then … to` does.
+                // (Without both compositions the line is an error already; its keyword is
+                // judged by the move's kind alone.)
                 let is_move = match (&transition, prev, &content) {
                     (
                         Transition::Move { kind, .. },
                         Some((_, Some(ShotContent::Composition(from)))),
                         Some(ShotContent::Composition(to)),
-                    ) => *kind != MoveKind::Hold || from != to,
+                    ) => crate::script::then_moves(*kind, from, to),
                     (Transition::Move { kind, .. }, _, _) => *kind != MoveKind::Hold,
                     _ => false,
                 };

@@ -51,10 +51,16 @@ pub fn moves_camera(timeline: &[Shot], index: usize) -> bool {
     let before = index.checked_sub(1).and_then(|i| timeline.get(i));
     match (before.map(|b| &b.content), &shot.content) {
         (Some(ShotContent::Composition(from)), ShotContent::Composition(to)) => {
-            *kind != MoveKind::Hold || from != to
+            then_moves(*kind, from, to)
         }
         _ => false,
     }
+}
+
+/// The rule of [`moves_camera`] for a `then` of `kind` from the composition `from` to `to`
+/// (the resolver asks it too, for the duration keyword, before the timeline exists).
+pub fn then_moves(kind: MoveKind, from: &Composition, to: &Composition) -> bool {
+    kind != MoveKind::Hold || from != to
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
