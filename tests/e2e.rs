@@ -5,31 +5,12 @@
 
 mod common;
 
-use std::net::UdpSocket;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
 
 const SCRIPT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                       actor A height 1.80m at (0, 0) facing 0deg\n\
                       at 1s A walks to (0.5, 0.5) over 3s\n\
                       MS on A 34left for 6s\n";
-
-fn free_port() -> u16 {
-    UdpSocket::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
-struct Kill(Child);
-
-impl Drop for Kill {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn report(out: &std::process::Output) -> serde_json::Value {
     assert!(
@@ -47,39 +28,14 @@ fn shoot_through_the_emulator_tracks_like_the_simulator() {
     std::fs::write(&script, SCRIPT).unwrap();
     let script = script.to_str().unwrap();
     let bin = env!("CARGO_BIN_EXE_dronecine");
-    let (at, nav, cmd, data) = (free_port(), free_port(), free_port(), free_port());
-
-    let _emulator = Kill(
-        Command::new(bin)
-            .args(["emulate", "ardrone", "--seed", "4", "--script", script])
-            .args([
-                "--at-port",
-                &at.to_string(),
-                "--navdata-port",
-                &nav.to_string(),
-            ])
-            .args(["--natnet", &format!("127.0.0.1:{data}")])
-            .args(["--natnet-command-port", &cmd.to_string()])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap(),
-    );
-    // Until it listens (a connect that fails too early would fail the test for nothing).
-    let started = Instant::now();
-    while UdpSocket::bind(("127.0.0.1", at)).is_ok() && started.elapsed() < Duration::from_secs(5) {
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let emulator = common::Emulator::start(&["--seed", "4", "--script", script]);
 
     let log = dir.join("e2e.mcap");
     let wire = report(
         &Command::new(bin)
             .args(["shoot", script, "-q", "--report", "json"])
-            .args(["--drone", &format!("ardrone://127.0.0.1:{at}:{nav}")])
-            .args([
-                "--mocap",
-                &format!("natnet://127.0.0.1:{cmd}?unicast&data_port={data}"),
-            ])
+            .args(["--drone", &emulator.drone_url])
+            .args(["--mocap", &emulator.mocap_url])
             .args(["--log", log.to_str().unwrap()])
             .output()
             .unwrap(),

@@ -139,33 +139,51 @@ pub struct Emulator {
 
 impl Emulator {
     /// Starts it with `args` added (`--ideal`, `--seed N`, `--script FILE`) and waits until
-    /// it listens.
+    /// it listens. The ports are free when picked, not held: a test running beside this one
+    /// can take one before the emulator binds it, and the emulator then exits; such a start
+    /// is tried again on new ports, three times at most (then what it said is the panic).
     pub fn start(args: &[&str]) -> Emulator {
-        let (at, nav, cmd, data) = (free_port(), free_port(), free_port(), free_port());
-        let child = Command::new(env!("CARGO_BIN_EXE_dronecine"))
-            .args(["emulate", "ardrone"])
-            .args(["--at-port", &at.to_string()])
-            .args(["--navdata-port", &nav.to_string()])
-            .args(["--natnet", &format!("127.0.0.1:{data}")])
-            .args(["--natnet-command-port", &cmd.to_string()])
-            .args(args)
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .expect("the emulator starts");
-        let emulator = Emulator {
-            child,
-            drone_url: format!("ardrone://127.0.0.1:{at}:{nav}"),
-            mocap_url: format!("natnet://127.0.0.1:{cmd}?unicast&data_port={data}"),
-        };
-        // Until it listens (a connect that fails too early would fail the test for nothing).
-        let started = std::time::Instant::now();
-        while std::net::UdpSocket::bind(("127.0.0.1", at)).is_ok()
-            && started.elapsed() < std::time::Duration::from_secs(5)
-        {
-            std::thread::sleep(std::time::Duration::from_millis(50));
+        let mut said = String::new();
+        for _ in 0..3 {
+            let (at, nav, cmd, data) = (free_port(), free_port(), free_port(), free_port());
+            // What it says goes to a file (a pipe nobody reads would block its writes).
+            let mut told = tempfile::tempfile().expect("a temporary file");
+            let mut child = Command::new(env!("CARGO_BIN_EXE_dronecine"))
+                .args(["emulate", "ardrone"])
+                .args(["--at-port", &at.to_string()])
+                .args(["--navdata-port", &nav.to_string()])
+                .args(["--natnet", &format!("127.0.0.1:{data}")])
+                .args(["--natnet-command-port", &cmd.to_string()])
+                .args(args)
+                .stdout(std::process::Stdio::null())
+                .stderr(told.try_clone().expect("the temporary file, again"))
+                .spawn()
+                .expect("the emulator starts");
+            // Until it listens (a connect that fails too early would fail the test for
+            // nothing), or exits.
+            let started = std::time::Instant::now();
+            while std::net::UdpSocket::bind(("127.0.0.1", at)).is_ok()
+                && started.elapsed() < std::time::Duration::from_secs(5)
+            {
+                if child.try_wait().ok().flatten().is_some() {
+                    break;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(50));
+            }
+            if child.try_wait().ok().flatten().is_some() {
+                use std::io::{Read, Seek};
+                said.clear();
+                let _ = told.rewind();
+                let _ = told.read_to_string(&mut said);
+                continue;
+            }
+            return Emulator {
+                child,
+                drone_url: format!("ardrone://127.0.0.1:{at}:{nav}"),
+                mocap_url: format!("natnet://127.0.0.1:{cmd}?unicast&data_port={data}"),
+            };
         }
-        emulator
+        panic!("the emulator did not start: {said}");
     }
 }
 
