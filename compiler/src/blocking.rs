@@ -291,6 +291,17 @@ impl Blocking {
         None
     }
 
+    /// The first end of a movement (any actor's walk or turn) after `t_s`, if any.
+    pub fn next_movement_end_after(&self, t_s: f64) -> Option<f64> {
+        self.walks
+            .iter()
+            .chain(&self.turns)
+            .flatten()
+            .map(|l| l.end_s)
+            .filter(|&e| e > t_s)
+            .min_by(f64::total_cmp)
+    }
+
     /// Every actor's pose at `t_s`, written into `out` (one per actor, declaration order).
     pub fn poses_into(&self, t_s: f64, out: &mut [ActorPose]) {
         for (i, slot) in out.iter_mut().enumerate().take(self.len()) {

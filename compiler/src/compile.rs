@@ -232,6 +232,7 @@ fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::Vec3;
 
     fn script(text: &str) -> Script {
         let opts = dronecine_grammar::Options {
@@ -272,6 +273,84 @@ mod tests {
         let sample = director.step(0.0, &poses);
         assert!(director.finished());
         assert!(sample.position_m.iter().all(|x| x.is_finite()));
+    }
+
+    /// Compiles `text` at 100 Hz: the diagnostics, the timings, and for the last shot its
+    /// first sample and the framing it asks for then (position and velocity, solved against
+    /// the blocking at that time), at the first of its samples.
+    fn last_shot_start(text: &str) -> (Compiled, Sample, Vec3, Vec3) {
+        let s = script(text);
+        let scene = s.scene.as_ref().unwrap();
+        let profile = Profile::builtin("ardrone2").unwrap();
+        let mut samples = Vec::new();
+        let c = compile(&s, &profile, &Options::default(), |x, _| {
+            samples.push(*x);
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        let last = c.timings.last().unwrap();
+        let first = *samples
+            .iter()
+            .find(|x| x.t_s >= last.start_s - 1e-9)
+            .unwrap();
+        let ShotContent::Composition(comp) = &s.timeline[last.index].content else {
+            panic!("a composition");
+        };
+        let lens = crate::camera::Lens::new(profile.camera.fov_x_rad, profile.camera.aspect);
+        let gimbal = profile.camera.gimbal;
+        let poses = Blocking::new(scene).poses(first.t_s);
+        let names: Vec<&str> = scene.actors.iter().map(|a| a.name.as_str()).collect();
+        let v = crate::framing::solve(comp, &names, &poses, &lens, &gimbal).unwrap();
+        let p = crate::framing::position_m(&v, &poses, &lens, &gimbal);
+        let vel = crate::framing::velocity_mps(&v, &poses, &lens, &gimbal);
+        (c, first, p, vel)
+    }
+
+    /// A cut while the actor turns: the repositioning flight goes where the framing will be
+    /// when it arrives, and the shot starts on it. Planned to where the framing was when the
+    /// flight set off, it arrived mid-turn 3.5 m from where it had to be, and the shot was
+    /// refused ("needs 2.39 m/s²" as the framing swung round the turning actor).
+    #[test]
+    fn a_cut_while_the_actor_turns_starts_on_the_framing() {
+        let (c, first, framing, _) = last_shot_start(
+            "stage 10m x 12m x 4m\ndrone ardrone2\n\
+             actor A height 1.80m at (-1.5, -2) facing 120deg\n\
+             at 8s A turns to -75deg over 4s\n\
+             MCU on A for 6s\n\
+             cut to LS on A 34left for 8s\n",
+        );
+        assert!(!c.has_errors(), "{:#?}", c.diagnostics);
+        let start = c.timings.last().unwrap().start_s;
+        assert!(
+            start >= 12.0,
+            "the shot starts once the turn is done: {start}"
+        );
+        let off_m = (Vec3::from(first.position_m) - framing).norm();
+        assert!(off_m < 0.05, "{off_m} m off the framing at the start");
+    }
+
+    /// A cut while the actor walks: the flight arrives on the framing moving with it (it
+    /// merges), so the shot starts on its framing at its speed.
+    #[test]
+    fn a_cut_while_the_actor_walks_arrives_moving_with_the_framing() {
+        let (c, first, framing, framing_v) = last_shot_start(
+            "stage 12m x 10m x 3m\ndrone ardrone2\n\
+             actor A height 1.80m at (-2, 0) facing 0deg\n\
+             at 7s A walks to (1.5, 0) over 8s\n\
+             MS on A front for 6s\n\
+             cut to MS on A left for 10s\n",
+        );
+        assert!(!c.has_errors(), "{:#?}", c.diagnostics);
+        let start = c.timings.last().unwrap().start_s;
+        assert!(start < 15.0, "the shot starts while A walks: {start}");
+        assert!(framing_v.norm() > 0.3, "A walks: {framing_v}");
+        let off_m = (Vec3::from(first.position_m) - framing).norm();
+        let off_mps = (Vec3::from(first.velocity_mps) - framing_v).norm();
+        assert!(off_m < 0.05, "{off_m} m off the framing at the start");
+        assert!(
+            off_mps < 0.1,
+            "{off_mps} m/s off the framing's velocity at the start"
+        );
     }
 
     /// A film annotation and an empty script are refused, each for what it is.

@@ -24,7 +24,7 @@ use dronecine_grammar::vocab::wrap_angle_rad;
 use dronecine_grammar::vocab::Size;
 use dronecine_grammar::{Code, Diagnostic, Span};
 
-use crate::blocking::min_jerk;
+use crate::blocking::{min_jerk, Blocking};
 use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
 use crate::feasibility::{round_up_1, Monitor};
 use crate::framing::{self, FramingError};
@@ -132,6 +132,14 @@ pub struct Director {
     beyond_reach: Vec<bool>,
     /// Per-tick scratch: the actors extrapolated, and their body axes.
     ahead: Vec<ActorPose>,
+    /// The script's blocking: where a repositioning flight will find the actors when it
+    /// arrives ([`Director::arriving_into`]).
+    blocking: Blocking,
+    /// Per-tick scratch of a repositioning flight: the actors as they will stand when it
+    /// arrives.
+    arriving: Vec<ActorPose>,
+    /// Scratch of a repositioning flight's plan: the actors it keeps clear of.
+    keep_out: Vec<ActorPose>,
     axes: Vec<(Vec3, f64)>,
     /// Per plan, the actors each end's composition names (by index), for the solve memo.
     framed: Vec<[Vec<usize>; 2]>,
@@ -278,6 +286,9 @@ impl Director {
             closest: vec![None; script.timeline.len()],
             beyond_reach: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
+            blocking: Blocking::new(scene),
+            arriving: Vec::with_capacity(scene.actors.len()),
+            keep_out: Vec::with_capacity(2 * scene.actors.len()),
             axes: Vec::with_capacity(scene.actors.len()),
             held,
             framed,
@@ -666,7 +677,7 @@ impl Director {
                     if is_move && !self.shots[next].pinned {
                         self.begin_shot(next, end_s, actors);
                     } else {
-                        self.begin_reposition(next, end_s, actors);
+                        self.begin_reposition(next, end_s, t_s, actors);
                         continuous = false;
                     }
                 }
@@ -716,55 +727,154 @@ impl Director {
     }
 
     /// Plan the flight from where the camera is to shot `to`'s first framing.
-    fn begin_reposition(&mut self, to: usize, now_s: f64, actors: &[ActorPose]) {
-        // Where the shot starts: its framing (or path start) with the actors as they are now.
-        let (goal, goal_heading) = {
-            if matches!(self.plans[to], Plan::PathPending) {
-                self.begin_shot_plan_only(to, actors);
+    ///
+    /// That framing is where the actors will be when the drone arrives, and when it arrives
+    /// depends on how far it flies. The flight is planned to the framing with the actors as
+    /// they stand now, then again to where the blocking will have taken them by the time that
+    /// flight arrives, until the arrival settles (to 2 ms; halfway steps after the first
+    /// round, as an actor walking toward where the drone comes from shortens the flight the
+    /// later it arrives). Where it does not settle, the earliest arrival the drone can make
+    /// is searched among those tried, the ends of the actors' movements, and halfway between
+    /// one that does not fit and one that does: at most a second past the first plan's
+    /// arrival while the framing then moves slower than the drone can merge into it (else
+    /// the flight arrives then), without a bound where it sweeps by faster (an actor turning
+    /// round at the size's distance). A flight that arrives while the framing moves merges
+    /// into it ([`route::merge_m_per_mps`]).
+    ///
+    /// Planned to the actors as they stood when it set off, a flight during which an actor
+    /// walked or turned arrived where the framing had been, and the shot started off it, by
+    /// up to 3 m: 10 of 400 random scripts were refused as lagging behind at the shot's
+    /// start (6 now).
+    ///
+    /// `actors` are the poses at `actors_s` (the tick's time, at or after `now_s`).
+    fn begin_reposition(&mut self, to: usize, now_s: f64, actors_s: f64, actors: &[ActorPose]) {
+        if matches!(self.plans[to], Plan::PathPending) {
+            self.begin_shot_plan_only(to, actors);
+        }
+        let (pinned, written) = {
+            let shot = &self.shots[to];
+            (shot.pinned, if shot.pinned { shot.start_s } else { now_s })
+        };
+        // When the flight arrives on the framing (see `Phase::Reposition::arrive_s`).
+        let arrives = |needed: f64| {
+            let end = (now_s + needed).max(written);
+            (now_s + needed - SETTLE_S).max(now_s).min(end)
+        };
+        let settled = |f: &RepositionFlight| (arrives(f.needed) - f.at_s).abs() < 0.002;
+        // A flight planned for `at_s` that is there by then (it flies slower, or waits).
+        let fits = |f: &RepositionFlight| arrives(f.needed) <= f.at_s + 0.002;
+        let mut flight = self.plan_reposition(to, actors_s, now_s, actors);
+        // The arrival as first planned: to the framing as it is now.
+        let first = flight.clone();
+        // The earliest arrival found that fits, and the latest before it that does not.
+        let mut best: Option<RepositionFlight> = None;
+        let mut short_s = now_s;
+        let mut round = 0;
+        let mut after_s = now_s;
+        // Past the rounds: a fit found, an earlier one is looked for.
+        let mut searching = false;
+        // Where the framing when first planned moves no faster than the drone can merge into
+        // it: the flight that arrives then, and how much later than that a search may go.
+        let mut on_time: Option<RepositionFlight> = None;
+        let mut limit_s = f64::INFINITY;
+        for _ in 0..24 {
+            if settled(&flight) && !searching {
+                break;
             }
-            let p = self.shot_target(to, 0.0, actors, false);
-            let (h, _) = self.look_for(to, 0.0, actors, &p, false);
-            (p, h)
-        };
+            if round >= 6 && !searching && on_time.is_none() {
+                // The rounds did not settle. Where the framing moves no faster than the
+                // drone can merge into it when the flight first planned arrives, the search
+                // goes at most a second past that, and else the flight arrives then, to where
+                // the framing will be (it may start the shot a little behind, where the actors
+                // took the framing further than the flight was planned for). Unbounded, the
+                // search waited for the actors to stand and put the scene's two-shot after
+                // Bob's walk up to 5 s later on set, past its pinned orbit.
+                let a0 = arrives(first.needed);
+                let plan = self.plan_reposition(to, actors_s, a0, actors);
+                if plan.goal_speed_mps <= 0.8 * self.limits.speed_h_mps {
+                    limit_s = a0 + 1.0;
+                    let needed = plan.needed.min(first.needed);
+                    on_time = Some(RepositionFlight { needed, ..plan });
+                }
+            }
+            if fits(&flight) {
+                if best.as_ref().is_none_or(|b| flight.at_s < b.at_s) {
+                    best = Some(flight.clone());
+                }
+            } else if best.as_ref().is_none_or(|b| flight.at_s < b.at_s) {
+                short_s = short_s.max(flight.at_s);
+            }
+            let at_s = if round < 6 && !searching {
+                // Planned again for when it arrives; halfway after the first round (an actor
+                // walking toward where the drone comes from shortens the flight the later
+                // it arrives, and the rounds would swing).
+                round += 1;
+                let next = arrives(flight.needed);
+                if round == 1 {
+                    next
+                } else {
+                    (flight.at_s + next) / 2.0
+                }
+            } else if let Some(b) = &best {
+                // Between the latest that does not fit and the earliest that does.
+                searching = true;
+                if b.at_s - short_s < 0.005 {
+                    break;
+                }
+                (short_s + b.at_s) / 2.0
+            } else if let Some(end_s) = self
+                .blocking
+                .next_movement_end_after(after_s)
+                .filter(|&e| e <= limit_s)
+            {
+                // The framing sweeps by faster than the drone can meet it (an actor turning
+                // round at the size's distance): the drone arrives when a movement ends, or
+                // later while the actors stand as they do then, and the earliest such arrival
+                // is looked for.
+                searching = true;
+                after_s = end_s;
+                let there = self.plan_reposition(to, actors_s, end_s, actors);
+                if fits(&there) {
+                    flight = there;
+                    continue;
+                }
+                arrives(there.needed)
+            } else {
+                break;
+            };
+            flight = self.plan_reposition(to, actors_s, at_s, actors);
+        }
+        if !settled(&flight) || searching {
+            if searching && fits(&flight) && best.as_ref().is_none_or(|b| flight.at_s < b.at_s) {
+                best = Some(flight.clone());
+            }
+            let best = match (best, on_time) {
+                (Some(b), _) if b.at_s <= limit_s => Some(b),
+                (_, on_time) => on_time,
+            };
+            if let Some(b) = best {
+                // Early: it flies there in the time it has (or waits, pinned).
+                let early_s = if fits(&b) {
+                    b.at_s - arrives(b.needed)
+                } else {
+                    0.0
+                };
+                flight = RepositionFlight {
+                    needed: b.needed + early_s.max(0.0),
+                    ..b
+                };
+            }
+        }
+        let RepositionFlight {
+            route,
+            needed,
+            flown,
+            ..
+        } = flight;
         let from = self.state.p;
-        let keep = Keepout {
-            lo: self.stage_lo,
-            hi: self.stage_hi,
-            actors,
-            safety_m: self.safety_m,
-        };
-        let route = route::choose(&from, &goal, self.pivot(to, actors), &keep);
-        let path_len = route.length(&from, &goal);
-        let dz = (goal.z - from.z).abs();
-        let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();
-        let speed = self.state.v.norm();
-        let (needed, turn_sets_time) = if path_len < 0.03 && dh < 0.05 && speed < 0.05 {
-            (0.0, false)
-        } else {
-            // A min-jerk flight peaks at 1.875·L/T in speed and 5.77·L/T² in acceleration;
-            // keep both under 80% of the limits, plus the time to stop from the current speed
-            // and half a second to settle.
-            let m = 0.8;
-            let t_speed = 1.875 * path_len / (m * self.limits.speed_h_mps);
-            let t_accel = (5.77 * path_len / (m * self.limits.accel_h_mps2)).sqrt();
-            let t_vz = 1.875 * dz / (m * self.limits.speed_v_mps);
-            let t_yaw = 1.875 * dh / (m * self.limits.yaw_rate_radps);
-            let t_stop = speed / self.limits.accel_h_mps2;
-            let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(0.5);
-            // The flight may curve round the pivot: measure its peaks (centripetal
-            // acceleration included) and stretch it until they fit.
-            let t_fly = route.fit_duration(&from, &goal, t0, &self.limits);
-            (t_fly + t_stop + SETTLE_S, t_yaw > 0.5 && t_yaw >= t0)
-        };
-        let flown = Flown {
-            path_m: path_len,
-            turn_rad: dh,
-            turn_sets_time,
-        };
         let shot = &self.shots[to];
-        let written = if shot.pinned { shot.start_s } else { now_s };
         let arrive = now_s + needed;
-        let end = if shot.pinned {
+        let end = if pinned {
             if arrive > written + 1e-6 {
                 let late = arrive - written;
                 self.diagnostics.push(
@@ -797,7 +907,7 @@ impl Director {
             self.begin_shot(to, now_s, actors);
             return;
         }
-        if !shot.pinned && needed > 0.0 {
+        if !pinned && needed > 0.0 {
             self.diagnostics.push(
                 Diagnostic::warning(
                     Code::Reposition,
@@ -824,6 +934,146 @@ impl Director {
             from_heading_rad: self.heading.heading_rad,
             route,
         };
+    }
+
+    /// A repositioning flight from where the camera is now to shot `to`'s first
+    /// framing with the actors (`actors`, their poses at `actors_s`) where the blocking will
+    /// have taken them at `at_s` (when it arrives): its route, and how long it takes.
+    fn plan_reposition(
+        &mut self,
+        to: usize,
+        actors_s: f64,
+        at_s: f64,
+        actors: &[ActorPose],
+    ) -> RepositionFlight {
+        // Each plan solves from the same held two-actor solve (the flight's own solves start
+        // from it too): else the plans of one search would each start from the last one's
+        // root, and which root the goal takes would depend on the order they were tried in.
+        let held = self.held[to][0];
+        let mut arriving = std::mem::take(&mut self.arriving);
+        self.arriving_into(actors, actors_s, at_s, &mut arriving);
+        let goal = self.shot_target(to, 0.0, &arriving, false);
+        let (goal_heading, _) = self.look_for(to, 0.0, &arriving, &goal, false);
+        let pivot = self.pivot(to, &arriving);
+        // How the framing moves on arrival (the flight arrives moving with it).
+        let moving = self.arriving_into(actors, actors_s, at_s + EPS_S, &mut arriving);
+        let goal_v = if moving {
+            let after = self.solve_live(to, |d| d.shot_target(to, 0.0, &arriving, false));
+            (after - goal) / EPS_S
+        } else {
+            Vec3::zeros()
+        };
+        // The route keeps clear of the actors where they stand and where they will be.
+        let mut keep_out = std::mem::take(&mut self.keep_out);
+        keep_out.clear();
+        keep_out.extend_from_slice(actors);
+        if moving {
+            keep_out.extend_from_slice(&arriving);
+        }
+        self.arriving = arriving;
+        self.held[to][0] = held;
+        let from = self.state.p;
+        let keep = Keepout {
+            lo: self.stage_lo,
+            hi: self.stage_hi,
+            actors: &keep_out,
+            safety_m: self.safety_m,
+        };
+        let route = route::choose(&from, &goal, pivot, &keep);
+        self.keep_out = keep_out;
+        let path_len = route.length(&from, &goal);
+        let dz = (goal.z - from.z).abs();
+        let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();
+        let speed = self.state.v.norm();
+        let (needed, turn_sets_time) = if path_len < 0.03 && dh < 0.05 && speed < 0.05 {
+            (0.0, false)
+        } else {
+            // A min-jerk flight peaks at 1.875·L/T in speed and 5.77·L/T² in acceleration;
+            // keep both under 80% of the limits, plus the time to stop from the current speed
+            // and half a second to settle.
+            let m = 0.8;
+            let t_speed = 1.875 * path_len / (m * self.limits.speed_h_mps);
+            let t_accel = (5.77 * path_len / (m * self.limits.accel_h_mps2)).sqrt();
+            let t_vz = 1.875 * dz / (m * self.limits.speed_v_mps);
+            let t_yaw = 1.875 * dh / (m * self.limits.yaw_rate_radps);
+            let t_stop = speed / self.limits.accel_h_mps2;
+            let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(0.5);
+            // The flight may curve round the pivot: measure its peaks (centripetal
+            // acceleration included) and stretch it until they fit.
+            let t_fly = route.fit_duration_arriving(&from, &goal, &goal_v, t0, &self.limits);
+            (t_fly + t_stop + SETTLE_S, t_yaw > 0.5 && t_yaw >= t0)
+        };
+        RepositionFlight {
+            at_s,
+            route,
+            needed,
+            goal_speed_mps: goal_v.norm(),
+            flown: Flown {
+                path_m: path_len,
+                turn_rad: dh,
+                turn_sets_time,
+            },
+        }
+    }
+
+    /// The actors as they will stand at `at_s`, from their poses `actors` at `now_s`: each
+    /// moved on by what the script's blocking does between the two times (its walks'
+    /// displacement, its turns' rotation, the velocities at `at_s`), into `out`. Against the
+    /// blocking itself (`compile`) that is the blocking at `at_s`, bit for bit; on set the
+    /// actor's deviation from the blocking is carried along. An actor whom the blocking has
+    /// at the same pose at both times is its pose now, bit for bit.
+    /// Returns whether any actor moves between the two times.
+    fn arriving_into(
+        &self,
+        actors: &[ActorPose],
+        now_s: f64,
+        at_s: f64,
+        out: &mut Vec<ActorPose>,
+    ) -> bool {
+        let mut moving = false;
+        out.clear();
+        out.extend(actors.iter().enumerate().map(|(i, a)| {
+            if i >= self.blocking.len() {
+                return *a;
+            }
+            let (p0, p1) = (self.blocking.pose(i, now_s), self.blocking.pose(i, at_s));
+            if same_pose(&p0, &p1) {
+                return *a;
+            }
+            moving = true;
+            if same_pose(a, &p0) {
+                // On its mark (as in `compile`): the blocking's pose then.
+                return ActorPose {
+                    height_m: a.height_m,
+                    ..p1
+                };
+            }
+            // `then + (live − planned now)`: exact when the live pose is the planned one.
+            let on = |then: [f64; 3], live: [f64; 3], planned: [f64; 3]| {
+                [0, 1, 2].map(|k| then[k] + (live[k] - planned[k]))
+            };
+            ActorPose {
+                position_m: on(p1.position_m, a.position_m, p0.position_m),
+                velocity_mps: on(p1.velocity_mps, a.velocity_mps, p0.velocity_mps),
+                facing_rad: wrap_angle_rad(
+                    p1.facing_rad + wrap_angle_rad(a.facing_rad - p0.facing_rad),
+                ),
+                facing_rate_radps: p1.facing_rate_radps
+                    + (a.facing_rate_radps - p0.facing_rate_radps),
+                height_m: a.height_m,
+            }
+        }));
+        moving
+    }
+
+    /// `solve` (a solve of shot `to`'s first framing against the actors as they are now,
+    /// during a repositioning flight), leaving the held two-actor solve as it was: the flight
+    /// holds the one of its goal, which the shot starts from.
+    fn solve_live<R>(&mut self, to: usize, solve: impl FnOnce(&mut Director) -> R) -> R {
+        let held = self.held[to][0];
+        let r = solve(self);
+        self.held[to][0] = held;
+        r
     }
 
     fn begin_shot_plan_only(&mut self, index: usize, actors: &[ActorPose]) {
@@ -872,14 +1122,33 @@ impl Director {
                 route,
                 ..
             } => {
-                let goal = self.shot_target(to, 0.0, actors, false);
                 let u = if arrive_s > start_s {
                     (t_s - start_s) / (arrive_s - start_s)
                 } else {
                     1.0
                 };
                 let (s, _, _) = min_jerk(u);
-                route.at(&from, &goal, s)
+                if u >= 1.0 {
+                    // Arrived: on the framing as it is, until the shot starts.
+                    let goal = self.shot_target(to, 0.0, actors, false);
+                    return route.at(&from, &goal, s);
+                }
+                // The flight's goal: the shot's first framing as it will be when the flight
+                // arrives, and how it moves then.
+                let mut arriving = std::mem::take(&mut self.arriving);
+                self.arriving_into(actors, t_s, arrive_s, &mut arriving);
+                let goal = self.shot_target(to, 0.0, &arriving, false);
+                let on_route = route.at(&from, &goal, s);
+                let p = if self.arriving_into(actors, t_s, arrive_s + EPS_S, &mut arriving) {
+                    let after = self.solve_live(to, |d| d.shot_target(to, 0.0, &arriving, false));
+                    let v = (after - goal) / EPS_S;
+                    on_route
+                        + v * route::merge_m_per_mps(u, arrive_s - start_s, v.norm(), &self.limits)
+                } else {
+                    on_route
+                };
+                self.arriving = arriving;
+                p
             }
             Phase::NotStarted | Phase::Done => self.state.p,
         }
@@ -1194,13 +1463,23 @@ impl Director {
                 from_heading_rad,
                 ..
             } => {
-                let (h1, p1) = self.look_for(to, 0.0, actors, position, false);
                 let u = if arrive_s > start_s {
                     (t_s - start_s) / (arrive_s - start_s)
                 } else {
                     1.0
                 };
                 let (s, _, _) = min_jerk(u);
+                // As the target does: toward the framing as it will be on arrival, then the
+                // framing as it is.
+                let mut arriving = std::mem::take(&mut self.arriving);
+                if u < 1.0 {
+                    self.arriving_into(actors, t_s, arrive_s, &mut arriving);
+                } else {
+                    arriving.clear();
+                    arriving.extend_from_slice(actors);
+                }
+                let (h1, p1) = self.look_for(to, 0.0, &arriving, position, false);
+                self.arriving = arriving;
                 (
                     wrap_angle_rad(from_heading_rad + s * wrap_angle_rad(h1 - from_heading_rad)),
                     p1 * s,
@@ -1408,6 +1687,20 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
 /// turn"): a short flight that needs seconds is a turn at the yaw-rate limit, and the
 /// distance alone does not say so. Formatted only when a diagnostic is written (a flight's
 /// loop allocates nothing for a repositioning it does not tell).
+/// A planned repositioning flight ([`Director::plan_reposition`]).
+#[derive(Clone)]
+struct RepositionFlight {
+    /// When the flight was taken to arrive: the actors where the blocking puts them then.
+    at_s: f64,
+    route: Route,
+    /// Its duration, settling included.
+    needed: f64,
+    /// How fast the framing moves when it arrives.
+    goal_speed_mps: f64,
+    flown: Flown,
+}
+
+#[derive(Clone)]
 struct Flown {
     path_m: f64,
     turn_rad: f64,
@@ -1457,6 +1750,49 @@ mod tests {
         // A small turn that sets the time (a slow yaw): told.
         assert_eq!(words(0.2, 12.0, true), "0.2 m and a 12° turn");
         assert_eq!(words(0.2, 0.2, true), "0.2 m");
+    }
+
+    /// Where a repositioning flight will find the actors: against the blocking itself, the
+    /// blocking at the arrival, bit for bit; on set, the live pose carried along by what the
+    /// blocking does in between (an actor a little off its mark stays as far off it); an
+    /// actor who stands still, the live pose itself.
+    #[test]
+    fn the_actors_on_arrival_follow_the_blocking_from_where_they_are() {
+        let text = "stage 10m x 8m x 3m\ndrone ardrone2\n\
+                    actor A height 1.80m at (-2, 0) facing 0deg\n\
+                    actor B height 1.70m at (2, 1) facing 180deg\n\
+                    at 2s A walks to (1, -1) over 4s\n\
+                    at 6s A turns to 170deg over 1s\n\
+                    MS on A for 10s\n";
+        let opts = dronecine_grammar::Options {
+            known_drones: crate::profile::BUILTIN_NAMES,
+            base_dir: None,
+        };
+        let script = dronecine_grammar::check(text, &opts).script.unwrap();
+        let scene = script.scene.as_ref().unwrap();
+        let director = Director::new(&script, scene, &Profile::builtin("ardrone2").unwrap());
+        let blocking = Blocking::new(scene);
+        let mut out = Vec::new();
+        // Exact against the blocking.
+        let now = blocking.poses(2.5);
+        assert!(director.arriving_into(&now, 2.5, 7.0, &mut out));
+        let then = blocking.poses(7.0);
+        assert!(same_pose(&out[0], &then[0]), "{:?} {:?}", out[0], then[0]);
+        assert!(same_pose(&out[1], &now[1]), "B stands");
+        // Off the mark by (0.1, −0.2) m and 0.05 rad: as far off at the arrival.
+        let mut live = now.clone();
+        live[0].position_m[0] += 0.1;
+        live[0].position_m[1] -= 0.2;
+        live[0].facing_rad += 0.05;
+        director.arriving_into(&live, 2.5, 7.0, &mut out);
+        assert!((out[0].position_m[0] - (then[0].position_m[0] + 0.1)).abs() < 1e-12);
+        assert!((out[0].position_m[1] - (then[0].position_m[1] - 0.2)).abs() < 1e-12);
+        let facing_off = wrap_angle_rad(out[0].facing_rad - then[0].facing_rad);
+        assert!((facing_off - 0.05).abs() < 1e-12, "{facing_off}");
+        // Nothing moves between 7 s and 9 s: the live poses, and no movement.
+        let late = blocking.poses(7.0);
+        assert!(!director.arriving_into(&late, 7.0, 9.0, &mut out));
+        assert!(out.iter().zip(&late).all(|(a, b)| same_pose(a, b)));
     }
 
     fn goal(p: [f64; 3], v: [f64; 3]) -> Kinematics {

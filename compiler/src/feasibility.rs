@@ -185,6 +185,11 @@ impl Monitor {
             }
             st.last_solved = Some((t, *solved));
         }
+        if !in_shot {
+            // A repositioning flight: the shot after it starts from where the flight left it,
+            // not where the shot before left the drone.
+            self.last_lag = None;
+        }
         st.speed.see(crate::norm_xy(v.x, v.y), t);
         let x = self.tau * a.x + v.x;
         let y = self.tau * a.y + v.y;

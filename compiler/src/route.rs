@@ -97,13 +97,33 @@ impl Route {
     /// The shortest duration, from `t0` up, for which the minimum-jerk flight along the
     /// route keeps its speed and acceleration (centripetal included) under 80% of the limits.
     pub fn fit_duration(&self, a: &Vec3, b: &Vec3, t0: f64, limits: &SteerLimits) -> f64 {
+        self.fit_duration_arriving(a, b, &Vec3::zeros(), t0, limits)
+    }
+
+    /// [`Route::fit_duration`] for a flight that arrives moving at `arrive_v` (the route
+    /// plus its [`merge_m_per_mps`] offset).
+    pub fn fit_duration_arriving(
+        &self,
+        a: &Vec3,
+        b: &Vec3,
+        arrive_v: &Vec3,
+        t0: f64,
+        limits: &SteerLimits,
+    ) -> f64 {
+        let speed = arrive_v.norm();
         let mut t = t0;
         for _ in 0..4 {
             let n = 64;
             let h = t / n as f64;
+            // Before the start at rest; after the end moving on at `arrive_v`.
             let at = |k: i64| {
-                let u = (k as f64 * h / t).clamp(0.0, 1.0);
-                self.at(a, b, crate::blocking::min_jerk(u).0)
+                let u = k as f64 * h / t;
+                let p = self.at(a, b, crate::blocking::min_jerk(u).0);
+                if speed > 0.0 {
+                    p + arrive_v * (merge_m_per_mps(u, t, speed, limits) + (u - 1.0).max(0.0) * t)
+                } else {
+                    p
+                }
             };
             let (mut v_max, mut a_max, mut vz_max): (f64, f64, f64) = (0.0, 0.0, 0.0);
             for k in 0..=n {
@@ -124,6 +144,30 @@ impl Route {
         }
         t
     }
+}
+
+/// A flight that arrives on a framing moving at `speed_mps` arrives moving with it: on top of
+/// its route (which arrives at rest), an offset `v·merge(u)` along the framing's velocity `v`,
+/// with `merge = −τ·φ(1 − (1 − u)·D/τ)` over the flight's last τ seconds (`D` its duration,
+/// `u` how far along it is) and `φ(w) = 4w³ − 7w⁴ + 3w⁵`, which is 0 with its first two
+/// derivatives at w = 0, and 0 with slope −1 and no curvature at w = 1: the offset starts
+/// smoothly and is back to nothing on arrival, where it moves at `v`. On the way it first
+/// falls behind (by at most 0.2·τ·speed), as a car does that merges into traffic. τ (at
+/// least 1 s, at most the flight) is long enough that the merge's own acceleration,
+/// 3.93·speed/τ at most, stays within half the profile's.
+pub fn merge_m_per_mps(u: f64, duration_s: f64, speed_mps: f64, limits: &SteerLimits) -> f64 {
+    let tau_s = (7.9 * speed_mps / limits.accel_h_mps2)
+        .max(1.0)
+        .min(duration_s);
+    if tau_s <= 0.0 {
+        return 0.0;
+    }
+    let w = 1.0 - (1.0 - u.clamp(0.0, 1.0)) * duration_s / tau_s;
+    if w <= 0.0 {
+        return 0.0;
+    }
+    let (w3, w4, w5) = (w * w * w, w * w * w * w, w * w * w * w * w);
+    -tau_s * (4.0 * w3 - 7.0 * w4 + 3.0 * w5)
 }
 
 /// Where a route may go: inside the box `[lo, hi]` (the director gives the stage less the
@@ -250,6 +294,48 @@ pub fn choose(a: &Vec3, b: &Vec3, pivot: Option<Vec3>, keep: &Keepout) -> Route 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The merge offset is nothing at the start and on arrival, moves at the framing's speed
+    /// on arrival (slope 1 in seconds), starts at rest, and its acceleration stays within half
+    /// the profile's; it falls behind by at most 0.2·τ·speed.
+    #[test]
+    fn a_merge_arrives_on_the_framing_at_its_speed() {
+        let limits = SteerLimits {
+            speed_h_mps: 1.84,
+            speed_v_mps: 0.9,
+            accel_h_mps2: 1.08,
+            accel_v_mps2: 1.0,
+            jerk_mps3: 3.0,
+            yaw_rate_radps: 1.5,
+            yaw_accel_radps2: 3.0,
+        };
+        for (duration_s, speed) in [(6.0, 0.5), (3.0, 0.3), (10.0, 1.2), (0.8, 0.4)] {
+            let m = |t_s: f64| merge_m_per_mps(t_s / duration_s, duration_s, speed, &limits);
+            let h = 1e-4;
+            assert_eq!(m(0.0), 0.0);
+            assert!(m(duration_s).abs() < 1e-12);
+            let slope_end = (m(duration_s) - m(duration_s - h)) / h;
+            assert!((slope_end - 1.0).abs() < 1e-3, "{slope_end}");
+            assert!(((m(h) - m(0.0)) / h).abs() < 1e-6, "at rest at the start");
+            let tau_s = (7.9 * speed / limits.accel_h_mps2).max(1.0).min(duration_s);
+            let mut worst_behind = 0.0f64;
+            for k in 1..1000 {
+                let t = duration_s * k as f64 / 1000.0;
+                let acc_mps2 = speed * (m(t + h) - 2.0 * m(t) + m(t - h)) / (h * h);
+                worst_behind = worst_behind.max(-m(t));
+                if tau_s > 7.9 * speed / limits.accel_h_mps2 - 1e-9 {
+                    assert!(
+                        acc_mps2.abs() <= 0.5 * limits.accel_h_mps2 + 1e-3,
+                        "{acc_mps2}"
+                    );
+                }
+            }
+            assert!(
+                worst_behind <= 0.198 * tau_s,
+                "{worst_behind} behind, τ {tau_s}"
+            );
+        }
+    }
 
     fn actor(x: f64, y: f64) -> ActorPose {
         ActorPose {
