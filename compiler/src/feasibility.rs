@@ -67,6 +67,10 @@ struct ShotStats {
     /// The deepest point outside was the framing's (the target as solved), which the
     /// director does not follow out of the stage.
     outside_framing: bool,
+    /// How far outside the shot before left the framing, where this shot continues it
+    /// (`then`), and whether this shot's framing is still on its way back in from there.
+    outside_entry: Option<f64>,
+    coming_in: bool,
     /// How deep the framing (the target as solved) puts the camera into the stage's margin
     /// during the shot, inside the stage, as a fraction of its distance to the nearest actor
     /// (what the screen shows of the shift: a size that much larger, or an angle of that many
@@ -105,6 +109,8 @@ pub struct Monitor {
     names: Vec<String>,
     /// The shot of the last sample in a shot, and how far behind its target the drone was.
     last_lag: Option<(usize, f64)>,
+    /// The last in-shot sample's shot and how far outside the stage its framing was.
+    last_outside: Option<(usize, f64)>,
 }
 
 impl Monitor {
@@ -127,6 +133,7 @@ impl Monitor {
             profile: profile.name.clone(),
             names: scene.actors.iter().map(|a| a.name.clone()).collect(),
             last_lag: None,
+            last_outside: None,
         }
     }
 
@@ -189,6 +196,7 @@ impl Monitor {
             // A repositioning flight: the shot after it starts from where the flight left it,
             // not where the shot before left the drone.
             self.last_lag = None;
+            self.last_outside = None;
         }
         st.speed.see(crate::norm_xy(v.x, v.y), t);
         let x = self.tau * a.x + v.x;
@@ -220,7 +228,28 @@ impl Monitor {
                 out.max(self.lo[i] - q[i]).max(q[i] - self.hi[i])
             })
         };
+        let framing_out = outside(solved);
+        if in_shot {
+            if st.outside_entry.is_none() {
+                // A shot that continues the one before starts with that one's framing, out
+                // where it left it: that shot's error, told there.
+                let left_m = match self.last_outside {
+                    Some((shot, out)) if shot + 1 == s.shot => out,
+                    _ => 0.0,
+                };
+                st.outside_entry = Some(left_m);
+                st.coming_in = left_m > OUTSIDE_TOLD_M;
+            }
+            st.coming_in &= framing_out > OUTSIDE_TOLD_M;
+            self.last_outside = Some((s.shot, framing_out));
+        }
+        // On its way back in, only what goes further out than it started is this shot's.
+        let inherited =
+            st.coming_in && framing_out <= st.outside_entry.unwrap_or(0.0) + OUTSIDE_TOLD_M;
         for (q, framing) in [(p, false), (*solved, true)] {
+            if framing && inherited {
+                continue;
+            }
             let out = outside(&q);
             if out > st.outside.value {
                 st.outside = Peak { value: out, t_s: t };
@@ -464,7 +493,7 @@ impl Monitor {
             // Held at the margin: a warning (the shot is flown, a little off its framing) when
             // the screen shows it (`IN_MARGIN_TOLD`), and the framing does not leave the stage
             // (an error of its own).
-            if st.in_margin.value > IN_MARGIN_TOLD && st.outside.value <= 0.02 {
+            if st.in_margin.value > IN_MARGIN_TOLD && st.outside.value <= OUTSIDE_TOLD_M {
                 let (p, by, when) = (st.in_margin_at, st.in_margin_m, at(st.in_margin.t_s));
                 let margin = self.margin_m;
                 let share = match st.in_margin_actor {
@@ -495,7 +524,7 @@ impl Monitor {
                     )),
                 );
             }
-            if st.outside.value > 0.02 {
+            if st.outside.value > OUTSIDE_TOLD_M {
                 let (p, by, when) = (st.outside_at, st.outside.value, at(st.outside.t_s));
                 let at_p = format!("at ({:.2}, {:.2}, {:.2}) ({when})", p[0], p[1], p[2]);
                 let message = if st.outside_framing {
@@ -523,6 +552,10 @@ impl Monitor {
 /// two-shot is held 0.07–0.08 m off at 1.3 m (6 %), its reverse over-the-shoulder 0.10 m off
 /// at 2.3 m (4 %): not told; an MS held 0.10 m off at 0.8 m (12 %) is.
 const IN_MARGIN_TOLD: f64 = 0.08;
+
+/// How far outside the stage the camera or its framing may go before `compile::leaves_stage`
+/// is told.
+const OUTSIDE_TOLD_M: f64 = 0.02;
 
 /// Round up to a tenth (durations and times suggested to the user).
 pub(crate) fn round_up_1(x: f64) -> f64 {
