@@ -169,10 +169,7 @@ impl Monitor {
             if st.lag_entry.is_none() {
                 // What the shot just before left: the lag of its last sample. (A target that
                 // steps at the boundary is this shot's lag, not an inherited one.)
-                let left_m = match self.last_lag {
-                    Some((shot, lag)) if shot + 1 == s.shot => lag,
-                    _ => 0.0,
-                };
+                let left_m = left_by(self.last_lag, s.shot);
                 st.lag_entry = Some(left_m);
                 st.catching_up = left_m > TRACKING_TOLERANCE_M;
             }
@@ -233,10 +230,7 @@ impl Monitor {
             if st.outside_entry.is_none() {
                 // A shot that continues the one before starts with that one's framing, out
                 // where it left it: that shot's error, told there.
-                let left_m = match self.last_outside {
-                    Some((shot, out)) if shot + 1 == s.shot => out,
-                    _ => 0.0,
-                };
+                let left_m = left_by(self.last_outside, s.shot);
                 st.outside_entry = Some(left_m);
                 st.coming_in = left_m > OUTSIDE_TOLD_M;
             }
@@ -552,6 +546,15 @@ impl Monitor {
 /// two-shot is held 0.07–0.08 m off at 1.3 m (6 %), its reverse over-the-shoulder 0.10 m off
 /// at 2.3 m (4 %): not told; an MS held 0.10 m off at 0.8 m (12 %) is.
 const IN_MARGIN_TOLD: f64 = 0.08;
+
+/// What the last in-shot sample (its shot, and a figure) left shot `shot`: the figure when
+/// that was the shot just before (a repositioning flight in between clears it), else 0.
+fn left_by(last: Option<(usize, f64)>, shot: usize) -> f64 {
+    match last {
+        Some((before, figure)) if before + 1 == shot => figure,
+        _ => 0.0,
+    }
+}
 
 /// How far outside the stage the camera or its framing may go before `compile::leaves_stage`
 /// is told.
