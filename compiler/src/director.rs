@@ -140,6 +140,8 @@ pub struct Director {
     arriving: Vec<ActorPose>,
     /// Scratch of a repositioning flight's plan: the actors it keeps clear of.
     keep_out: Vec<ActorPose>,
+    /// The velocity of the framing a repositioning flight arrives on, as of this tick.
+    merge_v: Vec3,
     axes: Vec<(Vec3, f64)>,
     /// Per plan, the actors each end's composition names (by index), for the solve memo.
     framed: Vec<[Vec<usize>; 2]>,
@@ -289,6 +291,7 @@ impl Director {
             blocking: Blocking::new(scene),
             arriving: Vec::with_capacity(scene.actors.len()),
             keep_out: Vec::with_capacity(2 * scene.actors.len()),
+            merge_v: Vec3::zeros(),
             axes: Vec::with_capacity(scene.actors.len()),
             held,
             framed,
@@ -1139,13 +1142,24 @@ impl Director {
                 self.arriving_into(actors, t_s, arrive_s, &mut arriving);
                 let goal = self.shot_target(to, 0.0, &arriving, false);
                 let on_route = route.at(&from, &goal, s);
-                let p = if self.arriving_into(actors, t_s, arrive_s + EPS_S, &mut arriving) {
-                    let after = self.solve_live(to, |d| d.shot_target(to, 0.0, &arriving, false));
-                    let v = (after - goal) / EPS_S;
+                // The framing's velocity on arrival: solved with the tick's target, reused by
+                // its look-ahead (whose change of it over 1 ms the feed-forward does not need).
+                if keep {
+                    let moving = self.arriving_into(actors, t_s, arrive_s + EPS_S, &mut arriving);
+                    self.merge_v = if moving {
+                        let after =
+                            self.solve_live(to, |d| d.shot_target(to, 0.0, &arriving, false));
+                        (after - goal) / EPS_S
+                    } else {
+                        Vec3::zeros()
+                    };
+                }
+                let v = self.merge_v;
+                let p = if v == Vec3::zeros() {
                     on_route
-                        + v * route::merge_m_per_mps(u, arrive_s - start_s, v.norm(), &self.limits)
                 } else {
-                    on_route
+                    let duration_s = arrive_s - start_s;
+                    on_route + v * route::merge_m_per_mps(u, duration_s, v.norm(), &self.limits)
                 };
                 self.arriving = arriving;
                 p
