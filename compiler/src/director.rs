@@ -128,6 +128,12 @@ pub struct Director {
     /// By timeline index: `compile::too_close` told, and the closest that framing came
     /// (told at the end).
     closest: Vec<Option<Closest>>,
+    /// By timeline index, once the shot has been checked: how near an actor its framing
+    /// starts where it continues (`then`) a framing already told too close, while it is still
+    /// on its way out from there; infinite otherwise.
+    clearance_entry: Vec<Option<f64>>,
+    /// By timeline index: the shot started inside the distance where the one before left it.
+    inherits_close: Vec<bool>,
     /// By timeline index: `compile::beyond_reach` told.
     beyond_reach: Vec<bool>,
     /// Per-tick scratch: the actors extrapolated, and their body axes.
@@ -286,6 +292,8 @@ impl Director {
             monitor: Monitor::new(profile, scene, script.timeline.len()),
             warned: vec![false; script.timeline.len()],
             closest: vec![None; script.timeline.len()],
+            clearance_entry: vec![None; script.timeline.len()],
+            inherits_close: vec![false; script.timeline.len()],
             beyond_reach: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
             blocking: Blocking::new(scene),
@@ -1353,9 +1361,31 @@ impl Director {
             }
             return;
         }
+        let told_m = self.safety_m - 0.01;
+        let nearest_m = actors
+            .iter()
+            .map(|a| framing::body_axis_distance_m(p, a))
+            .fold(f64::INFINITY, f64::min);
+        // A shot that continues a framing told too close starts there: that shot's error.
+        // While it comes out from there it is told only for coming nearer than it started.
+        let continues_told = index > 0
+            && (self.closest[index - 1].is_some() || self.inherits_close[index - 1])
+            && matches!(self.shots[index].transition, Transition::Move { .. })
+            && !self.shots[index].pinned;
+        if self.clearance_entry[index].is_none() {
+            let inherited = continues_told && nearest_m < told_m;
+            self.inherits_close[index] = inherited;
+            self.clearance_entry[index] = Some(if inherited { nearest_m } else { f64::INFINITY });
+        }
+        // Out of the distance: from then on, the shot's own.
+        let entry = match self.clearance_entry[index] {
+            Some(entry) if nearest_m < told_m => entry,
+            _ => f64::INFINITY,
+        };
+        self.clearance_entry[index] = Some(entry);
         for (i, a) in actors.iter().enumerate() {
             let d = framing::body_axis_distance_m(p, a);
-            if d < self.safety_m - 0.01 {
+            if d < told_m && d < entry - 0.01 {
                 self.closest[index] = Some(Closest {
                     diagnostic: self.diagnostics.len(),
                     actor: i,

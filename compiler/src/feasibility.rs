@@ -71,6 +71,10 @@ struct ShotStats {
     /// (`then`), and whether this shot's framing is still on its way back in from there.
     outside_entry: Option<f64>,
     coming_in: bool,
+    /// How far inside an actor's distance the shot before left the camera, where this shot
+    /// continues it, and whether this shot is still on its way out from there.
+    intrusion_entry: Option<f64>,
+    coming_out: bool,
     /// How deep the framing (the target as solved) puts the camera into the stage's margin
     /// during the shot, inside the stage, as a fraction of its distance to the nearest actor
     /// (what the screen shows of the shift: a size that much larger, or an angle of that many
@@ -111,6 +115,8 @@ pub struct Monitor {
     last_lag: Option<(usize, f64)>,
     /// The last in-shot sample's shot and how far outside the stage its framing was.
     last_outside: Option<(usize, f64)>,
+    /// The last in-shot sample's shot and how far inside an actor's distance the camera was.
+    last_intrusion: Option<(usize, f64)>,
 }
 
 impl Monitor {
@@ -134,6 +140,7 @@ impl Monitor {
             names: scene.actors.iter().map(|a| a.name.clone()).collect(),
             last_lag: None,
             last_outside: None,
+            last_intrusion: None,
         }
     }
 
@@ -194,6 +201,7 @@ impl Monitor {
             // not where the shot before left the drone.
             self.last_lag = None;
             self.last_outside = None;
+            self.last_intrusion = None;
         }
         st.speed.see(crate::norm_xy(v.x, v.y), t);
         let x = self.tau * a.x + v.x;
@@ -201,12 +209,30 @@ impl Monitor {
         st.tilt.see(crate::norm_xy(x, y) / self.gain, t);
         st.vz.see(v.z.abs(), t);
         st.yaw_rate.see(s.heading_rate_radps.abs(), t);
-        for (i, actor) in actors.iter().enumerate() {
+        let intrusion_of = |actor: &ActorPose| {
             if p.z > actor.position_m[2] + actor.height_m + self.safety_m {
+                return f64::NEG_INFINITY;
+            }
+            self.safety_m - crate::norm_xy(p.x - actor.position_m[0], p.y - actor.position_m[1])
+        };
+        if in_shot {
+            // As for the stage: a shot that continues the one before starts where that one
+            // left the camera, inside an actor's distance (that shot's error, told there).
+            let deepest = actors.iter().map(intrusion_of).fold(0.0, f64::max);
+            if st.intrusion_entry.is_none() {
+                let left_m = left_by(self.last_intrusion, s.shot);
+                st.intrusion_entry = Some(left_m);
+                st.coming_out = left_m > INTRUSION_TOLD_M;
+            }
+            st.coming_out &= deepest > INTRUSION_TOLD_M;
+            self.last_intrusion = Some((s.shot, deepest));
+        }
+        let entry_m = st.intrusion_entry.unwrap_or(0.0);
+        for (i, actor) in actors.iter().enumerate() {
+            let intrusion = intrusion_of(actor);
+            if in_shot && st.coming_out && intrusion <= entry_m + INTRUSION_TOLD_M {
                 continue;
             }
-            let d = crate::norm_xy(p.x - actor.position_m[0], p.y - actor.position_m[1]);
-            let intrusion = self.safety_m - d;
             let (peak, whose) = if in_shot {
                 (&mut st.intrusion, &mut st.intruded)
             } else {
@@ -463,7 +489,7 @@ impl Monitor {
                 } else {
                     (st.intrusion_on_the_way, st.intruded_on_the_way)
                 };
-            if intrusion.value > 0.02 {
+            if intrusion.value > INTRUSION_TOLD_M {
                 let who = intruded
                     .and_then(|i| self.names.get(i))
                     .map(String::as_str)
@@ -555,6 +581,10 @@ fn left_by(last: Option<(usize, f64)>, shot: usize) -> f64 {
         _ => 0.0,
     }
 }
+
+/// How far inside an actor's distance the camera may come before `compile::too_close` is
+/// told.
+const INTRUSION_TOLD_M: f64 = 0.02;
 
 /// How far outside the stage the camera or its framing may go before `compile::leaves_stage`
 /// is told.
