@@ -51,11 +51,10 @@ struct ShotStats {
     /// its framing (a `then` shot starts where the one before left it, that one's error) owns
     /// its lag once it has caught up within [`TRACKING_TOLERANCE_M`]…
     lag: Peak,
-    /// …and before that, how much further behind than the shot before left it it falls;
-    /// that lag (`None` before the shot's first sample), and whether it is still catching up.
+    /// …and before that, how much further behind than the shot before left it it falls,
+    /// and that lag.
     lag_further: Peak,
-    lag_entry: Option<f64>,
-    catching_up: bool,
+    lag_carried: Carried,
     /// Deepest intrusion into an actor's safety distance during the shot, and whose…
     intrusion: Peak,
     intruded: Option<usize>,
@@ -67,14 +66,10 @@ struct ShotStats {
     /// The deepest point outside was the framing's (the target as solved), which the
     /// director does not follow out of the stage.
     outside_framing: bool,
-    /// How far outside the shot before left the framing, where this shot continues it
-    /// (`then`), and whether this shot's framing is still on its way back in from there.
-    outside_entry: Option<f64>,
-    coming_in: bool,
-    /// How far inside an actor's distance the shot before left the camera, where this shot
-    /// continues it, and whether this shot is still on its way out from there.
-    intrusion_entry: Option<f64>,
-    coming_out: bool,
+    /// How far outside the shot before left the framing, where this shot continues it.
+    outside_carried: Carried,
+    /// How far inside an actor's distance the shot before left the camera.
+    intrusion_carried: Carried,
     /// How deep the framing (the target as solved) puts the camera into the stage's margin
     /// during the shot, inside the stage, as a fraction of its distance to the nearest actor
     /// (what the screen shows of the shift: a size that much larger, or an angle of that many
@@ -173,17 +168,13 @@ impl Monitor {
             st.demand_speed.see(crate::norm_xy(goal.v.x, goal.v.y), t);
             st.demand_accel.see(crate::norm_xy(goal.a.x, goal.a.y), t);
             let lag_m = (goal.p - p).norm();
-            if st.lag_entry.is_none() {
-                // What the shot just before left: the lag of its last sample. (A target that
-                // steps at the boundary is this shot's lag, not an inherited one.)
-                let left_m = left_by(self.last_lag, s.shot);
-                st.lag_entry = Some(left_m);
-                st.catching_up = left_m > TRACKING_TOLERANCE_M;
-            }
+            // What the shot just before left: the lag of its last sample. (A target that
+            // steps at the boundary is this shot's lag, not an inherited one.)
+            let left_m = left_by(self.last_lag, s.shot);
+            st.lag_carried.see(left_m, lag_m, TRACKING_TOLERANCE_M);
             self.last_lag = Some((s.shot, lag_m));
-            st.catching_up &= lag_m > TRACKING_TOLERANCE_M;
-            if st.catching_up {
-                st.lag_further.see(lag_m - st.lag_entry.unwrap_or(0.0), t);
+            if st.lag_carried.returning {
+                st.lag_further.see(lag_m - st.lag_carried.entry(), t);
             } else {
                 st.lag.see(lag_m, t);
             }
@@ -219,18 +210,14 @@ impl Monitor {
             // As for the stage: a shot that continues the one before starts where that one
             // left the camera, inside an actor's distance (that shot's error, told there).
             let deepest = actors.iter().map(intrusion_of).fold(0.0, f64::max);
-            if st.intrusion_entry.is_none() {
-                let left_m = left_by(self.last_intrusion, s.shot);
-                st.intrusion_entry = Some(left_m);
-                st.coming_out = left_m > INTRUSION_TOLD_M;
-            }
-            st.coming_out &= deepest > INTRUSION_TOLD_M;
+            let left_m = left_by(self.last_intrusion, s.shot);
+            st.intrusion_carried.see(left_m, deepest, INTRUSION_TOLD_M);
             self.last_intrusion = Some((s.shot, deepest));
         }
-        let entry_m = st.intrusion_entry.unwrap_or(0.0);
+        let carried = st.intrusion_carried;
         for (i, actor) in actors.iter().enumerate() {
             let intrusion = intrusion_of(actor);
-            if in_shot && st.coming_out && intrusion <= entry_m + INTRUSION_TOLD_M {
+            if in_shot && carried.holds(intrusion, INTRUSION_TOLD_M) {
                 continue;
             }
             let (peak, whose) = if in_shot {
@@ -253,19 +240,13 @@ impl Monitor {
         };
         let framing_out = outside(solved);
         if in_shot {
-            if st.outside_entry.is_none() {
-                // A shot that continues the one before starts with that one's framing, out
-                // where it left it: that shot's error, told there.
-                let left_m = left_by(self.last_outside, s.shot);
-                st.outside_entry = Some(left_m);
-                st.coming_in = left_m > OUTSIDE_TOLD_M;
-            }
-            st.coming_in &= framing_out > OUTSIDE_TOLD_M;
+            // A shot that continues the one before starts with that one's framing, out where
+            // it left it: that shot's error, told there.
+            let left_m = left_by(self.last_outside, s.shot);
+            st.outside_carried.see(left_m, framing_out, OUTSIDE_TOLD_M);
             self.last_outside = Some((s.shot, framing_out));
         }
-        // On its way back in, only what goes further out than it started is this shot's.
-        let inherited =
-            st.coming_in && framing_out <= st.outside_entry.unwrap_or(0.0) + OUTSIDE_TOLD_M;
+        let inherited = st.outside_carried.holds(framing_out, OUTSIDE_TOLD_M);
         for (q, framing) in [(p, false), (*solved, true)] {
             if framing && inherited {
                 continue;
@@ -415,7 +396,7 @@ impl Monitor {
             // is told only for what it adds: the lag it starts with is not its doing, and its
             // fix ("make it longer") did not fix it. (Found compiling random scripts: 79 of
             // 384 lag errors over 1,500 scripts were such a shot, starting up to 4.3 m behind.)
-            let entry_m = st.lag_entry.unwrap_or(0.0);
+            let entry_m = st.lag_carried.entry();
             let own = st.lag.value > TRACKING_TOLERANCE_M;
             let further = !own && st.lag_further.value > TRACKING_TOLERANCE_M;
             if !demand_reported && !is_held_off(i) && (own || further) {
@@ -572,6 +553,40 @@ impl Monitor {
 /// two-shot is held 0.07–0.08 m off at 1.3 m (6 %), its reverse over-the-shoulder 0.10 m off
 /// at 2.3 m (4 %): not told; an MS held 0.10 m off at 0.8 m (12 %) is.
 const IN_MARGIN_TOLD: f64 = 0.08;
+
+/// What a shot carries over from the shot before, which it continues (`then`): a lag behind
+/// the target, a framing outside the stage, a camera inside an actor's distance. That is the
+/// shot before's error, told there; the shot owns only what goes beyond it, or what comes
+/// back after it has got clear.
+#[derive(Clone, Copy, Debug, Default)]
+struct Carried {
+    /// What the shot before left (`None` before this shot's first sample).
+    entry: Option<f64>,
+    /// Still over the figure told since the shot's first sample: on its way back from it.
+    returning: bool,
+}
+
+impl Carried {
+    /// One in-shot sample: `left` what the sample before left this shot ([`left_by`]), `now`
+    /// this sample's figure, `told` the figure from which it is told.
+    fn see(&mut self, left: f64, now: f64, told: f64) {
+        if self.entry.is_none() {
+            self.entry = Some(left);
+            self.returning = left > told;
+        }
+        self.returning &= now > told;
+    }
+
+    fn entry(&self) -> f64 {
+        self.entry.unwrap_or(0.0)
+    }
+
+    /// `now` is still what the shot before left: on the way back, and no further out than
+    /// it started.
+    fn holds(&self, now: f64, told: f64) -> bool {
+        self.returning && now <= self.entry() + told
+    }
+}
 
 /// What the last in-shot sample (its shot, and a figure) left shot `shot`: the figure when
 /// that was the shot just before (a repositioning flight in between clears it), else 0.
