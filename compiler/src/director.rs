@@ -1383,6 +1383,9 @@ impl Director {
             _ => f64::INFINITY,
         };
         self.clearance_entry[index] = Some(entry);
+        if nearest_m >= told_m {
+            return;
+        }
         for (i, a) in actors.iter().enumerate() {
             let d = framing::body_axis_distance_m(p, a);
             if d < told_m && d < entry - 0.01 {

@@ -215,7 +215,12 @@ impl Monitor {
             self.last_intrusion = Some((s.shot, deepest));
         }
         let carried = st.intrusion_carried;
-        for (i, actor) in actors.iter().enumerate() {
+        // Clear of every actor (the usual sample): no peak to raise.
+        let clear = in_shot
+            && self
+                .last_intrusion
+                .is_some_and(|(_, deepest)| deepest <= 0.0);
+        for (i, actor) in actors.iter().enumerate().filter(|_| !clear) {
             let intrusion = intrusion_of(actor);
             if in_shot && carried.holds(intrusion, INTRUSION_TOLD_M) {
                 continue;

@@ -110,10 +110,11 @@ impl Route {
         t0: f64,
         limits: &SteerLimits,
     ) -> f64 {
+        const N: usize = 64;
         let speed = arrive_v.norm();
         let mut t = t0;
         for _ in 0..4 {
-            let n = 64;
+            let n = N as i64;
             let h = t / n as f64;
             // Before the start at rest; after the end moving on at `arrive_v`.
             let at = |k: i64| {
@@ -125,9 +126,14 @@ impl Route {
                     p
                 }
             };
+            // Each sample once (k = −1 ..= n + 1), on the stack.
+            let mut points = [Vec3::zeros(); N + 3];
+            for (i, point) in points.iter_mut().enumerate() {
+                *point = at(i as i64 - 1);
+            }
             let (mut v_max, mut a_max, mut vz_max): (f64, f64, f64) = (0.0, 0.0, 0.0);
-            for k in 0..=n {
-                let (p0, p1, p2) = (at(k - 1), at(k), at(k + 1));
+            for w in points.windows(3) {
+                let (p0, p1, p2) = (w[0], w[1], w[2]);
                 let v = (p2 - p0) / (2.0 * h);
                 let acc = (p2 - 2.0 * p1 + p0) / (h * h);
                 v_max = v_max.max(crate::norm_xy(v.x, v.y));
