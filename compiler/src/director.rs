@@ -26,13 +26,17 @@ use dronecine_grammar::{Code, Diagnostic, Span};
 
 use crate::blocking::{min_jerk, Blocking};
 use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
-use crate::feasibility::{round_up_1, Monitor};
+use crate::feasibility::{round_up_1, Carried, Monitor};
 use crate::framing::{self, FramingError};
 use crate::paths::PathPlan;
 use crate::profile::{Gimbal, Profile};
 use crate::reference::{ActorPose, Sample};
 use crate::route::{self, Keepout, Route};
 use crate::steering::{self, HeadingState, Kinematics, SteerGains, SteerLimits};
+
+/// How far inside the profile's actor distance a framing's camera may be before
+/// `compile::too_close` is told.
+const TOO_CLOSE_TOLD_M: f64 = 0.01;
 
 /// Time a repositioning flight leaves for the camera to settle on the first framing.
 const SETTLE_S: f64 = 0.5;
@@ -128,12 +132,10 @@ pub struct Director {
     /// By timeline index: `compile::too_close` told, and the closest that framing came
     /// (told at the end).
     closest: Vec<Option<Closest>>,
-    /// By timeline index, once the shot has been checked: how near an actor its framing
-    /// starts where it continues (`then`) a framing already told too close, while it is still
-    /// on its way out from there; infinite otherwise.
-    clearance_entry: Vec<Option<f64>>,
-    /// By timeline index: the shot started inside the distance where the one before left it.
-    inherits_close: Vec<bool>,
+    /// By timeline index: how far inside an actor's distance the shot's framing starts where
+    /// it continues (`then`) a framing already told too close, as the monitor carries a lag
+    /// over ([`Carried`]).
+    clearance: Vec<Carried>,
     /// By timeline index: `compile::beyond_reach` told.
     beyond_reach: Vec<bool>,
     /// Per-tick scratch: the actors extrapolated, and their body axes.
@@ -292,8 +294,7 @@ impl Director {
             monitor: Monitor::new(profile, scene, script.timeline.len()),
             warned: vec![false; script.timeline.len()],
             closest: vec![None; script.timeline.len()],
-            clearance_entry: vec![None; script.timeline.len()],
-            inherits_close: vec![false; script.timeline.len()],
+            clearance: vec![Carried::default(); script.timeline.len()],
             beyond_reach: vec![false; script.timeline.len()],
             ahead: Vec::with_capacity(scene.actors.len()),
             blocking: Blocking::new(scene),
@@ -967,13 +968,8 @@ impl Director {
         let (goal_heading, _) = self.look_for(to, 0.0, &arriving, &goal, false);
         let pivot = self.pivot(to, &arriving);
         // How the framing moves on arrival (the flight arrives moving with it).
-        let moving = self.arriving_into(actors, actors_s, at_s + EPS_S, &mut arriving);
-        let goal_v = if moving {
-            let after = self.solve_live(to, |d| d.shot_target(to, 0.0, &arriving, false));
-            (after - goal) / EPS_S
-        } else {
-            Vec3::zeros()
-        };
+        let (moving, goal_v) =
+            self.arrival_velocity(to, actors, actors_s, at_s, &goal, &mut arriving);
         // The route keeps clear of the actors where they stand and where they will be.
         let mut keep_out = std::mem::take(&mut self.keep_out);
         keep_out.clear();
@@ -1077,6 +1073,25 @@ impl Director {
         moving
     }
 
+    /// How shot `to`'s first framing moves at `at_s`, where it is `goal` (a forward difference
+    /// over 1 ms, the actors from `actors` at `actors_s` as [`Director::arriving_into`] has
+    /// them, written into `scratch`), and whether any actor moves between the two times.
+    fn arrival_velocity(
+        &mut self,
+        to: usize,
+        actors: &[ActorPose],
+        actors_s: f64,
+        at_s: f64,
+        goal: &Vec3,
+        scratch: &mut Vec<ActorPose>,
+    ) -> (bool, Vec3) {
+        if !self.arriving_into(actors, actors_s, at_s + EPS_S, scratch) {
+            return (false, Vec3::zeros());
+        }
+        let after = self.solve_live(to, |d| d.shot_target(to, 0.0, scratch, false));
+        (true, (after - goal) / EPS_S)
+    }
+
     /// `solve` (a solve of shot `to`'s first framing against the actors as they are now,
     /// during a repositioning flight), leaving the held two-actor solve as it was: the flight
     /// holds the one of its goal, which the shot starts from.
@@ -1153,14 +1168,8 @@ impl Director {
                 // The framing's velocity on arrival: solved with the tick's target, reused by
                 // its look-ahead (whose change of it over 1 ms the feed-forward does not need).
                 if keep {
-                    let moving = self.arriving_into(actors, t_s, arrive_s + EPS_S, &mut arriving);
-                    self.merge_v = if moving {
-                        let after =
-                            self.solve_live(to, |d| d.shot_target(to, 0.0, &arriving, false));
-                        (after - goal) / EPS_S
-                    } else {
-                        Vec3::zeros()
-                    };
+                    (_, self.merge_v) =
+                        self.arrival_velocity(to, actors, t_s, arrive_s, &goal, &mut arriving);
                 }
                 let v = self.merge_v;
                 let p = if v == Vec3::zeros() {
@@ -1361,7 +1370,6 @@ impl Director {
             }
             return;
         }
-        let told_m = self.safety_m - 0.01;
         let nearest_m = actors
             .iter()
             .map(|a| framing::body_axis_distance_m(p, a))
@@ -1369,26 +1377,21 @@ impl Director {
         // A shot that continues a framing told too close starts there: that shot's error.
         // While it comes out from there it is told only for coming nearer than it started.
         let continues_told = index > 0
-            && (self.closest[index - 1].is_some() || self.inherits_close[index - 1])
+            && (self.closest[index - 1].is_some()
+                || self.clearance[index - 1].entry() > TOO_CLOSE_TOLD_M)
             && matches!(self.shots[index].transition, Transition::Move { .. })
             && !self.shots[index].pinned;
-        if self.clearance_entry[index].is_none() {
-            let inherited = continues_told && nearest_m < told_m;
-            self.inherits_close[index] = inherited;
-            self.clearance_entry[index] = Some(if inherited { nearest_m } else { f64::INFINITY });
-        }
-        // Out of the distance: from then on, the shot's own.
-        let entry = match self.clearance_entry[index] {
-            Some(entry) if nearest_m < told_m => entry,
-            _ => f64::INFINITY,
-        };
-        self.clearance_entry[index] = Some(entry);
-        if nearest_m >= told_m {
+        let deepest_m = self.safety_m - nearest_m;
+        let left_m = if continues_told { deepest_m } else { 0.0 };
+        self.clearance[index].see(left_m, deepest_m, TOO_CLOSE_TOLD_M);
+        if deepest_m <= TOO_CLOSE_TOLD_M {
             return;
         }
+        let carried = self.clearance[index];
         for (i, a) in actors.iter().enumerate() {
             let d = framing::body_axis_distance_m(p, a);
-            if d < told_m && d < entry - 0.01 {
+            let intrusion_m = self.safety_m - d;
+            if intrusion_m > TOO_CLOSE_TOLD_M && !carried.holds(intrusion_m, TOO_CLOSE_TOLD_M) {
                 self.closest[index] = Some(Closest {
                     diagnostic: self.diagnostics.len(),
                     actor: i,
@@ -1729,11 +1732,6 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
     .with_help(help)
 }
 
-/// A repositioning flight in words, for its diagnostics: the length of its route and, when the
-/// camera turns visibly or the turn sets the flight's time, the turn ("0.4 m and a 165°
-/// turn"): a short flight that needs seconds is a turn at the yaw-rate limit, and the
-/// distance alone does not say so. Formatted only when a diagnostic is written (a flight's
-/// loop allocates nothing for a repositioning it does not tell).
 /// A planned repositioning flight ([`Director::plan_reposition`]).
 #[derive(Clone)]
 struct RepositionFlight {
@@ -1747,6 +1745,11 @@ struct RepositionFlight {
     flown: Flown,
 }
 
+/// A repositioning flight in words, for its diagnostics: the length of its route and, when the
+/// camera turns visibly or the turn sets the flight's time, the turn ("0.4 m and a 165°
+/// turn"): a short flight that needs seconds is a turn at the yaw-rate limit, and the
+/// distance alone does not say so. Formatted only when a diagnostic is written (a flight's
+/// loop allocates nothing for a repositioning it does not tell).
 #[derive(Clone)]
 struct Flown {
     path_m: f64,

@@ -206,20 +206,17 @@ impl Monitor {
             }
             self.safety_m - crate::norm_xy(p.x - actor.position_m[0], p.y - actor.position_m[1])
         };
-        if in_shot {
+        let deepest = in_shot.then(|| actors.iter().map(intrusion_of).fold(0.0, f64::max));
+        if let Some(deepest) = deepest {
             // As for the stage: a shot that continues the one before starts where that one
             // left the camera, inside an actor's distance (that shot's error, told there).
-            let deepest = actors.iter().map(intrusion_of).fold(0.0, f64::max);
             let left_m = left_by(self.last_intrusion, s.shot);
             st.intrusion_carried.see(left_m, deepest, INTRUSION_TOLD_M);
             self.last_intrusion = Some((s.shot, deepest));
         }
         let carried = st.intrusion_carried;
         // Clear of every actor (the usual sample): no peak to raise.
-        let clear = in_shot
-            && self
-                .last_intrusion
-                .is_some_and(|(_, deepest)| deepest <= 0.0);
+        let clear = deepest.is_some_and(|d| d <= 0.0);
         for (i, actor) in actors.iter().enumerate().filter(|_| !clear) {
             let intrusion = intrusion_of(actor);
             if in_shot && carried.holds(intrusion, INTRUSION_TOLD_M) {
@@ -560,11 +557,11 @@ impl Monitor {
 const IN_MARGIN_TOLD: f64 = 0.08;
 
 /// What a shot carries over from the shot before, which it continues (`then`): a lag behind
-/// the target, a framing outside the stage, a camera inside an actor's distance. That is the
-/// shot before's error, told there; the shot owns only what goes beyond it, or what comes
-/// back after it has got clear.
+/// the target, a framing outside the stage, a camera inside an actor's distance (here and in
+/// the director's own check of its framings). That is the shot before's error, told there;
+/// the shot owns only what goes beyond it, or what comes back after it has got clear.
 #[derive(Clone, Copy, Debug, Default)]
-struct Carried {
+pub(crate) struct Carried {
     /// What the shot before left (`None` before this shot's first sample).
     entry: Option<f64>,
     /// Still over the figure told since the shot's first sample: on its way back from it.
@@ -574,7 +571,7 @@ struct Carried {
 impl Carried {
     /// One in-shot sample: `left` what the sample before left this shot ([`left_by`]), `now`
     /// this sample's figure, `told` the figure from which it is told.
-    fn see(&mut self, left: f64, now: f64, told: f64) {
+    pub(crate) fn see(&mut self, left: f64, now: f64, told: f64) {
         if self.entry.is_none() {
             self.entry = Some(left);
             self.returning = left > told;
@@ -582,13 +579,13 @@ impl Carried {
         self.returning &= now > told;
     }
 
-    fn entry(&self) -> f64 {
+    pub(crate) fn entry(&self) -> f64 {
         self.entry.unwrap_or(0.0)
     }
 
     /// `now` is still what the shot before left: on the way back, and no further out than
     /// it started.
-    fn holds(&self, now: f64, told: f64) -> bool {
+    pub(crate) fn holds(&self, now: f64, told: f64) -> bool {
         self.returning && now <= self.entry() + told
     }
 }
