@@ -423,9 +423,11 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
 /// What the director finds against the live actors during a flight is told as it arises, as
 /// events in the log (and on the terminal): each repositioning flight, and an error such as a
 /// framing that takes the camera too close to an actor. The first version kept such findings
-/// to itself and the flight said only "completed". On seed 4, `scene.psl`'s shot 2 (a framing
+/// to itself and the flight said only "completed". On seed 9, `scene.psl`'s shot 2 (a framing
 /// that follows Alice as she stops) takes the camera 0.49 m from Bob at a moment, where the
 /// drone keeps 0.50 m: told once, counted in the report, and counted again by the replay.
+/// (Seed 4 did the same until the repositioning routes kept clear of where walking actors
+/// pass; on it the drone now also reaches the pinned orbit late.)
 ///
 /// The scene's reverse over-the-shoulder shot (shot 5) used to be that finding on all seeds
 /// but a few: against live actors standing a few centimetres closer than blocked, its
@@ -441,7 +443,7 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         "shoot",
         "shots/scene.psl",
         "--seed",
-        "4",
+        "9",
         "--log",
         log_s,
         "--report",

@@ -353,6 +353,42 @@ mod tests {
         );
     }
 
+    /// A cut while an actor walks across the short way to the next framing: the flight
+    /// goes round where the actor will be as it passes (the long way, taking the time it
+    /// needs), and keeps the profile's distance from them throughout. Planned against where
+    /// they stood and where they would stop, it flew the short arc through their way, came
+    /// within 0.37 m of them (the profile keeps 0.50 m), and the script was refused.
+    #[test]
+    fn a_cut_keeps_clear_of_an_actor_who_walks_across_its_way() {
+        let s = script(
+            "stage 10m x 8m x 4m\ndrone ardrone2-outdoor\n\
+             actor A height 1.6m at (-1.31, 0.35) facing 90deg\n\
+             actor B height 1.91m at (-0.57, -1.02) facing 73deg\n\
+             at 17.6s A walks to (-3.22, -1.21) over 4s\n\
+             FS on A front for 16s\n\
+             cut to MLS on B left for 12s\n",
+        );
+        let profile = Profile::builtin("ardrone2-outdoor").unwrap();
+        let safety_m = profile.safety.actor_distance_m;
+        let mut closest_m = f64::INFINITY;
+        let c = compile(&s, &profile, &Options::default(), |x, actors| {
+            let [px, py, pz] = x.position_m;
+            for a in actors {
+                let [ax, ay, az] = a.position_m;
+                if pz <= az + a.height_m + safety_m {
+                    closest_m = closest_m.min(crate::norm_xy(px - ax, py - ay));
+                }
+            }
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        assert!(!c.has_errors(), "{:#?}", c.diagnostics);
+        let shot = c.timings.last().unwrap();
+        let (start_s, end_s) = shot.reposition.unwrap();
+        assert!(end_s - start_s > 8.0, "the long way: {start_s}..{end_s}");
+        assert!(closest_m >= safety_m - 0.01, "{closest_m} m from an actor");
+    }
+
     /// A film annotation and an empty script are refused, each for what it is.
     #[test]
     fn annotations_and_empty_scripts_are_refused_for_what_they_are() {

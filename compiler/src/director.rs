@@ -40,6 +40,9 @@ const TOO_CLOSE_TOLD_M: f64 = 0.01;
 
 /// Time a repositioning flight leaves for the camera to settle on the first framing.
 const SETTLE_S: f64 = 0.5;
+/// A repositioning route keeps clear of where walking actors are while it flies, at this
+/// many steps of its time.
+const PASSING_SAMPLES: usize = 16;
 
 /// Time step of the finite differences that give the target's velocity.
 const EPS_S: f64 = 1e-3;
@@ -146,8 +149,10 @@ pub struct Director {
     /// Per-tick scratch of a repositioning flight: the actors as they will stand when it
     /// arrives.
     arriving: Vec<ActorPose>,
-    /// Scratch of a repositioning flight's plan: the actors it keeps clear of.
+    /// Scratch of a repositioning flight's plan: the actors it keeps clear of, and where the
+    /// walking ones pass while it flies.
     keep_out: Vec<ActorPose>,
+    passing: Vec<(f64, ActorPose)>,
     /// The velocity of the framing a repositioning flight arrives on, as of this tick.
     merge_v: Vec3,
     axes: Vec<(Vec3, f64)>,
@@ -300,6 +305,7 @@ impl Director {
             blocking: Blocking::new(scene),
             arriving: Vec::with_capacity(scene.actors.len()),
             keep_out: Vec::with_capacity(2 * scene.actors.len()),
+            passing: Vec::with_capacity(PASSING_SAMPLES * scene.actors.len()),
             merge_v: Vec3::zeros(),
             axes: Vec::with_capacity(scene.actors.len()),
             held,
@@ -775,7 +781,7 @@ impl Director {
         let settled = |f: &RepositionFlight| (arrives(f.needed) - f.at_s).abs() < 0.002;
         // A flight planned for `at_s` that is there by then (it flies slower, or waits).
         let fits = |f: &RepositionFlight| arrives(f.needed) <= f.at_s + 0.002;
-        let mut flight = self.plan_reposition(to, actors_s, now_s, actors);
+        let mut flight = self.plan_reposition(to, now_s, actors_s, now_s, actors);
         // The arrival as first planned: to the framing as it is now.
         let first = flight.clone();
         // The earliest arrival found that fits, and the latest before it that does not.
@@ -802,10 +808,16 @@ impl Director {
                 // search waited for the actors to stand and put the scene's two-shot after
                 // Bob's walk up to 5 s later on set, past its pinned orbit.
                 let a0 = arrives(first.needed);
-                let plan = self.plan_reposition(to, actors_s, a0, actors);
+                let plan = self.plan_reposition(to, now_s, actors_s, a0, actors);
                 if plan.goal_speed_mps <= 0.8 * self.limits.speed_h_mps {
                     limit_s = a0 + 1.0;
-                    let needed = plan.needed.min(first.needed);
+                    // In the first plan's time; but a longer way round (an actor walks across
+                    // the first plan's route then) takes the time it needs.
+                    let needed = if plan.route == first.route {
+                        plan.needed.min(first.needed)
+                    } else {
+                        plan.needed
+                    };
                     on_time = Some(RepositionFlight { needed, ..plan });
                 }
             }
@@ -845,7 +857,7 @@ impl Director {
                 // is looked for.
                 searching = true;
                 after_s = end_s;
-                let there = self.plan_reposition(to, actors_s, end_s, actors);
+                let there = self.plan_reposition(to, now_s, actors_s, end_s, actors);
                 if fits(&there) {
                     flight = there;
                     continue;
@@ -854,7 +866,7 @@ impl Director {
             } else {
                 break;
             };
-            flight = self.plan_reposition(to, actors_s, at_s, actors);
+            flight = self.plan_reposition(to, now_s, actors_s, at_s, actors);
         }
         if !settled(&flight) || searching {
             if searching && fits(&flight) && best.as_ref().is_none_or(|b| flight.at_s < b.at_s) {
@@ -948,12 +960,14 @@ impl Director {
         };
     }
 
-    /// A repositioning flight from where the camera is now to shot `to`'s first
-    /// framing with the actors (`actors`, their poses at `actors_s`) where the blocking will
-    /// have taken them at `at_s` (when it arrives): its route, and how long it takes.
+    /// A repositioning flight setting off at `start_s` from where the camera is now to shot
+    /// `to`'s first framing with the actors (`actors`, their poses at `actors_s`) where the
+    /// blocking will have taken them at `at_s` (when it arrives): its route, and how long it
+    /// takes.
     fn plan_reposition(
         &mut self,
         to: usize,
+        start_s: f64,
         actors_s: f64,
         at_s: f64,
         actors: &[ActorPose],
@@ -970,12 +984,30 @@ impl Director {
         // How the framing moves on arrival (the flight arrives moving with it).
         let (moving, goal_v) =
             self.arrival_velocity(to, actors, actors_s, at_s, &goal, &mut arriving);
-        // The route keeps clear of the actors where they stand and where they will be.
+        // The route keeps clear of the actors where they stand, where they will be, and where
+        // they pass in between: a route clear of a walking actor's two ends could cross their
+        // way while they walked it.
         let mut keep_out = std::mem::take(&mut self.keep_out);
+        let mut passing = std::mem::take(&mut self.passing);
         keep_out.clear();
+        passing.clear();
         keep_out.extend_from_slice(actors);
         if moving {
             keep_out.extend_from_slice(&arriving);
+            // The flight's clock: it sets off at `start_s` and arrives at `at_s`.
+            let span_s = (at_s - start_s).max(1e-9);
+            for k in (1..PASSING_SAMPLES).filter(|_| at_s > actors_s) {
+                let t_s = actors_s + (at_s - actors_s) * k as f64 / PASSING_SAMPLES as f64;
+                self.arriving_into(actors, actors_s, t_s, &mut arriving);
+                let u = ((t_s - start_s) / span_s).clamp(0.0, 1.0);
+                passing.extend(
+                    arriving
+                        .iter()
+                        .zip(actors)
+                        .filter(|(then, now)| !same_pose(then, now))
+                        .map(|(then, _)| (u, *then)),
+                );
+            }
         }
         self.arriving = arriving;
         self.held[to][0] = held;
@@ -984,10 +1016,12 @@ impl Director {
             lo: self.stage_lo,
             hi: self.stage_hi,
             actors: &keep_out,
+            passing: &passing,
             safety_m: self.safety_m,
         };
         let route = route::choose(&from, &goal, pivot, &keep);
         self.keep_out = keep_out;
+        self.passing = passing;
         let path_len = route.length(&from, &goal);
         let dz = (goal.z - from.z).abs();
         let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();

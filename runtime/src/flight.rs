@@ -1228,6 +1228,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             lo,
             hi,
             actors: &self.actors.poses,
+            passing: &[],
             safety_m: self.setup.profile.safety.actor_distance_m,
         }
     }
