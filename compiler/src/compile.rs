@@ -353,6 +353,29 @@ mod tests {
         );
     }
 
+    /// A cut to an actor seen from behind as they turn round: the flight's plans do not
+    /// settle (the framing sweeps round with the turn), and it arrives at the first plan's
+    /// time, but no sooner than the drone can fly its way at its limits. Held to the first
+    /// plan's time (a 3.9 s flight; 4.8 s now), it fell 0.27 m behind the framing at the
+    /// shot's start and the script was refused.
+    #[test]
+    fn a_flight_that_does_not_settle_is_no_faster_than_the_drone() {
+        let (c, first, framing, _) = last_shot_start(
+            "stage 10m x 12m x 4m\ndrone ardrone2\n\
+             actor A height 1.56m at (-0.47, -2.03) facing 148deg\n\
+             actor B height 1.77m at (-0.28, 0.85) facing -134deg\n\
+             at 25.4s B turns to 138deg over 4s\n\
+             at 1.3s A turns to -140deg over 4s\n\
+             MS on A for 6s\n\
+             then hold to high angle MS on A and B over 10s\n\
+             then hold to MCU on A and B over 10s\n\
+             cut to FS on B back screen right for 8s\n",
+        );
+        assert!(!c.has_errors(), "{:#?}", c.diagnostics);
+        let off_m = (Vec3::from(first.position_m) - framing).norm();
+        assert!(off_m < 0.05, "{off_m} m off the framing at the start");
+    }
+
     /// A cut while an actor walks across the short way to the next framing: the flight
     /// goes round where the actor will be as it passes (the long way, taking the time it
     /// needs), and keeps the profile's distance from them throughout. Planned against where

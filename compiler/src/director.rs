@@ -755,8 +755,10 @@ impl Director {
     /// is searched among those tried, the ends of the actors' movements, and halfway between
     /// one that does not fit and one that does: at most a second past the first plan's
     /// arrival while the framing then moves slower than the drone can merge into it (else
-    /// the flight arrives then), without a bound where it sweeps by faster (an actor turning
-    /// round at the size's distance). A flight that arrives while the framing moves merges
+    /// the flight arrives then, as soon as the drone can fly that way at its full limits, or
+    /// as planned when that way is another: round an actor who walks across the first one),
+    /// without a bound where it sweeps by faster (an actor turning round at the size's
+    /// distance). A flight that arrives while the framing moves merges
     /// into it ([`route::merge_m_per_mps`]).
     ///
     /// Planned to the actors as they stood when it set off, a flight during which an actor
@@ -811,10 +813,12 @@ impl Director {
                 let plan = self.plan_reposition(to, now_s, actors_s, a0, actors);
                 if plan.goal_speed_mps <= 0.8 * self.limits.speed_h_mps {
                     limit_s = a0 + 1.0;
-                    // In the first plan's time; but a longer way round (an actor walks across
-                    // the first plan's route then) takes the time it needs.
-                    let needed = if plan.route == first.route {
-                        plan.needed.min(first.needed)
+                    // In the first plan's time, the goal where the framing will be then;
+                    // but another way (round an actor who walks across the first plan's way
+                    // then) takes the time it needs: flown in the first plan's time, a way
+                    // three times as long asked more speed than the drone has.
+                    let needed = if plan.way == first.way {
+                        plan.needed.min(first.needed).max(plan.needed_full)
                     } else {
                         plan.needed
                     };
@@ -1026,28 +1030,44 @@ impl Director {
         let dz = (goal.z - from.z).abs();
         let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();
         let speed = self.state.v.norm();
-        let (needed, turn_sets_time) = if path_len < 0.03 && dh < 0.05 && speed < 0.05 {
-            (0.0, false)
+        let (needed, needed_full, turn_sets_time) = if path_len < 0.03 && dh < 0.05 && speed < 0.05
+        {
+            (0.0, 0.0, false)
         } else {
-            // A min-jerk flight peaks at 1.875·L/T in speed and 5.77·L/T² in acceleration;
-            // keep both under 80% of the limits, plus the time to stop from the current speed
-            // and half a second to settle.
-            let m = 0.8;
-            let t_speed = 1.875 * path_len / (m * self.limits.speed_h_mps);
-            let t_accel = (5.77 * path_len / (m * self.limits.accel_h_mps2)).sqrt();
-            let t_vz = 1.875 * dz / (m * self.limits.speed_v_mps);
-            let t_yaw = 1.875 * dh / (m * self.limits.yaw_rate_radps);
-            let t_stop = speed / self.limits.accel_h_mps2;
-            let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(0.5);
-            // The flight may curve round the pivot: measure its peaks (centripetal
-            // acceleration included) and stretch it until they fit.
-            let t_fly = route.fit_duration_arriving(&from, &goal, &goal_v, t0, &self.limits);
-            (t_fly + t_stop + SETTLE_S, t_yaw > 0.5 && t_yaw >= t0)
+            // A min-jerk flight peaks at 1.875·L/T in speed and 5.77·L/T² in
+            // acceleration; keep both under the share `m` of the limits (80% as planned),
+            // plus the time to stop from the current speed and half a second to settle.
+            let l = &self.limits;
+            let t_stop = speed / l.accel_h_mps2;
+            let flight_s = |m: f64| {
+                let t_speed = 1.875 * path_len / (m * l.speed_h_mps);
+                let t_accel = (5.77 * path_len / (m * l.accel_h_mps2)).sqrt();
+                let t_vz = 1.875 * dz / (m * l.speed_v_mps);
+                let t_yaw = 1.875 * dh / (m * l.yaw_rate_radps);
+                let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(0.5);
+                // The flight may curve round the pivot: measure its peaks (centripetal
+                // acceleration included) and stretch it until they fit (to 80% of the
+                // limits it is given: these, scaled to make that the share `m`).
+                let k = m / 0.8;
+                let scaled = SteerLimits {
+                    speed_h_mps: l.speed_h_mps * k,
+                    speed_v_mps: l.speed_v_mps * k,
+                    accel_h_mps2: l.accel_h_mps2 * k,
+                    accel_v_mps2: l.accel_v_mps2 * k,
+                    ..*l
+                };
+                let t_fly = route.fit_duration_arriving(&from, &goal, &goal_v, t0, &scaled);
+                (t_fly + t_stop + SETTLE_S, t_yaw > 0.5 && t_yaw >= t0)
+            };
+            let (needed, turn_sets_time) = flight_s(0.8);
+            (needed, flight_s(1.0).0, turn_sets_time)
         };
         RepositionFlight {
             at_s,
             route,
+            way: Way::of(&route, pivot),
             needed,
+            needed_full,
             goal_speed_mps: goal_v.norm(),
             flown: Flown {
                 path_m: path_len,
@@ -1772,11 +1792,46 @@ struct RepositionFlight {
     /// When the flight was taken to arrive: the actors where the blocking puts them then.
     at_s: f64,
     route: Route,
+    way: Way,
     /// Its duration, settling included.
     needed: f64,
+    /// The same at the profile's full limits instead of 80% of them: the shortest it can
+    /// take.
+    needed_full: f64,
     /// How fast the framing moves when it arrives.
     goal_speed_mps: f64,
     flown: Flown,
+}
+
+/// Which way a repositioning flight goes: the way it goes unless something is in it (round
+/// the next shot's actors the short way, or straight when there are none to turn round), or
+/// another of the route's shapes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Way {
+    Usual,
+    Straight,
+    ShortArc,
+    LongArc,
+}
+
+impl Way {
+    fn of(route: &Route, pivot: Option<Vec3>) -> Way {
+        let usual = match pivot {
+            Some(pivot) => Route::Around {
+                pivot,
+                long_way: false,
+            },
+            None => Route::Straight,
+        };
+        match route {
+            r if *r == usual => Way::Usual,
+            Route::Straight => Way::Straight,
+            Route::Around {
+                long_way: false, ..
+            } => Way::ShortArc,
+            Route::Around { long_way: true, .. } => Way::LongArc,
+        }
+    }
 }
 
 /// A repositioning flight in words, for its diagnostics: the length of its route and, when the
