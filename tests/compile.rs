@@ -655,6 +655,47 @@ fn a_repositioning_flight_that_is_a_turn_says_so() {
     );
 }
 
+/// A cut pinned where the drone is late as planned (80 % of its limits) but in time at its
+/// full limits is flown in the time there is: on time, with no error, and the reference's
+/// turn faster than planned but within the profile's yaw rate. Pinned sooner than that, it
+/// is an error whose fix is the pin the full limits make.
+#[test]
+fn a_pinned_cut_the_drone_makes_at_its_full_limits_starts_on_time() {
+    let base = "stage 10m x 8m x 3m\ndrone ardrone2\n\
+                actor A height 1.80m at (-1.2, 0) facing 0deg\n\
+                actor B height 1.80m at (1.2, 0) facing 180deg\n\
+                MS on A front for 3s\n";
+    let yaw_max = ardrone().limits.yaw_rate_max_radps;
+    // A 180° turn: 5.2 s as planned, 4.2 s at the full limits; 4.5 s are left.
+    let (c, samples, _) = run(&script_of(&format!(
+        "{base}at 7.5s cut to MS on B front for 3s\n"
+    )));
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+    assert!((c.timings[1].start_s - 7.5).abs() < 1e-9, "{:?}", c.timings);
+    let fastest = samples
+        .iter()
+        .map(|s| s.heading_rate_radps.abs())
+        .fold(0.0, f64::max);
+    assert!(
+        fastest > 0.8 * yaw_max && fastest <= yaw_max + 1e-9,
+        "{fastest} rad/s against {yaw_max}"
+    );
+    // 3.5 s left: late even at the full limits, by 0.7 s.
+    let (c, _, _) = run(&script_of(&format!(
+        "{base}at 6.5s cut to MS on B front for 3s\n"
+    )));
+    let d = with_code(&c, Code::CutTooShort);
+    assert_eq!(d.len(), 1, "{:?}", c.diagnostics);
+    assert!(
+        d[0].message.contains("4.2 s at its full limits")
+            && d[0].help.as_deref()
+                == Some(
+                    "pin the shot at `at 7.3s` or later, or shorten the shot before it by 0.7 s"
+                ),
+        "{d:?}"
+    );
+}
+
 #[test]
 fn a_size_inside_the_safety_distance_is_an_error() {
     let (c, _, _) = run(&script_of(

@@ -895,24 +895,32 @@ impl Director {
         }
         let RepositionFlight {
             route,
-            needed,
+            mut needed,
+            needed_full,
             flown,
             ..
         } = flight;
         let from = self.state.p;
         let shot = &self.shots[to];
+        if pinned && now_s + needed > written + 1e-6 && now_s + needed_full <= written + 1e-6 {
+            // Late for its pin as planned (at 80 % of the profile's limits), in time at its
+            // full limits: flown in the time there is.
+            needed = written - now_s;
+        }
         let arrive = now_s + needed;
         let end = if pinned {
             if arrive > written + 1e-6 {
-                let late = arrive - written;
+                // Late even at the full limits: by how much, and the pin that it would make.
+                let soonest = now_s + needed_full;
+                let late = soonest - written;
                 self.diagnostics.push(
                     Diagnostic::error(
                         Code::CutTooShort,
                         shot.span,
                         format!(
                             "the drone needs {needed:.1} s to fly to this shot's first framing \
-                             ({flown}), but the shot is pinned to start at {:.1} s, \
-                             {:.1} s after the previous shot ends",
+                             ({flown}; {needed_full:.1} s at its full limits), but the shot is \
+                             pinned to start at {:.1} s, {:.1} s after the previous shot ends",
                             written,
                             (written - now_s).max(0.0)
                         ),
@@ -921,7 +929,7 @@ impl Director {
                     .with_help(format!(
                         "pin the shot at `at {}s` or later, or shorten the shot before it by \
                          {late:.1} s",
-                        round_up_1(arrive)
+                        round_up_1(soonest)
                     )),
                 );
                 arrive
