@@ -620,16 +620,18 @@ fn a_framing_that_jumps_is_told_as_a_jump_not_as_a_speed() {
     );
 }
 
+/// Two actors facing each other, framed from between them: each camera stands there, looking
+/// at one of them, so a cut from one to the other is nearly all a 180° turn.
+const FACING_ACTORS: &str = "stage 10m x 8m x 3m\ndrone ardrone2\n\
+                             actor A height 1.80m at (-1.2, 0) facing 0deg\n\
+                             actor B height 1.80m at (1.2, 0) facing 180deg\n\
+                             MS on A front for 3s\n";
+
 /// A short repositioning flight that takes seconds is a turn at the yaw-rate limit: the
 /// diagnostic says so, and a turn that does not set the time is not mentioned.
 #[test]
 fn a_repositioning_flight_that_is_a_turn_says_so() {
-    // Each camera stands between the actors, looking at one of them: nearly the same spot,
-    // facing the other way.
-    let base = "stage 10m x 8m x 3m\ndrone ardrone2\n\
-                actor A height 1.80m at (-1.2, 0) facing 0deg\n\
-                actor B height 1.80m at (1.2, 0) facing 180deg\n\
-                MS on A front for 3s\n";
+    let base = FACING_ACTORS;
     let (c, _, _) = run(&script_of(&format!("{base}cut to MS on B front for 3s\n")));
     let d = with_code(&c, Code::Reposition);
     assert_eq!(d.len(), 1, "{:?}", c.diagnostics);
@@ -661,10 +663,7 @@ fn a_repositioning_flight_that_is_a_turn_says_so() {
 /// is an error whose fix is the pin the full limits make.
 #[test]
 fn a_pinned_cut_the_drone_makes_at_its_full_limits_starts_on_time() {
-    let base = "stage 10m x 8m x 3m\ndrone ardrone2\n\
-                actor A height 1.80m at (-1.2, 0) facing 0deg\n\
-                actor B height 1.80m at (1.2, 0) facing 180deg\n\
-                MS on A front for 3s\n";
+    let base = FACING_ACTORS;
     let yaw_max = ardrone().limits.yaw_rate_max_radps;
     // A 180° turn: 5.2 s as planned, 4.2 s at the full limits; 4.5 s are left.
     let (c, samples, _) = run(&script_of(&format!(

@@ -1824,15 +1824,8 @@ enum Way {
 
 impl Way {
     fn of(route: &Route, pivot: Option<Vec3>) -> Way {
-        let usual = match pivot {
-            Some(pivot) => Route::Around {
-                pivot,
-                long_way: false,
-            },
-            None => Route::Straight,
-        };
         match route {
-            r if *r == usual => Way::Usual,
+            r if *r == route::usual(pivot) => Way::Usual,
             Route::Straight => Way::Straight,
             Route::Around {
                 long_way: false, ..

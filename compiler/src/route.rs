@@ -284,17 +284,23 @@ fn cylinder_intrusion_m(p: &Vec3, a: &ActorPose, safety_m: f64) -> f64 {
     safety_m - crate::norm_xy(p.x - x, p.y - y)
 }
 
-/// The route from `a` to `b` (see the module doc): round `pivot` the short way (without a
-/// pivot, straight) when that is clear; else the shortest clear route; else the one that
-/// intrudes least.
-pub fn choose(a: &Vec3, b: &Vec3, pivot: Option<Vec3>, keep: &Keepout) -> Route {
-    let first = match pivot {
+/// The route a flight takes unless something is in its way: round `pivot` the short way, or
+/// straight without one.
+pub fn usual(pivot: Option<Vec3>) -> Route {
+    match pivot {
         Some(pivot) => Route::Around {
             pivot,
             long_way: false,
         },
         None => Route::Straight,
-    };
+    }
+}
+
+/// The route from `a` to `b` (see the module doc): round `pivot` the short way (without a
+/// pivot, straight) when that is clear; else the shortest clear route; else the one that
+/// intrudes least.
+pub fn choose(a: &Vec3, b: &Vec3, pivot: Option<Vec3>, keep: &Keepout) -> Route {
+    let first = usual(pivot);
     // No route is clearer than its ends.
     let ((walls_a, actors_a), (walls_b, actors_b)) = (keep.intrusions_m(a), keep.intrusions_m(b));
     let clear = |(walls, actors): (f64, f64)| {
