@@ -756,7 +756,9 @@ impl Director {
     /// one that does not fit and one that does: at most a second past the first plan's
     /// arrival while the framing then moves slower than the drone can merge into it (else
     /// the flight arrives then, as soon as the drone can fly that way at its full limits, or
-    /// as planned when that way is another: round an actor who walks across the first one),
+    /// as planned when that way is another, round an actor who walks across the first one,
+    /// and then the search goes as far as that arrival: waiting for the actor to pass can be
+    /// sooner),
     /// without a bound where it sweeps by faster (an actor turning round at the size's
     /// distance). A flight that arrives while the framing moves merges
     /// into it ([`route::merge_m_per_mps`]).
@@ -820,6 +822,9 @@ impl Director {
                     let needed = if plan.way == first.way {
                         plan.needed.min(first.needed).max(plan.needed_full)
                     } else {
+                        // That way arrives later: any flight that arrives before it is
+                        // looked for (waiting for the actor to pass, the short way).
+                        limit_s = limit_s.max(arrives(plan.needed));
                         plan.needed
                     };
                     on_time = Some(RepositionFlight { needed, ..plan });
