@@ -304,13 +304,14 @@ impl Monitor {
                 || dronecine_grammar::script::moves_camera(shots, i);
             // When, said from the shot's start; a shot's samples begin with the repositioning
             // flight inserted before it, if any.
+            let start = timings
+                .iter()
+                .find(|x| x.index == i)
+                .map(|x| x.start_s)
+                .unwrap_or(shot.start_s);
+            let on_the_flight = |t: f64| t < start - 0.005;
             let at = |t: f64| {
-                let start = timings
-                    .iter()
-                    .find(|x| x.index == i)
-                    .map(|x| x.start_s)
-                    .unwrap_or(shot.start_s);
-                if t < start - 0.005 {
+                if on_the_flight(t) {
                     format!(
                         "on the repositioning flight, {:.1} s before the shot starts",
                         round_up_1(start - t)
@@ -490,7 +491,18 @@ impl Monitor {
                         ),
                     )
                     .with_label(format!("too close to {who}"))
-                    .with_help("use a wider size, a longer lens (`lens …`), or move the path away from the actors"),
+                    .with_help(if on_the_flight(intrusion.t_s) {
+                        // No way there clear of the actor (routes keep clear where one is).
+                        format!(
+                            "the drone passes {who} on its way to this framing: frame the shot \
+                             from the side of {who} it comes from, or use a wider size or a \
+                             longer lens (`lens …`), which stand the framing further off"
+                        )
+                    } else {
+                        "use a wider size, a longer lens (`lens …`), or move the path away from \
+                         the actors"
+                            .to_string()
+                    }),
                 );
             }
             // Held at the margin: a warning (the shot is flown, a little off its framing) when
