@@ -149,9 +149,9 @@ pub struct Director {
     /// Per-tick scratch of a repositioning flight: the actors as they will stand when it
     /// arrives.
     arriving: Vec<ActorPose>,
-    /// Scratch of a repositioning flight's plan: the actors it keeps clear of, and where the
-    /// walking ones pass while it flies.
+    /// Scratch of a repositioning flight's plan: the actors it keeps clear of…
     keep_out: Vec<ActorPose>,
+    /// …and where the walking ones are while it flies (`route::Keepout::passing`).
     passing: Vec<(f64, ActorPose)>,
     /// The velocity of the framing a repositioning flight arrives on, as of this tick.
     merge_v: Vec3,
@@ -758,10 +758,9 @@ impl Director {
     /// the flight arrives then, as soon as the drone can fly that way at its full limits, or
     /// as planned when that way is another, round an actor who walks across the first one,
     /// and then the search goes as far as that arrival: waiting for the actor to pass can be
-    /// sooner),
-    /// without a bound where it sweeps by faster (an actor turning round at the size's
-    /// distance). A flight that arrives while the framing moves merges
-    /// into it ([`route::merge_m_per_mps`]).
+    /// sooner), without a bound where it sweeps by faster (an actor turning round at the
+    /// size's distance). A flight that arrives while the framing moves merges into it
+    /// ([`route::merge_m_per_mps`]).
     ///
     /// Planned to the actors as they stood when it set off, a flight during which an actor
     /// walked or turned arrived where the framing had been, and the shot started off it, by
@@ -1011,12 +1010,14 @@ impl Director {
         keep_out.extend_from_slice(actors);
         if moving {
             keep_out.extend_from_slice(&arriving);
-            // The flight's clock: it sets off at `start_s` and arrives at `at_s`.
-            let span_s = (at_s - start_s).max(1e-9);
-            for k in (1..PASSING_SAMPLES).filter(|_| at_s > actors_s) {
+        }
+        if moving && at_s > actors_s {
+            // On the flight's clock: it sets off at `start_s` (at or before `actors_s`) and
+            // arrives at `at_s`.
+            for k in 1..PASSING_SAMPLES {
                 let t_s = actors_s + (at_s - actors_s) * k as f64 / PASSING_SAMPLES as f64;
                 self.arriving_into(actors, actors_s, t_s, &mut arriving);
-                let u = ((t_s - start_s) / span_s).clamp(0.0, 1.0);
+                let u = (t_s - start_s) / (at_s - start_s);
                 passing.extend(
                     arriving
                         .iter()
