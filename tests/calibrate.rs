@@ -181,19 +181,29 @@ fn identifies_the_model_from_a_shoot_log() {
     let got = load(&out_file);
     let t = Profile::builtin("ardrone2").unwrap().model;
     let g = &got.model;
+    // The square excites the drone's initial acceleration K/τ well, K and τ apart less: how
+    // the fit splits K/τ between them moves with the reference flown, and the intervals it
+    // gives for K and τ do not cover that. Pitch K/τ within 1 %, K and τ within 5 % (0.5 %
+    // high, both); roll, excited only in the turns, the drone yawing at ~1.3 rad/s in closed
+    // loop, K/τ within 2 %, K and τ within 10 % (7 % high, both). Steering variants tried
+    // while the steering learned to stay on a target that speeds up or slows down moved
+    // pitch's K and τ 3 % low or 5 % high, and roll's 6 % low or 24 % high, K/τ within 1 %.
+    close(
+        "K_theta/tau_theta",
+        g.gain_pitch_mps_per_rad / g.tau_pitch_s,
+        t.gain_pitch_mps_per_rad / t.tau_pitch_s,
+        0.01,
+    );
     close(
         "K_theta",
         g.gain_pitch_mps_per_rad,
         t.gain_pitch_mps_per_rad,
-        0.02,
+        0.05,
     );
-    close("tau_theta", g.tau_pitch_s, t.tau_pitch_s, 0.02);
+    close("tau_theta", g.tau_pitch_s, t.tau_pitch_s, 0.05);
     close("K_zdot", g.gain_vz, t.gain_vz, 0.02);
     close("tau_zdot", g.tau_vz_s, t.tau_vz_s, 0.02);
     close("K_psi", g.gain_yaw, t.gain_yaw, 0.02);
-    // Roll is excited only in the square's turns, the drone yawing at ~1.3 rad/s, in closed
-    // loop: the fit follows the heading through each tick and gets the initial acceleration
-    // K/τ within 2 %, but K and τ apart only within 10 % (7 % high, both).
     close(
         "K_phi/tau_phi",
         g.gain_roll_mps_per_rad / g.tau_roll_s,
@@ -209,7 +219,7 @@ fn identifies_the_model_from_a_shoot_log() {
     close("tau_phi", g.tau_roll_s, t.tau_roll_s, 0.1);
 
     // The same log with one chunk damaged in the middle: read past it, named, and fitted on
-    // what is left (no window spans the gap), still within 2 % on pitch.
+    // what is left (no window spans the gap), pitch still within the bounds above.
     let damaged = dir.join("damaged.mcap");
     let offset = common::damage_middle_chunk(&log, &damaged);
     let out_file = dir.join("id-damaged.toml");
@@ -227,16 +237,22 @@ fn identifies_the_model_from_a_shoot_log() {
     );
     let g = load(&out_file).model;
     close(
+        "K_theta/tau_theta (damaged log)",
+        g.gain_pitch_mps_per_rad / g.tau_pitch_s,
+        t.gain_pitch_mps_per_rad / t.tau_pitch_s,
+        0.01,
+    );
+    close(
         "K_theta (damaged log)",
         g.gain_pitch_mps_per_rad,
         t.gain_pitch_mps_per_rad,
-        0.02,
+        0.05,
     );
     close(
         "tau_theta (damaged log)",
         g.tau_pitch_s,
         t.tau_pitch_s,
-        0.02,
+        0.05,
     );
     std::fs::remove_dir_all(&dir).ok();
 }

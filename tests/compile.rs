@@ -695,28 +695,27 @@ fn a_pinned_cut_the_drone_makes_at_its_full_limits_starts_on_time() {
     );
 }
 
-/// A repositioning flight that comes too close to an actor (no way to a close-up beside B
-/// keeps clear of B) is told as such, with a fix for a flight: which side to frame from, or a
-/// framing that stands further off; not "move the path away from the actors", a help for a
+/// A repositioning flight that comes too close to an actor (from a medium long shot of A to
+/// B, its way grazes A) is told as such, with a fix for a flight: which side to frame from, or
+/// a framing that stands further off; not "move the path away from the actors", a help for a
 /// path shot.
 #[test]
 fn too_close_on_a_repositioning_flight_says_the_flight_passes_the_actor() {
     let (c, _, _) = run(&script_of(
-        "stage 10m x 8m x 4m\ndrone ardrone2\n\
-         actor A height 1.57m at (-0.29, -0.09) facing -95deg\n\
-         actor B height 1.56m at (1.28, -0.56) facing -68deg\n\
-         at 14.4s A walks to (-0.7, 1.22) over 4s\n\
-         FS on A right for 8s\n\
-         cut to eye level MCU on B right for 6s\n",
+        "stage 10m x 12m x 3m\ndrone ardrone2\nlens 92deg\n\
+         actor A height 1.99m at (-1.58, -0.76) facing -119deg\n\
+         actor B height 1.68m at (1.86, -0.63) facing 64deg\n\
+         MLS on A 34right for 10s\n\
+         cut to MS on B 34backleft screen left for 5s\n",
     ));
     let d = with_code(&c, Code::TooClose);
     assert_eq!(d.len(), 1, "{:?}", c.diagnostics);
     assert!(
-        d[0].message.contains("of B (on the repositioning flight,")
+        d[0].message.contains("of A (on the repositioning flight,")
             && d[0]
                 .help
                 .as_deref()
-                .is_some_and(|h| h.starts_with("the drone passes B on its way to this framing")),
+                .is_some_and(|h| h.starts_with("the drone passes A on its way to this framing")),
         "{:?}",
         d[0]
     );

@@ -149,7 +149,10 @@ fn transition_front_to_34backright() {
 
 /// Two walking actors held in a two-shot, with their actors deviating from the blocking: the
 /// issue's target, RMS framing error ≤ 0.05, on the seeded flight of the README table and on
-/// four more seeds; LQG within 5 cm and at most half the PID baseline's errors.
+/// four more seeds; LQG within 5 cm and at most half the PID baseline's errors. On average
+/// over the five, within 0.02 (0.018): with the actor tracker's earlier gains, which passed
+/// more of the motion capture's noise into the actors' velocities that the director feeds
+/// forward, 0.024.
 #[test]
 fn two_moving_actors_held_in_a_two_shot() {
     let (lqg, pid) = lqg_against_pid("shots/two-actors.psl");
@@ -161,11 +164,14 @@ fn two_moving_actors_held_in_a_two_shot() {
         framing <= 0.5 * pid_framing,
         "{framing} against PID {pid_framing}"
     );
+    let mut sum = framing;
     for seed in 1..=4 {
         let r = fly("shots/two-actors.psl", "lqg", seed);
         let framing = r.figures.rms_framing_error.expect("the script has holds");
         assert!(framing <= 0.05, "seed {seed}: framing error {framing}");
+        sum += framing;
     }
+    assert!(sum / 5.0 <= 0.02, "mean framing error {}", sum / 5.0);
 }
 
 /// The same two-shot with actors of 1.80 m and 1.65 m: no level, roll-free camera puts both
