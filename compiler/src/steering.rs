@@ -4,11 +4,14 @@
 //! The state is position, velocity and acceleration; each tick chooses a jerk (bounded) and
 //! integrates it exactly, so velocity and acceleration are the derivatives of position by
 //! construction and the reference is C² with bounded jerk. The behaviour is arrival with
-//! feed-forward: `v_des = v_T + truncate(k_p·(p_T − p))` capped at the speed limit (the
-//! desired speed falls with the distance to the target, so the camera arrives without
-//! overshoot), `a_des = a_T + k_v·(v_des − v)` plus separation from the actors' safety
-//! cylinders and stage containment, capped at the acceleration limit. Near the stage's walls
-//! (less its margin) the speed toward each wall is capped at what the camera can brake from
+//! feed-forward: `v_des = v_T + truncate(k_p·(p_T − p'))` capped at the speed limit, `p'`
+//! where the camera is at the step's end if it keeps its acceleration (the desired speed falls
+//! with the distance to the target, so the camera arrives without overshoot), `a_des = a_T +
+//! k_v·(v_des − v')` plus separation from the actors' safety cylinders and stage containment,
+//! capped at the acceleration limit; `v'` is the velocity the camera reaches when its
+//! acceleration is taken to the target's trend at full jerk, which keeps a jerk-limited camera
+//! from overshooting and, on a target that speeds up or slows down, on it. Near the stage's
+//! walls (less its margin) the speed toward each wall is capped at what the camera can brake from
 //! before it, and the target's acceleration toward it is dropped ([`brake_for_walls`]). When
 //! the camera sits on a smooth, feasible target the feed-forward terms keep it there exactly.
 //!
