@@ -179,11 +179,13 @@ impl From<BackendError> for FlightError {
 /// Positions: the steady-state gains of the Kalman filter of a body whose acceleration is
 /// white ([`TRACK_ACTOR_ACCEL_MPS2`]) measured with noise ([`TRACK_POSITION_NOISE_M`]) every
 /// `T` (Kalata's α-β filter, [`alpha_beta`]): at 100 Hz α = 0.44, β = 0.125. The fixed
-/// α = 0.7, β = 0.2 it replaced passed 60 % more of the noise into the velocity, which the
-/// director feeds forward and differentiates again: `two-actors.psl`'s two-shot measured a
-/// framing error of 0.024 on average over seeds 1–10 with them, 0.018 with these.
-/// Facing: α = 0.7, β = 0.2 (smoothing the facing more was tried, α = 0.3, β = 0.05: the
-/// one-actor holds of `scene.psl` tracked worse, 2.9 → 3.8 cm RMS on its first shot).
+/// α = 0.7, β = 0.2 they replaced passed 41 % more of the noise into the velocity (twice its
+/// variance), which the director feeds forward and differentiates again. Over seeds 1–10,
+/// `two-actors.psl`'s two-shot measured a framing error of 0.022 on average with those,
+/// 0.016 with these; `transition.psl`, one actor drifting on their mark, 0.0145 and 0.0155.
+/// Facing: α = 0.7, β = 0.2. Smoothing it more was tried (α = 0.3, β = 0.05): the one-actor
+/// holds of `scene.psl`, whose framings turn with the actors' drifting facing, tracked worse
+/// (its first shot 2.9 → 3.8 cm RMS over seeds 1–10).
 struct ActorTracker {
     poses: Vec<ActorPose>,
     last_t_s: Vec<Option<f64>>,
