@@ -383,7 +383,9 @@ pub fn step_heading(
     gains: &SteerGains,
     dt_s: f64,
 ) -> HeadingState {
-    let err = wrap_angle_rad(target_rad - state.heading_rad);
+    // As for the position: against the heading at the step's end (against the one at its
+    // start, a turning target was led by one step's turn).
+    let err = wrap_angle_rad(target_rad - (state.heading_rad + state.rate_radps * dt_s));
     let rate_des = (target_rate_radps + gains.k_heading * err)
         .clamp(-limits.yaw_rate_radps, limits.yaw_rate_radps);
     let acc = (gains.k_heading_rate * (rate_des - state.rate_radps))
@@ -754,6 +756,28 @@ mod tests {
             assert!(h.rate_radps <= lim.yaw_rate_radps + 1e-9);
         }
         assert!(wrap_angle_rad(h.heading_rad - target).abs() < 1e-3);
+    }
+
+    /// A target turning at a steady 0.8 rad/s across ±π: the camera's heading, started on
+    /// it, stays on it (compared with the heading at the step's start, it was held one step's
+    /// turn ahead, 8 mrad at 100 Hz).
+    #[test]
+    fn a_heading_on_a_steadily_turning_target_stays_on_it() {
+        let lim = limits();
+        let gains = SteerGains::default();
+        let rate = 0.8;
+        let at = |t: f64| wrap_angle_rad(3.0 + rate * t);
+        let mut h = HeadingState {
+            heading_rad: at(0.0),
+            rate_radps: rate,
+        };
+        let mut worst: f64 = 0.0;
+        for k in 1..=800 {
+            let t = k as f64 * 0.01;
+            h = step_heading(&h, at(t), rate, &lim, &gains, 0.01);
+            worst = worst.max(wrap_angle_rad(h.heading_rad - at(t)).abs());
+        }
+        assert!(worst < 1e-6, "{worst} rad");
     }
 
     #[test]
