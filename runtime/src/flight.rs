@@ -182,7 +182,7 @@ impl From<BackendError> for FlightError {
 /// α = 0.7, β = 0.2 they replaced passed 41 % more of the noise into the velocity (twice its
 /// variance), which the director feeds forward and differentiates again. Over seeds 1–10,
 /// `two-actors.psl`'s two-shot measured a framing error of 0.022 on average with those,
-/// 0.016 with these; `transition.psl`, one actor drifting on their mark, 0.0145 and 0.0155.
+/// 0.016 with these; `transition.psl`, one actor drifting on their mark, 0.0145 and 0.0156.
 /// Facing: α = 0.7, β = 0.2. Smoothing it more was tried (α = 0.3, β = 0.05): the one-actor
 /// holds of `scene.psl`, whose framings turn with the actors' drifting facing, tracked worse
 /// (its first shot 2.9 → 3.8 cm RMS over seeds 1–10).
