@@ -1061,6 +1061,12 @@ impl Director {
             actors: &keep_out,
             passing: &passing,
             safety_m: self.safety_m,
+            // The flight's merge as `target` flies it: over the time from `start_s` to `at_s`.
+            merge: (goal_v != Vec3::zeros() && at_s > start_s).then_some(route::Merge {
+                arrive_v: goal_v,
+                duration_s: at_s - start_s,
+                limits: &self.limits,
+            }),
         };
         let route = route::choose(&from, &goal, pivot, &keep);
         self.keep_out = keep_out;

@@ -14,7 +14,8 @@
 //! the way gets from in front of them to behind them where both the straight line and the
 //! arcs round the pivot cut through them); when none is clear, the one that intrudes least.
 //! Steering still applies on top (containment and separation), but a route that stays clear
-//! does not lean on it.
+//! does not lean on it. A flight that arrives on a moving framing flies its route plus the
+//! merge's offset ([`merge_m_per_mps`]), and that is what is kept clear ([`Keepout::merge`]).
 //!
 //! The route is chosen once, when the flight starts, against the actors as they stand; its
 //! end `b` follows the next shot's framing as the actors move.
@@ -196,6 +197,31 @@ pub struct Keepout<'a> {
     /// and then only (see [`Keepout::route_intrusion_m`]).
     pub passing: &'a [(f64, ActorPose)],
     pub safety_m: f64,
+    /// The merge of a flight that arrives moving, when it does: its offset from the route is
+    /// part of where the drone flies, and is kept clear too.
+    pub merge: Option<Merge<'a>>,
+}
+
+/// The merge of a flight that arrives on a moving framing (see [`merge_m_per_mps`]): on the
+/// way, the drone flies its route plus `arrive_v · merge(u)`, an offset that falls behind
+/// along the framing's velocity by up to 0.2·τ·speed (metres, for a framing that moves fast:
+/// random script 2378's flight, planned clear on its route alone, swung 0.19 m into an
+/// actor's cylinder).
+#[derive(Clone, Copy, Debug)]
+pub struct Merge<'a> {
+    /// The framing's velocity on arrival.
+    pub arrive_v: Vec3,
+    /// The flight's duration, as the director flies it (start to arrival).
+    pub duration_s: f64,
+    pub limits: &'a SteerLimits,
+}
+
+impl Merge<'_> {
+    /// The offset from the route at `u` (a fraction of the flight's time).
+    pub fn offset_m(&self, u: f64) -> Vec3 {
+        let speed = self.arrive_v.norm();
+        self.arrive_v * merge_m_per_mps(u, self.duration_s, speed, self.limits)
+    }
 }
 
 /// The stage less `margin_m` on every side (the floor and the ceiling too): the box the
@@ -251,8 +277,24 @@ impl Keepout<'_> {
     /// it), and as early or late as the spacing of the passing poses, for a flight that runs
     /// a little behind or ahead.
     fn route_intrusions_m(&self, route: &Route, a: &Vec3, b: &Vec3) -> (f64, f64) {
+        // Where the drone is at `u` of the flight's time, merge included.
+        let flown = |u: f64| {
+            let p = route.at(a, b, crate::blocking::min_jerk(u).0);
+            match &self.merge {
+                Some(m) => p + m.offset_m(u),
+                None => p,
+            }
+        };
         let (walls, standing): (f64, f64) = (0..=CHECKS)
-            .map(|k| self.intrusions_m(&route.at(a, b, k as f64 / CHECKS as f64)))
+            .map(|k| {
+                let x = k as f64 / CHECKS as f64;
+                // Without a merge, evenly along the route; with one, evenly in time (the
+                // offset is a function of time).
+                self.intrusions_m(&match self.merge {
+                    Some(_) => flown(x),
+                    None => route.at(a, b, x),
+                })
+            })
             .fold((0.0, 0.0), |(w, ac), (wk, ak)| (w.max(wk), ac.max(ak)));
         // The passing poses' spacing in time (they come in time order).
         let slack = self
@@ -265,7 +307,7 @@ impl Keepout<'_> {
             [u - slack, *u, u + slack]
                 .into_iter()
                 .filter(|u| (0.0..=1.0).contains(u))
-                .map(|u| route.at(a, b, crate::blocking::min_jerk(u).0))
+                .map(flown)
                 .fold(worst, |w, p| {
                     w.max(cylinder_intrusion_m(&p, pose, self.safety_m))
                 })
@@ -423,12 +465,60 @@ mod tests {
             actors,
             passing: &[],
             safety_m: 0.5,
+            merge: None,
         }
     }
 
     /// `stage 8m x 6m x 3m`.
     fn stage() -> (Vec3, Vec3) {
         (Vec3::new(-4.0, -3.0, 0.0), Vec3::new(4.0, 3.0, 3.0))
+    }
+
+    /// A flight that arrives on a framing moving at 1.5 m/s falls behind it on the way, by up
+    /// to 1.8 m over 6 s: a straight route 1.4 m clear of an actor is flown through them. With
+    /// the merge in the keep-out the straight route counts as intruding and another is flown,
+    /// whose path, merge included, keeps clear.
+    #[test]
+    fn a_merge_that_swings_into_an_actor_takes_another_route() {
+        let (lo, hi) = stage();
+        let actors = [actor(0.0, 1.4)];
+        let (a, b) = (Vec3::new(-2.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 1.0));
+        let limits = SteerLimits {
+            speed_h_mps: 1.84,
+            speed_v_mps: 0.9,
+            accel_h_mps2: 1.08,
+            accel_v_mps2: 1.0,
+            jerk_mps3: 3.0,
+            yaw_rate_radps: 1.5,
+            yaw_accel_radps2: 3.0,
+        };
+        let merge = Merge {
+            arrive_v: Vec3::new(0.0, -1.5, 0.0),
+            duration_s: 6.0,
+            limits: &limits,
+        };
+        let bare = keepout(lo, hi, &actors);
+        let merged = Keepout {
+            merge: Some(merge),
+            ..keepout(lo, hi, &actors)
+        };
+        // Where the drone flies on `route`: the route plus the offset, on the flight's clock.
+        let flown_intrusion = |route: &Route| {
+            (0..=400)
+                .map(|k| {
+                    let u = k as f64 / 400.0;
+                    let p = route.at(&a, &b, crate::blocking::min_jerk(u).0) + merge.offset_m(u);
+                    cylinder_intrusion_m(&p, &actors[0], 0.5)
+                })
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        assert_eq!(bare.route_intrusion_m(&Route::Straight, &a, &b), 0.0);
+        assert_eq!(choose(&a, &b, None, &bare), Route::Straight);
+        assert!(flown_intrusion(&Route::Straight) > 0.4);
+        assert!(merged.route_intrusion_m(&Route::Straight, &a, &b) > 0.4);
+        let r = choose(&a, &b, None, &merged);
+        assert_ne!(r, Route::Straight);
+        assert!(flown_intrusion(&r) <= 0.0, "{r:?}: {}", flown_intrusion(&r));
     }
 
     #[test]

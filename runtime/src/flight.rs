@@ -1257,6 +1257,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             actors: &self.actors.poses,
             passing: &[],
             safety_m: self.setup.profile.safety.actor_distance_m,
+            merge: None,
         }
     }
 
