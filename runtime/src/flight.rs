@@ -1,5 +1,6 @@
 //! The flight loop behind `dronecine shoot`: pre-flight checks, take-off, the approach to the
-//! first framing, the shots with the online director, landing, and the report.
+//! first framing, the shots with the online director, the flight back over the take-off spot,
+//! landing, and the report.
 //!
 //! One tick, at the loop's rate on the backend's [`Clock`]:
 //! 1. wait for the tick time (the simulator advances its world; a wall clock sleeps);
@@ -388,8 +389,10 @@ const APPROACH_TOLERANCE_M: f64 = 0.1;
 /// from where the glide ended onto the first framing as the actors stand (it goes on steering
 /// into the first shot: its arrival closes a gap as e^(−t/1 s)).
 const SETTLE_S: f64 = 1.0;
-/// Hold after the last shot, before landing.
+/// Hold after the last shot, before the flight back to the take-off spot and the landing.
 const HOLD_BEFORE_LANDING_S: f64 = 1.0;
+/// Within this (horizontally) of the take-off spot, the drone lands where it is.
+const HOME_RADIUS_M: f64 = 0.3;
 
 /// Flies the script. Returns the report, also when a failsafe ended the flight early
 /// (`completed` is then false); an error only when the flight could not start or a backend
@@ -686,6 +689,8 @@ impl<'s, 'b> Flight<'s, 'b> {
         // and not under an actor's nose.
         let stage = self.setup.scene.stage;
         let [x, y, _] = m0.position_m;
+        // Where it lands again after the shots (`way_home`).
+        let take_off_xy = [x, y];
         let (lo, hi) = (stage.min_m(), stage.max_m());
         if !inside(&stage, &[x, y, lo[2].max(hi[2].min(m0.position_m[2]))], 0.0) {
             return Err(FlightError::Preflight(format!(
@@ -976,7 +981,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             }
         }
 
-        // Landing: hold the last pose a moment, then land.
+        // Landing: hold the last pose a moment, fly back over the take-off spot, then land.
         self.framing.clear();
         if completed {
             let end = t + HOLD_BEFORE_LANDING_S;
@@ -987,6 +992,20 @@ impl<'s, 'b> Flight<'s, 'b> {
                 {
                     completed = false;
                     break;
+                }
+            }
+        }
+        if completed {
+            if let Some(glide) = self.way_home(t, &last, take_off_xy) {
+                let pitch_rad = last.camera_pitch_rad;
+                while t < glide.end_s() {
+                    t = self.wait_tick(t + self.period_s)?;
+                    if let Outcome::Land =
+                        self.control(t, Phase::Landing, None, &glide.sample(t, pitch_rad))?
+                    {
+                        completed = false;
+                        break;
+                    }
                 }
             }
         }
@@ -1242,6 +1261,60 @@ impl<'s, 'b> Flight<'s, 'b> {
         self.setup
             .interrupts
             .map_or(0, |n| n.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// The flight back over the take-off spot after the last shot, at the altitude the shots
+    /// left the drone, so that it lands where it was set down (clear of the actors' marks then:
+    /// the pre-flight check's and the simulator's rule) and not where the last shot ends,
+    /// perhaps an arm's length from an actor (a close-up). Along the approach's route rule and
+    /// at its pace ([`Glide`]). `None`, the drone landing where it is, when it is already
+    /// within [`HOME_RADIUS_M`] of the spot, or when an actor now stands within their safety
+    /// distance of the spot (the landing's column, down to the floor) or in the way back
+    /// (both told as a warning).
+    fn way_home(&mut self, t: f64, last: &Sample, home_xy: [f64; 2]) -> Option<Glide> {
+        let here = hover_sample(t, last);
+        let [x, y, z] = last.position_m;
+        let far_m = crate::math::hypot(home_xy[0] - x, home_xy[1] - y);
+        if !(far_m >= HOME_RADIUS_M) {
+            return None;
+        }
+        let home = Sample {
+            position_m: [home_xy[0], home_xy[1], z],
+            ..here
+        };
+        let safety_m = self.setup.profile.safety.actor_distance_m;
+        let keep = self.keepout();
+        let pad = Vec3::new(home_xy[0], home_xy[1], 0.0);
+        let taken = keep.deepest_actor(&pad);
+        let glide = Glide::new(t, &here, &home, self.setup.profile, &keep);
+        let intrusion_m = keep.route_intrusion_m(&glide.route, &glide.from_m, &glide.to_m);
+        if let Some((i, into_m)) = taken {
+            let name = &self.setup.scene.actors[i].name;
+            let message = format!(
+                "{name} stands {:.2} m from the take-off spot; {} keeps {safety_m:.2} m from                  actors: landing where the drone is",
+                safety_m - into_m,
+                self.setup.profile.name
+            );
+            self.event(t, "warning", "return_not_clear", message);
+            return None;
+        }
+        if intrusion_m > APPROACH_TOLERANCE_M {
+            let message = format!(
+                "no clear way back to the take-off spot: it comes {intrusion_m:.2} m into an                  actor's safety distance or the stage's margin; landing where the drone is"
+            );
+            self.event(t, "warning", "return_not_clear", message);
+            return None;
+        }
+        let way = match glide.route {
+            Route::Straight => "",
+            Route::Around { .. } => ", round an actor in the way",
+        };
+        let message = format!(
+            "flying back to the take-off spot to land ({far_m:.1} m, {:.1} s{way})",
+            glide.duration_s
+        );
+        self.event(t, "info", "return", message);
+        Some(glide)
     }
 
     /// Where the drone may go: the stage less its margin, and out of the actors' safety

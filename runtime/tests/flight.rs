@@ -139,6 +139,10 @@ struct Recorder {
     /// The reference of the previous tick, and the largest step between two ticks'.
     last_reference_m: Option<[f64; 3]>,
     max_reference_step_m: f64,
+    /// The drone as last measured before the landing command (the last tick's frame), and
+    /// the reference of the last tick of the shots.
+    last_measured_m: Option<[f64; 3]>,
+    shots_end_m: Option<[f64; 3]>,
 }
 
 /// The observer's side of [`Recorder`]: the phases of the progress reports, and their
@@ -181,6 +185,12 @@ impl FlightSink for Recorder {
                 .approach_clearance_m
                 .unwrap_or((f64::INFINITY, f64::INFINITY));
             self.approach_clearance_m = Some((a.min(reference), b.min(measured)));
+        }
+        if let Some(d) = r.mocap.and_then(|f| f.drone) {
+            self.last_measured_m = Some(d.position_m);
+        }
+        if r.phase == Phase::Shots {
+            self.shots_end_m = Some(r.sample.position_m);
         }
         if r.phase == Phase::Shots && r.command_sent == dronecine_runtime::frames::Command::HOVER {
             self.hover_ticks_in_shots += 1;
@@ -1083,4 +1093,89 @@ fn a_first_framing_that_moves_after_the_approach_is_planned_is_steered_to() {
         "{first:?}"
     );
     assert!(first.rms_framing_error.unwrap() < 0.05, "{first:?}");
+}
+
+/// A script that ends on a close-up (MCU on A, 0.6 m from them), its first framing (the
+/// take-off spot below it) metres away.
+const CLOSE_UP: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
+                        actor A height 1.80m at (0, 0) facing 0deg\n\
+                        MS on A 34left for 4s\nthen dolly to MCU on A front over 4s\n";
+
+/// Where the simulated drone takes off for [`CLOSE_UP`] (as `fly_on` places it).
+fn close_up_take_off_m() -> [f64; 3] {
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    let script = dronecine_grammar::check(CLOSE_UP, &opts).script.unwrap();
+    let scene = script.scene.as_ref().unwrap();
+    let profile = Profile::builtin("ardrone2").unwrap();
+    start_pose(&script, scene, &profile, &SimConfig::new(3)).0
+}
+
+/// After the last shot the drone flies back over the spot it took off from, and lands there,
+/// not an arm's length from A.
+#[test]
+fn after_the_last_shot_the_drone_lands_where_it_took_off() {
+    let (r, rec, state) = fly_on(CLOSE_UP, |_| {}, None, Rig::plain);
+    let r = r.unwrap();
+    assert!(r.completed, "{:?}", rec.kinds());
+    assert_eq!(state, FlightState::Landed);
+    let kinds = rec.kinds();
+    let at = |k: &str| kinds.iter().position(|x| *x == k);
+    assert!(
+        at("return").is_some() && at("return") < at("landing"),
+        "{kinds:?}"
+    );
+    let home = close_up_take_off_m();
+    let [end, landed] = [rec.shots_end_m.unwrap(), rec.last_measured_m.unwrap()];
+    let flat = |p: [f64; 3], q: [f64; 3]| (p[0] - q[0]).hypot(p[1] - q[1]);
+    // The last shot ends a close-up's distance from A (0.6 m); the drone took off clear of
+    // A's mark by the actor distance and the actors' reach (0.8 m), 0.5 m from there.
+    assert!(flat(end, [0.0; 3]) < 0.65, "{end:?}");
+    assert!(flat(home, [0.0; 3]) > 0.75, "{home:?}");
+    assert!(flat(end, home) > 0.4, "{end:?} {home:?}");
+    // It lands over its take-off spot.
+    assert!(flat(landed, home) < 0.1, "{landed:?} {home:?}");
+}
+
+/// When an actor stands on the take-off spot at the end (here A is measured there once the
+/// shots are over), the drone does not fly back onto them: it lands where it is, and says why.
+#[test]
+fn a_take_off_spot_an_actor_stands_on_is_not_flown_back_to() {
+    let (r, rec, _) = fly_on(
+        CLOSE_UP,
+        |c| c.effects.actor_deviation = false,
+        None,
+        Rig::plain,
+    );
+    assert!(r.unwrap().completed);
+    let home = close_up_take_off_m();
+    // The shots (8 s) are over 8.5 s after "action!"; A stands at the origin until then.
+    let after_s = rec.first("action").unwrap().t_s + 8.5;
+    let (r, rec, _) = fly_on(
+        CLOSE_UP,
+        |c| c.effects.actor_deviation = false,
+        None,
+        |sim| Rig {
+            mocap: Box::new(Faulty {
+                inner: sim.mocap(),
+                faults: Faults {
+                    step_actor: Some((0, after_s, [home[0], home[1]])),
+                    ..Faults::default()
+                },
+                nan_done: false,
+            }),
+            ..Rig::plain(sim)
+        },
+    );
+    assert!(r.unwrap().completed, "{:?}", rec.kinds());
+    assert!(!rec.kinds().contains(&"return"), "{:?}", rec.kinds());
+    let e = rec.first("return_not_clear").expect("told");
+    assert!(
+        e.level == "warning"
+            && e.message.starts_with("A stands 0.")
+            && e.message.ends_with("landing where the drone is"),
+        "{e:?}"
+    );
 }
