@@ -19,9 +19,9 @@
 //!
 //! Failsafes (each logged as an event): a controller fault (NaN, time not increasing) →
 //! hover for that tick; the drone's body not tracked for `mocap_hover_s` → hover, for
-//! `mocap_land_s` → land; an actor's body not tracked as long, during the approach or the
-//! shots, the same (the drone cannot keep clear of an actor it does not see; an actor
-//! tracked again before the landing lets it fly on); the drone outside the stage → land;
+//! `mocap_land_s` → land; an actor's body not tracked as long, during the approach, the
+//! shots or the flight back to the take-off spot, the same (the drone cannot keep clear of an
+//! actor it does not see; an actor tracked again before the landing lets it fly on); the drone outside the stage → land;
 //! battery below `battery_land_percent` → land; no telemetry for `link_lost_s` → land; Ctrl-C → land, a
 //! second Ctrl-C → emergency motor cut.
 
@@ -99,11 +99,11 @@ pub struct Backends<'a> {
 /// Thresholds of the failsafes and the pre-flight checks.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Safety {
-    /// The drone, or an actor during the approach or the shots, not tracked this long →
-    /// hover.
+    /// The drone, or an actor during the approach, the shots or the flight back, not tracked
+    /// this long → hover.
     pub mocap_hover_s: f64,
-    /// The drone, or an actor during the approach or the shots, not tracked this long →
-    /// land.
+    /// The drone, or an actor during the approach, the shots or the flight back, not tracked
+    /// this long → land.
     pub mocap_land_s: f64,
     /// Below this, no take-off, and a flying drone lands.
     pub battery_land_percent: f64,
@@ -1127,8 +1127,9 @@ impl<'s, 'b> Flight<'s, 'b> {
             self.hovering = false;
         }
         // An actor the drone does not see: it cannot keep clear of them (nor frame them).
+        // Also while it holds after the shots and flies back to land (`way_home`).
         let mut actor_hover = false;
-        if matches!(phase, Phase::Approach | Phase::Shots) {
+        if matches!(phase, Phase::Approach | Phase::Shots | Phase::Landing) {
             for i in 0..self.actor_seen_s.len() {
                 let unseen_s = t - self.actor_seen_s[i];
                 let name = &self.setup.scene.actors[i].name;

@@ -1179,3 +1179,38 @@ fn a_take_off_spot_an_actor_stands_on_is_not_flown_back_to() {
         "{e:?}"
     );
 }
+
+/// An actor the drone loses on its way back to the take-off spot: it cannot keep clear of
+/// them, so it hovers, and lands where it is after 2 s, as during the shots.
+#[test]
+fn an_actor_lost_on_the_way_back_lands_the_drone_where_it_is() {
+    let (r, rec, _) = fly_on(CLOSE_UP, |_| {}, None, Rig::plain);
+    assert!(r.unwrap().completed);
+    let back_s = rec.first("return").unwrap().t_s;
+    let (r, rec, state) = fly_on(
+        CLOSE_UP,
+        |_| {},
+        None,
+        |sim| Rig {
+            mocap: Box::new(Faulty {
+                inner: sim.mocap(),
+                faults: Faults {
+                    lose_actor: Some((0, back_s + 0.1, f64::INFINITY)),
+                    ..Faults::default()
+                },
+                nan_done: false,
+            }),
+            ..Rig::plain(sim)
+        },
+    );
+    let r = r.unwrap();
+    assert!(!r.completed, "{:?}", rec.kinds());
+    assert_eq!(state, FlightState::Landed);
+    let hover = rec.first("failsafe").unwrap();
+    assert_eq!(hover.message, "actor A is not tracked: hovering");
+    let land = (rec.events.iter())
+        .find(|e| e.message == "actor A has not been tracked for 2 s: landing")
+        .expect("landed by the failsafe");
+    assert!(land.t_s < back_s + 2.5, "{land:?}");
+    assert!(rec.first("landing").unwrap().t_s >= land.t_s);
+}
