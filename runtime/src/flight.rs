@@ -21,9 +21,9 @@
 //! hover for that tick; the drone's body not tracked for `mocap_hover_s` → hover, for
 //! `mocap_land_s` → land; an actor's body not tracked as long, during the approach, the
 //! shots or the flight back to the take-off spot, the same (the drone cannot keep clear of an
-//! actor it does not see; an actor tracked again before the landing lets it fly on); the drone outside the stage → land;
-//! battery below `battery_land_percent` → land; no telemetry for `link_lost_s` → land; Ctrl-C → land, a
-//! second Ctrl-C → emergency motor cut.
+//! actor it does not see; an actor tracked again before the landing lets it fly on); the
+//! drone outside the stage → land; battery below `battery_land_percent` → land; no telemetry
+//! for `link_lost_s` → land; Ctrl-C → land, a second Ctrl-C → emergency motor cut.
 
 use std::io;
 
@@ -1292,7 +1292,8 @@ impl<'s, 'b> Flight<'s, 'b> {
         if let Some((i, into_m)) = taken {
             let name = &self.setup.scene.actors[i].name;
             let message = format!(
-                "{name} stands {:.2} m from the take-off spot; {} keeps {safety_m:.2} m from                  actors: landing where the drone is",
+                "{name} stands {:.2} m from the take-off spot; {} keeps {safety_m:.2} m from \
+                 actors: landing where the drone is",
                 safety_m - into_m,
                 self.setup.profile.name
             );
@@ -1301,7 +1302,8 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
         if intrusion_m > APPROACH_TOLERANCE_M {
             let message = format!(
-                "no clear way back to the take-off spot: it comes {intrusion_m:.2} m into an                  actor's safety distance or the stage's margin; landing where the drone is"
+                "no clear way back to the take-off spot: it comes {intrusion_m:.2} m into an \
+                 actor's safety distance or the stage's margin; landing where the drone is"
             );
             self.event(t, "warning", "return_not_clear", message);
             return None;

@@ -1175,7 +1175,10 @@ fn a_take_off_spot_an_actor_stands_on_is_not_flown_back_to() {
     assert!(
         e.level == "warning"
             && e.message.starts_with("A stands 0.")
-            && e.message.ends_with("landing where the drone is"),
+            && e.message.ends_with(
+                " m from the take-off spot; ardrone2 keeps 0.50 m from actors: landing where \
+                 the drone is"
+            ),
         "{e:?}"
     );
 }
