@@ -410,15 +410,7 @@ mod tests {
     /// the profile's; it falls behind by at most 0.2·τ·speed.
     #[test]
     fn a_merge_arrives_on_the_framing_at_its_speed() {
-        let limits = SteerLimits {
-            speed_h_mps: 1.84,
-            speed_v_mps: 0.9,
-            accel_h_mps2: 1.08,
-            accel_v_mps2: 1.0,
-            jerk_mps3: 3.0,
-            yaw_rate_radps: 1.5,
-            yaw_accel_radps2: 3.0,
-        };
+        let limits = ardrone_limits();
         for (duration_s, speed) in [(6.0, 0.5), (3.0, 0.3), (10.0, 1.2), (0.8, 0.4)] {
             let m = |t_s: f64| merge_m_per_mps(t_s / duration_s, duration_s, speed, &limits);
             let h = 1e-4;
@@ -444,6 +436,19 @@ mod tests {
                 worst_behind <= 0.198 * tau_s,
                 "{worst_behind} behind, τ {tau_s}"
             );
+        }
+    }
+
+    /// `ardrone2`'s limits, as the director steers with them.
+    fn ardrone_limits() -> SteerLimits {
+        SteerLimits {
+            speed_h_mps: 1.84,
+            speed_v_mps: 0.9,
+            accel_h_mps2: 1.08,
+            accel_v_mps2: 1.0,
+            jerk_mps3: 3.0,
+            yaw_rate_radps: 1.5,
+            yaw_accel_radps2: 3.0,
         }
     }
 
@@ -483,15 +488,7 @@ mod tests {
         let (lo, hi) = stage();
         let actors = [actor(0.0, 1.4)];
         let (a, b) = (Vec3::new(-2.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 1.0));
-        let limits = SteerLimits {
-            speed_h_mps: 1.84,
-            speed_v_mps: 0.9,
-            accel_h_mps2: 1.08,
-            accel_v_mps2: 1.0,
-            jerk_mps3: 3.0,
-            yaw_rate_radps: 1.5,
-            yaw_accel_radps2: 3.0,
-        };
+        let limits = ardrone_limits();
         let merge = Merge {
             arrive_v: Vec3::new(0.0, -1.5, 0.0),
             duration_s: 6.0,

@@ -229,6 +229,17 @@ impl Rig {
     }
 }
 
+/// The script `src` (valid: the tests' scripts are).
+fn parse(src: &str) -> dronecine_grammar::Script {
+    let opts = dronecine_grammar::Options {
+        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        base_dir: None,
+    };
+    dronecine_grammar::check(src, &opts)
+        .script
+        .expect("valid script")
+}
+
 /// Flies `src` (actors waiting for "action!", the drone below its first framing) on the
 /// simulator set up by `config`, through the backends `rig` makes of it.
 fn fly_on(
@@ -248,13 +259,7 @@ fn fly_at(
     interrupts: Option<&std::sync::atomic::AtomicU32>,
     rig: impl FnOnce(&Simulator) -> Rig,
 ) -> (Result<FlightReport, FlightError>, Recorder, FlightState) {
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let script = dronecine_grammar::check(src, &opts)
-        .script
-        .expect("valid script");
+    let script = parse(src);
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
     let mut cfg = SimConfig::new(3);
@@ -1103,11 +1108,7 @@ const CLOSE_UP: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
 
 /// Where the simulated drone takes off for [`CLOSE_UP`] (as `fly_on` places it).
 fn close_up_take_off_m() -> [f64; 3] {
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let script = dronecine_grammar::check(CLOSE_UP, &opts).script.unwrap();
+    let script = parse(CLOSE_UP);
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
     start_pose(&script, scene, &profile, &SimConfig::new(3)).0
