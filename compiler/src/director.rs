@@ -48,7 +48,8 @@ const PASSING_SAMPLES: usize = 16;
 const EPS_S: f64 = 1e-3;
 
 /// Time constant of the trend of the target's acceleration, which the steering predicts the
-/// camera's velocity against ([`steering::step`]'s `trend_a`; what it feeds forward is the
+/// camera's velocity against ([`steering::step`]'s `trend_a`), and which it feeds forward
+/// against measured actors ([`Director::actors_measured`]; against the blocking, the
 /// acceleration as it is). Against live actors the difference of the target's velocity from
 /// tick to tick is mostly the motion capture's noise: on `two-actors.psl`'s hold at 100 Hz
 /// 1.0 m/s² RMS, where the blocking's own is 0.35 m/s².
@@ -124,6 +125,11 @@ pub struct Director {
     /// [`Director::start_from`] placed the camera: the first step keeps it there (and its
     /// heading), and the framing is steered to, not jumped to.
     started_from: bool,
+    /// The actor poses are measured (see [`Director::actors_measured`]).
+    measured: bool,
+    /// The turn the repositioning flight's route went at the last tick (`None` before its
+    /// first, or when it does not turn).
+    route_turn: Option<f64>,
     safety_m: f64,
     profile_name: String,
     phase: Phase,
@@ -295,6 +301,8 @@ impl Director {
             failed_now: false,
             placed: false,
             started_from: false,
+            measured: false,
+            route_turn: None,
             safety_m: profile.safety.actor_distance_m,
             profile_name: profile.name.clone(),
             phase: Phase::NotStarted,
@@ -384,6 +392,21 @@ impl Director {
             self.placed = true;
             self.started_from = true;
         }
+    }
+
+    /// The actor poses it will be stepped with are measured (a motion capture's, tracked), not
+    /// the script's blocking: the target's acceleration, mostly their noise differentiated, is
+    /// fed forward as its trend ([`TREND_TAU_S`]) instead of as it is (a path's, which is
+    /// the path's own, as it is). On set the acceleration
+    /// of a framing that follows an actor swings by up to ±18 m/s² from one tick to the next
+    /// (a close framing swings with the actor's facing, whose rate is the noise of the
+    /// measured heading differentiated); fed forward as it is, the steering clipped it to the
+    /// drone's limits, and the clipping carried the reference off its target by up to 0.37 m:
+    /// on `scene.psl`, into an actor's safety distance on each of seeds 1–40, down to 0.14 m
+    /// from Bob. Against the blocking the acceleration is exact, and fed forward as it is
+    /// (`compile` is unchanged).
+    pub fn actors_measured(&mut self) {
+        self.measured = true;
     }
 
     /// Whether the camera has a position: some step's framing (or path) has solved, or
@@ -477,6 +500,12 @@ impl Director {
             t.toric.theta_rad = theta;
             framing::Visual::Two(t)
         })
+    }
+
+    /// Whether a path shot is being flown (its target is the path's, not a framing's).
+    fn on_path(&self) -> bool {
+        matches!(self.phase, Phase::Shot { index, .. }
+            if matches!(self.plans.get(index), Some(Plan::Path(_))))
     }
 
     /// The visual of a one-actor hold being flown this tick, if that is what it is.
@@ -594,7 +623,11 @@ impl Director {
             Kinematics {
                 p: target,
                 v: v_t,
-                a: a_t,
+                a: if self.measured && !self.on_path() {
+                    trend
+                } else {
+                    a_t
+                },
             },
             &self.stage_lo,
             &self.stage_hi,
@@ -990,6 +1023,7 @@ impl Director {
                 ),
             );
         }
+        self.route_turn = None;
         self.phase = Phase::Reposition {
             to,
             start_s: now_s,
@@ -1263,7 +1297,11 @@ impl Director {
                 let mut arriving = std::mem::take(&mut self.arriving);
                 self.arriving_into(actors, t_s, arrive_s, &mut arriving);
                 let goal = self.shot_target(to, 0.0, &arriving, false);
-                let on_route = route.at(&from, &goal, s);
+                // Round the way it went at the last tick (`Route::at_turning`).
+                let (on_route, turn) = route.at_turning(&from, &goal, s, self.route_turn);
+                if keep {
+                    self.route_turn = turn;
+                }
                 // The framing's velocity on arrival: solved with the tick's target, reused by
                 // its look-ahead (whose change of it over 1 ms the feed-forward does not need).
                 if keep {

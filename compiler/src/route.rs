@@ -66,26 +66,49 @@ fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
 impl Route {
     /// The point a fraction `s` of the way from `a` to `b`.
     pub fn at(&self, a: &Vec3, b: &Vec3, s: f64) -> Vec3 {
+        self.at_turning(a, b, s, None).0
+    }
+
+    /// [`Route::at`] for an end `b` that moves during the flight (the next framing against
+    /// live actors), going round the way nearest `near` (the turn, in radians, it went at the
+    /// last tick), and the turn it went. An arc's turn is taken the short (or long) way
+    /// afresh at each point: an end near the far side of the pivot from `a` (a cut from
+    /// behind an actor to their front) crosses from one way to the other with the noise of
+    /// the measured poses, and the target jumped from one side of the actor to the other
+    /// and back (the camera, between the two, went through the actor: 0.008 m from their
+    /// body's axis on set). `None` when the route does not turn (straight, or an end on the
+    /// pivot's vertical).
+    pub fn at_turning(&self, a: &Vec3, b: &Vec3, s: f64, near: Option<f64>) -> (Vec3, Option<f64>) {
         if let Route::Around { pivot: c, long_way } = self {
             let (ra, ta, za) = cylindrical(a, c);
             let (rb, tb, zb) = cylindrical(b, c);
             if ra > MIN_RADIUS_M && rb > MIN_RADIUS_M {
                 let short = wrap_angle_rad(tb - ta);
-                let turn = if *long_way {
+                let mut turn = if *long_way {
                     short - 2.0 * PI * short.signum()
                 } else {
                     short
                 };
+                if let Some(n) = near {
+                    if turn - n > PI {
+                        turn -= 2.0 * PI;
+                    } else if n - turn > PI {
+                        turn += 2.0 * PI;
+                    }
+                }
                 let r = ra + (rb - ra) * s;
                 let t = ta + turn * s;
-                return Vec3::new(
-                    c.x + r * math::cos(t),
-                    c.y + r * math::sin(t),
-                    za + (zb - za) * s,
+                return (
+                    Vec3::new(
+                        c.x + r * math::cos(t),
+                        c.y + r * math::sin(t),
+                        za + (zb - za) * s,
+                    ),
+                    Some(turn),
                 );
             }
         }
-        a + (b - a) * s
+        (a + (b - a) * s, None)
     }
 
     /// The route's length from `a` to `b` (sampled).

@@ -869,6 +869,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         // where the glide left it, not at the origin.
         let mut completed = false;
         let mut director = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
+        director.actors_measured();
         director.start_from(
             Vec3::from(last.position_m),
             Vec3::from(last.velocity_mps),
