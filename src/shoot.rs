@@ -669,6 +669,9 @@ pub fn render_report_as(
         "  position error  RMS {rms} cm, max {max} cm; heading error RMS {heading}°; framing \
          error RMS {framing}; saturated {saturated}% of ticks"
     );
+    if let Some(d) = r.figures.closest_actor_m {
+        let _ = writeln!(s, "  closest to an actor {d:.2} m (the drone, as measured)");
+    }
     let count = |n: u64, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
     if r.failsafes + r.faults + r.deadline_misses > 0 {
         let _ = writeln!(
@@ -857,6 +860,7 @@ mod tests {
             rms_heading_error_rad: Some(0.01),
             rms_framing_error: Some(0.021),
             saturated_fraction: Some(0.5),
+            closest_actor_m: Some(0.623),
             measured_ticks: 100,
         };
         let blind = Figures {
@@ -902,6 +906,10 @@ mod tests {
                 "RMS 1.2 cm, max 5.0 cm; heading error RMS 0.57°; framing error RMS \
                  0.021; saturated 50.0% of ticks"
             ),
+            "{text}"
+        );
+        assert!(
+            text.contains("\n  closest to an actor 0.62 m (the drone, as measured)\n"),
             "{text}"
         );
         let rows: Vec<&str> = text.lines().filter(|l| l.ends_with("shot 1")).collect();

@@ -1223,8 +1223,15 @@ impl<'s, 'b> Flight<'s, 'b> {
         let latency_s = self
             .fresh
             .then(|| (self.clock.now_s() - self.frame.received_s).max(0.0));
-        self.metrics
-            .record(phase, shot, &input, &output, &self.framing, latency_s);
+        self.metrics.record(
+            phase,
+            shot,
+            &input,
+            &output,
+            &self.framing,
+            &self.actors.poses,
+            latency_s,
+        );
         let error = Metrics::tracking_error(&input);
         let state = self.drone.telemetry().state;
         let record = TickRecord {

@@ -100,6 +100,7 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
             &tick.input,
             &tick.output,
             &tick.framing,
+            &tick.actors,
             tick.latency_s,
         );
     }

@@ -16,6 +16,7 @@ use dronecine_compiler::compile::{framing_miss_sq, FRAMING_MISS_MAX_SQ};
 use serde::Serialize;
 
 use crate::control::{TickFault, TickInput, TickOutput};
+use crate::frames::ActorPose;
 use crate::record::{FramingRecord, Phase};
 
 /// Figures of one shot, or of the whole flight. A figure with nothing to average is `None`
@@ -31,6 +32,10 @@ pub struct Figures {
     pub rms_framing_error: Option<f64>,
     /// `None` when no tick of the shots was flown.
     pub saturated_fraction: Option<f64>,
+    /// The least distance from the drone (as measured) to an actor's body, the segment from
+    /// their feet to the top of their head (as tracked): how near the profile's actor
+    /// distance the flight came, or how far inside it. `None` without actors.
+    pub closest_actor_m: Option<f64>,
     /// Ticks with a measurement.
     pub measured_ticks: u64,
 }
@@ -70,7 +75,7 @@ pub struct FlightReport {
 }
 
 /// Running sums for [`Figures`].
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct Accum {
     n: u64,
     sq_pos: f64,
@@ -82,6 +87,26 @@ struct Accum {
     controlled: u64,
     first_t_s: Option<f64>,
     last_t_s: f64,
+    /// `f64::INFINITY` until a measured tick with actors.
+    closest_m: f64,
+}
+
+impl Default for Accum {
+    fn default() -> Accum {
+        Accum {
+            n: 0,
+            sq_pos: 0.0,
+            max_pos: 0.0,
+            sq_heading: 0.0,
+            framing_n: 0,
+            sq_framing: 0.0,
+            saturated: 0,
+            controlled: 0,
+            first_t_s: None,
+            last_t_s: 0.0,
+            closest_m: f64::INFINITY,
+        }
+    }
 }
 
 impl Accum {
@@ -94,6 +119,7 @@ impl Accum {
             rms_framing_error: rms(self.sq_framing, self.framing_n),
             saturated_fraction: (self.controlled > 0)
                 .then(|| self.saturated as f64 / self.controlled as f64),
+            closest_actor_m: self.closest_m.is_finite().then_some(self.closest_m),
             measured_ticks: self.n,
         }
     }
@@ -137,11 +163,21 @@ impl Metrics {
         input: &TickInput,
         output: &Result<TickOutput, TickFault>,
         framing: &[FramingRecord],
+        actors: &[ActorPose],
         latency_s: Option<f64>,
     ) {
         let (Phase::Shots, Some(i)) = (phase, shot) else {
             return;
         };
+        let closest_m = input.measurement.map_or(f64::INFINITY, |m| {
+            let p = m.position_m;
+            actors.iter().fold(f64::INFINITY, |d, a| {
+                let [x, y, z] = a.position_m;
+                let at = p[2].clamp(z, z + a.height_m);
+                let sq = (p[0] - x).powi(2) + (p[1] - y).powi(2) + (p[2] - at).powi(2);
+                d.min(sq.sqrt())
+            })
+        });
         if let Some(l) = latency_s.filter(|l| l.is_finite()) {
             self.latency.0 += l;
             self.latency.1 = self.latency.1.max(l);
@@ -163,6 +199,7 @@ impl Metrics {
             acc.last_t_s = input.t_s;
             acc.controlled += 1;
             acc.saturated += saturated as u64;
+            acc.closest_m = acc.closest_m.min(closest_m);
             if let Some((e, h)) = error {
                 acc.n += 1;
                 acc.sq_pos += e * e;
@@ -281,6 +318,7 @@ mod tests {
             &input(0.0, 9.0, 0.0, true),
             &ok,
             &[],
+            &[],
             None,
         );
         m.record(
@@ -288,6 +326,7 @@ mod tests {
             Some(0),
             &input(1.0, 0.3, 0.0, true),
             &ok,
+            &[],
             &[],
             None,
         );
@@ -297,6 +336,7 @@ mod tests {
             &input(1.01, 0.4, 0.0, true),
             &sat,
             &[],
+            &[],
             None,
         );
         m.record(
@@ -304,6 +344,7 @@ mod tests {
             Some(1),
             &input(2.0, 0.0, 0.2, false),
             &ok,
+            &[],
             &[],
             None,
         );
@@ -313,6 +354,7 @@ mod tests {
             Some(1),
             &input(2.01, 0.0, 6.2, true),
             &ok,
+            &[],
             &[],
             None,
         );
@@ -345,6 +387,7 @@ mod tests {
             &input(1.0, 0.3, 0.1, true),
             &ok,
             &[],
+            &[],
             None,
         );
         for k in 0..3 {
@@ -354,6 +397,7 @@ mod tests {
                 Some(1),
                 &input(t, 0.0, 0.0, false),
                 &ok,
+                &[],
                 &[],
                 None,
             );
@@ -414,6 +458,7 @@ mod tests {
             &input(0.0, 0.0, 0.0, true),
             &Ok(TickOutput::default()),
             &f[..1],
+            &[],
             None,
         );
         let r = m.report(&[], Counts::default());
@@ -424,6 +469,7 @@ mod tests {
             &input(0.01, 0.0, 0.0, true),
             &Ok(TickOutput::default()),
             &f[1..],
+            &[],
             None,
         );
         let r = m.report(&[], Counts::default());
@@ -444,6 +490,7 @@ mod tests {
             &input(0.02, 0.0, 0.0, true),
             &Ok(TickOutput::default()),
             &far,
+            &[],
             None,
         );
         let r = m.report(&[], Counts::default());

@@ -159,3 +159,43 @@ fn a_damaged_log_replays_up_to_the_damage_and_reports_all_it_read() {
         "the flight's end event is after the damage"
     );
 }
+
+/// The report's `closest_actor_m` is the least distance, over the shots' ticks, from the
+/// drone's logged measurement to an actor's body as the log has them: the segment from the
+/// feet up to the head, so a drone beside the actor is its horizontal distance away and one
+/// above the head its distance to the top of the head. Here A walks past a camera that
+/// frames them at an MS, about 0.9 m away.
+#[test]
+fn the_report_says_how_close_the_drone_came_to_an_actor() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("closest.mcap");
+    let flown = fly_to_log("lqg", &path);
+    let log = FlightLog::open(&path).unwrap();
+    let mut closest = f64::INFINITY;
+    let mut per_shot = f64::INFINITY;
+    for t in log.ticks.iter().filter(|t| t.phase == Phase::Shots) {
+        let Some(m) = t.input.measurement else {
+            continue;
+        };
+        for a in &t.actors {
+            let horizontal =
+                (m.position_m[0] - a.position_m[0]).hypot(m.position_m[1] - a.position_m[1]);
+            let head = a.position_m[2] + a.height_m;
+            let d = if m.position_m[2] > head {
+                horizontal.hypot(m.position_m[2] - head)
+            } else if m.position_m[2] < a.position_m[2] {
+                horizontal.hypot(a.position_m[2] - m.position_m[2])
+            } else {
+                horizontal
+            };
+            closest = closest.min(d);
+            if t.shot == Some(0) {
+                per_shot = per_shot.min(d);
+            }
+        }
+    }
+    let got = flown.figures.closest_actor_m.unwrap();
+    assert!((got - closest).abs() < 1e-12, "{got} against {closest}");
+    assert_eq!(flown.shots[0].figures.closest_actor_m, Some(per_shot));
+    assert!((0.5..1.5).contains(&got), "{got}");
+}
