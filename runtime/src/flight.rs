@@ -335,6 +335,14 @@ impl Glide {
         self.t0_s + self.duration_s
     }
 
+    /// How its route goes, as the flight's events tell it (after the duration).
+    fn way(&self) -> &'static str {
+        match self.route {
+            Route::Straight => "",
+            Route::Around { .. } => ", round an actor in the way",
+        }
+    }
+
     fn sample(&self, t_s: f64, pitch_rad: f64) -> Sample {
         let u = ((t_s - self.t0_s) / self.duration_s).clamp(0.0, 1.0);
         let (s, ds, dds) = dronecine_compiler::blocking::min_jerk(u);
@@ -823,10 +831,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         let first = self.first_framing();
         let keep = self.keepout();
         let glide = Glide::new(t, &here, &first, self.setup.profile, &keep);
-        let way = match glide.route {
-            Route::Straight => "",
-            Route::Around { .. } => ", round an actor in the way",
-        };
+        let way = glide.way();
         let intrusion_m = keep.route_intrusion_m(&glide.route, &glide.from_m, &glide.to_m);
         self.event(
             t,
@@ -1316,10 +1321,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             self.event(t, "warning", "return_not_clear", message);
             return None;
         }
-        let way = match glide.route {
-            Route::Straight => "",
-            Route::Around { .. } => ", round an actor in the way",
-        };
+        let way = glide.way();
         let message = format!(
             "flying back to the take-off spot to land ({far_m:.1} m, {:.1} s{way})",
             glide.duration_s

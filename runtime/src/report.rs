@@ -12,7 +12,9 @@
 //!   camera counts as √8 (corner to opposite corner);
 //! - saturated fraction: ticks where the controller clamped a set-point, over controlled ticks.
 
+use dronecine_compiler::camera::Vec3;
 use dronecine_compiler::compile::{framing_miss_sq, FRAMING_MISS_MAX_SQ};
+use dronecine_compiler::framing::body_axis_distance_m;
 use serde::Serialize;
 
 use crate::control::{TickFault, TickInput, TickOutput};
@@ -75,7 +77,7 @@ pub struct FlightReport {
 }
 
 /// Running sums for [`Figures`].
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Accum {
     n: u64,
     sq_pos: f64,
@@ -87,26 +89,8 @@ struct Accum {
     controlled: u64,
     first_t_s: Option<f64>,
     last_t_s: f64,
-    /// `f64::INFINITY` until a measured tick with actors.
-    closest_m: f64,
-}
-
-impl Default for Accum {
-    fn default() -> Accum {
-        Accum {
-            n: 0,
-            sq_pos: 0.0,
-            max_pos: 0.0,
-            sq_heading: 0.0,
-            framing_n: 0,
-            sq_framing: 0.0,
-            saturated: 0,
-            controlled: 0,
-            first_t_s: None,
-            last_t_s: 0.0,
-            closest_m: f64::INFINITY,
-        }
-    }
+    /// `None` until a measured tick with actors.
+    closest_m: Option<f64>,
 }
 
 impl Accum {
@@ -119,7 +103,7 @@ impl Accum {
             rms_framing_error: rms(self.sq_framing, self.framing_n),
             saturated_fraction: (self.controlled > 0)
                 .then(|| self.saturated as f64 / self.controlled as f64),
-            closest_actor_m: self.closest_m.is_finite().then_some(self.closest_m),
+            closest_actor_m: self.closest_m,
             measured_ticks: self.n,
         }
     }
@@ -156,6 +140,9 @@ impl Metrics {
         (d.is_finite() && h.is_finite()).then_some((d, h))
     }
 
+    /// One tick, from what the flight logs of it (the flight and replay both call this with
+    /// a tick's fields: they hold them in different records).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
         phase: Phase,
@@ -169,14 +156,11 @@ impl Metrics {
         let (Phase::Shots, Some(i)) = (phase, shot) else {
             return;
         };
-        let closest_m = input.measurement.map_or(f64::INFINITY, |m| {
-            let p = m.position_m;
-            actors.iter().fold(f64::INFINITY, |d, a| {
-                let [x, y, z] = a.position_m;
-                let at = p[2].clamp(z, z + a.height_m);
-                let sq = (p[0] - x).powi(2) + (p[1] - y).powi(2) + (p[2] - at).powi(2);
-                d.min(sq.sqrt())
-            })
+        let closest_m = input.measurement.and_then(|m| {
+            let p = Vec3::from(m.position_m);
+            (actors.iter())
+                .map(|a| body_axis_distance_m(&p, a))
+                .min_by(f64::total_cmp)
         });
         if let Some(l) = latency_s.filter(|l| l.is_finite()) {
             self.latency.0 += l;
@@ -199,7 +183,9 @@ impl Metrics {
             acc.last_t_s = input.t_s;
             acc.controlled += 1;
             acc.saturated += saturated as u64;
-            acc.closest_m = acc.closest_m.min(closest_m);
+            if let Some(d) = closest_m {
+                acc.closest_m = Some(acc.closest_m.map_or(d, |c| c.min(d)));
+            }
             if let Some((e, h)) = error {
                 acc.n += 1;
                 acc.sq_pos += e * e;

@@ -375,11 +375,9 @@ impl FlightSink for Clearance {
             if self.closest.len() <= shot {
                 self.closest.resize(shot + 1, (f64::INFINITY, 0.0));
             }
-            let p = r.sample.position_m;
+            let p = r.sample.position_m.into();
             for a in r.actors {
-                let [x, y, z] = a.position_m;
-                let at = p[2].clamp(z, z + a.height_m);
-                let d = ((p[0] - x).powi(2) + (p[1] - y).powi(2) + (p[2] - at).powi(2)).sqrt();
+                let d = dronecine_compiler::framing::body_axis_distance_m(&p, a);
                 if d < self.closest[shot].0 {
                     self.closest[shot] = (d, r.input.t_s);
                 }
