@@ -171,7 +171,7 @@ pub struct Director {
     passing: Vec<(f64, ActorPose)>,
     /// The velocity of the framing a repositioning flight arrives on, as of this tick.
     merge_v: Vec3,
-    axes: Vec<(Vec3, f64)>,
+    axes: Vec<steering::Body>,
     /// Per plan, the actors each end's composition names (by index), for the solve memo.
     framed: Vec<[Vec<usize>; 2]>,
     /// Per plan, each end's composition prepared for solving (`None` for paths).
@@ -618,19 +618,35 @@ impl Director {
         // actors) take the reference to the wall, where a few centimetres of tracking error
         // land the drone (the stage failsafe). The monitor sees the target as solved: a
         // framing beyond the stage is still compile's error, and the pre-flight check's.
+        // Nor does the target come inside an actor's safety distance: a framing that would
+        // put the camera there (a live actor walking into it, a path or route grazing) is
+        // held at that distance, on the line from the actor's body to the framing, until the
+        // framing clears. The monitor and the shot's error still see the framing as solved.
         self.raw_target = target;
-        let goal = contained(
-            Kinematics {
-                p: target,
-                v: v_t,
-                a: if self.measured && !self.on_path() {
-                    trend
-                } else {
-                    a_t
-                },
+        let goal = Kinematics {
+            p: target,
+            v: v_t,
+            a: if self.measured && !self.on_path() {
+                trend
+            } else {
+                a_t
             },
-            &self.stage_lo,
-            &self.stage_hi,
+        };
+        self.axes.clear();
+        self.axes.extend(actors.iter().map(|a| steering::Body {
+            feet_m: Vec3::from(a.position_m),
+            height_m: a.height_m,
+            velocity_mps: Vec3::from(a.velocity_mps),
+        }));
+        let bodies = steering::Bodies {
+            axes: &self.axes,
+            clear_m: self.safety_m,
+        };
+        let (lo, hi) = (&self.stage_lo, &self.stage_hi);
+        let goal = contained(
+            steering::kept_clear(contained(goal, lo, hi), bodies),
+            lo,
+            hi,
         );
         let target = goal.p;
 
@@ -646,12 +662,6 @@ impl Director {
                 a: Vec3::zeros(),
             };
         } else {
-            self.axes.clear();
-            self.axes.extend(
-                actors
-                    .iter()
-                    .map(|a| (Vec3::from(a.position_m), a.height_m)),
-            );
             // A tick longer than the steering's step is steered in sub-steps toward the goal
             // as it moved during the tick, so the camera is the same at any rate.
             let (axes, safety_m) = (&self.axes, self.safety_m);
@@ -665,6 +675,7 @@ impl Director {
                         + steering::containment(p, lo, hi, 4.0)
                 },
                 (lo, hi),
+                bodies,
                 &self.limits,
                 &self.gains,
                 dt,
@@ -1544,7 +1555,8 @@ impl Director {
                         self.shots[index].span,
                         format!(
                             "this framing puts the camera {d:.2} m from {name} ({:.1} s into \
-                             the shot); {} keeps {:.2} m from actors",
+                             the shot); {} keeps {:.2} m from actors: the camera is held at \
+                             that distance, off its framing",
                             into_s.max(0.0),
                             self.profile_name,
                             self.safety_m
@@ -1765,7 +1777,8 @@ impl Director {
             if let Some(d) = diags.get_mut(c.diagnostic) {
                 d.message = format!(
                     "this framing puts the camera {:.2} m from {name} at the closest, {:.1} s \
-                     into the shot (too close from {:.1} s); {} keeps {:.2} m from actors",
+                     into the shot (too close from {:.1} s); {} keeps {:.2} m from actors: the \
+                     camera is held at that distance, off its framing",
                     c.closest_m,
                     c.closest_s.max(0.0),
                     c.first_s.max(0.0),

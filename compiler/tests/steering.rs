@@ -6,7 +6,7 @@
 use dronecine_compiler::blocking::min_jerk;
 use dronecine_compiler::camera::Vec3;
 use dronecine_compiler::profile::Profile;
-use dronecine_compiler::steering::{self, Kinematics, SteerGains, SteerLimits};
+use dronecine_compiler::steering::{self, Bodies, Kinematics, SteerGains, SteerLimits};
 use proptest::prelude::*;
 
 /// No walls within reach.
@@ -68,7 +68,7 @@ proptest! {
         let ticks = ((t_s + 2.0) / DT_S).ceil() as usize;
         for k in 1..=ticks {
             let goal = move_at(d, t_s, k as f64 * DT_S);
-            s = steering::step(&s, &goal, &goal.a, Vec3::zeros(), OPEN, &lim, &gains, DT_S);
+            s = steering::step(&s, &goal, &goal.a, Vec3::zeros(), OPEN, Bodies::NONE, &lim, &gains, DT_S);
             worst = worst.max((s.p - goal.p).norm());
             past = past.max((s.p - end).dot(&along));
         }
@@ -94,7 +94,7 @@ proptest! {
         let mut past = f64::NEG_INFINITY;
         for _ in 0..1500 {
             let before = s;
-            s = steering::step(&s, &target, &target.a, Vec3::zeros(), OPEN, &lim, &gains, DT_S);
+            s = steering::step(&s, &target, &target.a, Vec3::zeros(), OPEN, Bodies::NONE, &lim, &gains, DT_S);
             past = past.max((s.p - target.p).dot(&along));
             prop_assert!(s.v.xy().norm() <= lim.speed_h_mps + 1e-9);
             prop_assert!(s.v.z.abs() <= lim.speed_v_mps + 1e-9);

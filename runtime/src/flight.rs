@@ -760,10 +760,9 @@ impl<'s, 'b> Flight<'s, 'b> {
             )));
         }
         // …and clear of the actors as they stand now: one off their mark can stand where the
-        // first framing puts the drone, and the approach would fly it there (it keeps clear
-        // of the actors on the way, not at its end).
-        let to = Vec3::from(first.position_m);
-        if let Some((i, into_m)) = self.keepout().deepest_actor(&to) {
+        // first framing puts the drone. (The director would hold the drone at their distance,
+        // off the framing, from the first shot on: not a take to start.)
+        if let Some((i, into_m)) = self.keepout().deepest_actor(&Vec3::from(solved)) {
             if into_m > APPROACH_TOLERANCE_M {
                 let name = &self.setup.scene.actors[i].name;
                 return Err(FlightError::Preflight(format!(
