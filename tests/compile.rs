@@ -727,7 +727,7 @@ fn a_repositioning_flight_that_grazes_an_actor_keeps_their_distance() {
     let safety_m = ardrone().safety.actor_distance_m;
     assert!(closest > safety_m - 1e-3, "{closest} m from A");
     assert!(
-        closest < safety_m + 0.05,
+        closest < safety_m + 0.1,
         "{closest} m: the way no longer grazes A"
     );
 }

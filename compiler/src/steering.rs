@@ -419,28 +419,32 @@ fn out_of_bodies(
     (v, a)
 }
 
-/// The acceleration `a` with, for each actor's body the camera (`state`, relative to the
-/// body's motion) closes on so fast that, braking at [`LAST_BRAKE_SHARE`] of its limit from
-/// where its acceleration is now and at its jerk limit ([`stopping_m`]), it would come within
-/// `bodies.clear_m`, and whose course with `a` does come within it: at least the
-/// deceleration that stops it there (its limit if none does), which keeps its share of the
-/// limit, the rest of `a` scaled into what is left. Called on an acceleration already within
-/// the limits. A camera whose course passes the body wider is left alone, however fast it
-/// closes ([`stop_before_walls`] for a body).
+/// The acceleration `a` braking for the actors' bodies ([`stop_before_walls`] for a body).
+/// A camera (`state`, relative to the body's motion) brakes for a body when, braking at
+/// [`BRAKE_SHARE`] of its limit along the line from the body, reached from the acceleration
+/// it has now at its jerk limit ([`stopping_m`]), it would come within `bodies.clear_m`, and
+/// its course with `a` does come within it; it then brakes with the deceleration that stops
+/// it at that distance (its limit if none does). The brakes of every body it brakes for are
+/// summed and come first, within the limit; what `a` did across them keeps the room left.
+/// Called on an acceleration already within the limits.
 ///
-/// The director holds its goal outside that distance; without this the camera, a
-/// jerk-limited point mass chasing a framing that stops where an actor's distance holds it,
-/// ran on past the goal: `scene.psl`'s shot 2 on set (seed 9) took the reference 0.18 m
-/// inside Bob's distance.
-fn stop_before_bodies(
-    mut a: Vec3,
-    state: &Kinematics,
-    bodies: Bodies,
-    limits: &SteerLimits,
-) -> Vec3 {
+/// The course matters: judged on the straight line, or braking without an exact stopping
+/// distance, a camera following a framing that curves away or slows by itself was held
+/// back (0.13 m behind `scene.psl`'s shot 2, compiled, whose framing heads for Bob at
+/// 0.9 m/s and stops 0.66 m from him; 0.15 m behind a crane swinging past an actor at 2 m/s,
+/// random script 3049). The director holds its goal outside the distance; without this the
+/// camera, a jerk-limited point mass chasing a framing that stops where an actor's distance
+/// holds it, ran on past the goal: `scene.psl`'s shot 2 on set (seed 9) took the reference
+/// 0.18 m inside Bob's distance.
+fn stop_before_bodies(a: Vec3, state: &Kinematics, bodies: Bodies, limits: &SteerLimits) -> Vec3 {
     let jerk = limits.jerk_mps3;
     // The most the camera can brake with along any line (for the quick test below).
     let most = limits.accel_h_mps2.max(limits.accel_v_mps2);
+    let least_brake = BRAKE_SHARE * limits.accel_h_mps2.min(limits.accel_v_mps2);
+    // Each body's brake, outward, summed: a camera squeezed between two actors brakes for
+    // both (braking for the second alone undid the first's: random script 2331 went on
+    // between two actors 0.56 m apart, to 0.17 m from one).
+    let mut brakes = Vec3::zeros();
     for b in bodies.axes {
         let out = state.p - b.nearest_m(&state.p);
         let rel = state.v - b.velocity_mps;
@@ -457,12 +461,11 @@ fn stop_before_bodies(
         let speeding_up = -state.a.dot(&n);
         let ramp_s = (speeding_up.max(0.0) + most) / jerk;
         let fast_mps = speed + speeding_up.max(0.0) * ramp_s;
-        let least_brake = LAST_BRAKE_SHARE * limits.accel_h_mps2.min(limits.accel_v_mps2);
         if room_m > fast_mps * ramp_s + fast_mps * fast_mps / (2.0 * least_brake) {
             continue;
         }
         let accel = accel_along_mps2(&n, limits);
-        let brake = LAST_BRAKE_SHARE * accel;
+        let brake = BRAKE_SHARE * accel;
         if stopping_m(speed, speeding_up, brake, jerk) < room_m {
             continue;
         }
@@ -494,15 +497,22 @@ fn stop_before_bodies(
             }
             hi
         };
-        let along = a.dot(&n);
-        if along < need {
-            // Brake outward by `need`; what `a` did across the line keeps the room left.
-            let across = a - n * along;
-            let left = (accel * accel - need * need).max(0.0).sqrt();
-            a = n * need + truncate(across, left);
+        if a.dot(&n) < need {
+            brakes += n * need;
         }
     }
-    a
+    let size = brakes.norm();
+    if !(size > 0.0) {
+        return a;
+    }
+    // The brakes first, within the limit along them; what `a` did across them keeps the
+    // room left.
+    let way = brakes / size;
+    let accel = accel_along_mps2(&way, limits);
+    let brake = way * size.min(accel);
+    let across = a - way * a.dot(&way);
+    let left = (accel * accel - brake.norm_squared()).max(0.0).sqrt();
+    brake + truncate(across, left)
 }
 
 /// How far a point closing at `speed` (m/s, positive), speeding up at `speeding_up` (m/s²,
@@ -523,13 +533,6 @@ fn stopping_m(speed: f64, speeding_up: f64, brake: f64, jerk: f64) -> f64 {
 
 /// How many points of its course [`stop_before_bodies`] checks against a body.
 const COURSE_POINTS: usize = 8;
-
-/// From what share of the limit [`stop_before_bodies`] brakes: late, as a last resort.
-/// It judges the camera's course by the acceleration it is given now, which the framing it
-/// follows seldom keeps for long (on `scene.psl`'s shot 2, compiled, Alice's framing heads
-/// for Bob at 0.9 m/s and slows to stop 0.66 m from him): braking from [`BRAKE_SHARE`] of
-/// the limit, as for the walls, held that camera 0.13 m behind its framing.
-const LAST_BRAKE_SHARE: f64 = 0.8;
 
 /// [`truncate_hv`] for an acceleration, except that when exactly one horizontal axis is
 /// braking for a wall (`capped`, from [`brake_for_walls`]) that axis has the first call on

@@ -425,7 +425,7 @@ fn a_cut_from_behind_an_actor_to_their_front_goes_round_them_one_way() {
 /// its target. It feeds forward the acceleration's 30 ms trend now
 /// (`Director::actors_measured`): the flight to shot 12 keeps the actor distance (0.50 m).
 /// Shot 2 came as near as its framing does against the live actors (0.465 m, told on set as
-/// the framing's error); the camera is now held at Bob's distance (0.497 m).
+/// the framing's error); the camera is now held at Bob's distance (0.499 m).
 #[test]
 fn on_set_the_reference_does_not_leave_its_framing_for_an_actor() {
     let (text, script) = load("shots/scene.psl");
