@@ -407,6 +407,23 @@ impl Director {
     /// (`compile` is unchanged).
     pub fn actors_measured(&mut self) {
         self.measured = true;
+        self.monitor.actors_measured();
+    }
+
+    /// What the monitor found over shot `index` (its flight there included) that is not told
+    /// already: for a flight to tell when the shot is over, as `compile` tells them all at
+    /// the end ([`Director::finish`]). A framing told too close is not told again as the
+    /// camera coming near the actor.
+    pub fn shot_findings(&self, index: usize) -> Vec<Diagnostic> {
+        let too_close: Vec<bool> = self.closest.iter().map(Option::is_some).collect();
+        let mut out = Vec::new();
+        self.monitor
+            .shot_diagnostics(index, &self.shots, &self.timings, &too_close, &mut out);
+        let told_close = |d: &Diagnostic| {
+            (self.diagnostics.iter()).any(|t| t.code == Code::TooClose && t.span == d.span)
+        };
+        out.retain(|d| !(d.code == Code::TooClose && told_close(d)));
+        out
     }
 
     /// Whether the camera has a position: some step's framing (or path) has solved, or

@@ -112,6 +112,9 @@ pub struct Monitor {
     last_outside: Option<(usize, f64)>,
     /// The last in-shot sample's shot and how far inside an actor's distance the camera was.
     last_intrusion: Option<(usize, f64)>,
+    /// The actors are measured (a flight): what the framing demands is not told
+    /// ([`Monitor::actors_measured`]).
+    measured: bool,
 }
 
 impl Monitor {
@@ -136,6 +139,7 @@ impl Monitor {
             last_lag: None,
             last_outside: None,
             last_intrusion: None,
+            measured: false,
         }
     }
 
@@ -285,6 +289,18 @@ impl Monitor {
         }
     }
 
+    /// The actors it is fed are measured (a flight's director, `Director::actors_measured`):
+    /// the framing's own speed and acceleration are the live actors' noise differentiated,
+    /// and how far the reference is from it is mostly that noise smoothed away; neither is
+    /// told (on `scene.psl` on set, 8 to 12 shots a flight "needed" up to 33 m/s² or 30 m/s,
+    /// and the reference "fell" 0.27 m behind the LS that opens it, whose framing swings
+    /// with Bob's measured facing). The report's framing error says what the shot got. The
+    /// reference's own limits, the framing's jumps, the stage and the actors' distance are
+    /// told as in `compile`.
+    pub fn actors_measured(&mut self) {
+        self.measured = true;
+    }
+
     /// The diagnostics of everything that exceeded a limit. `held_off[i]`: shot `i`'s framing
     /// puts the camera inside an actor's safety distance, an error already reported. Its
     /// consequences are not told again: how far the drone, keeping its distance, stays
@@ -297,267 +313,284 @@ impl Monitor {
         held_off: &[bool],
     ) -> Vec<Diagnostic> {
         let mut out = Vec::new();
-        let is_held_off = |i: usize| held_off.get(i).copied().unwrap_or(false);
-        for (i, (st, shot)) in self.stats.iter().zip(shots).enumerate() {
-            let duration = shot.end_s - shot.start_s;
-            let retimeable = matches!(shot.content, ShotContent::Path(_))
-                || dronecine_grammar::script::moves_camera(shots, i);
-            // When, said from the shot's start; a shot's samples begin with the repositioning
-            // flight inserted before it, if any.
-            let start = timings
-                .iter()
-                .find(|x| x.index == i)
-                .map(|x| x.start_s)
-                .unwrap_or(shot.start_s);
-            let on_the_flight = |t: f64| t < start - 0.005;
-            let at = |t: f64| {
-                if on_the_flight(t) {
-                    format!(
-                        "on the repositioning flight, {:.1} s before the shot starts",
-                        round_up_1(start - t)
-                    )
-                } else {
-                    format!("{:.1} s into the shot", (t - start).max(0.0))
-                }
-            };
-            // How much longer a retimeable shot must be for both its speed and its
-            // acceleration to fit (speed scales as 1/T, acceleration as 1/T²), with 5% margin.
-            let retime = (st.demand_speed.value / self.speed_max)
-                .max((st.demand_accel.value / self.accel_max).sqrt())
-                * 1.05;
-            // What the shot asks that the drone cannot give: an error on its line, with what
-            // the label points at and the fix.
-            let infeasible = |message: String, label: &str, help: String| {
-                Diagnostic::error(Code::Infeasible, shot.span, message)
-                    .with_label(label)
-                    .with_help(help)
-            };
-            let mut demand_reported = false;
-            if st.jump.value > 0.0 {
-                // A jump sets the demand: said as such, with what changes it.
-                demand_reported = true;
-                out.push(infeasible(
-                    format!(
-                        "the framing jumps {:.2} m from one sample to the next ({}): no drone \
-                         follows that, {} flies {:.2} m/s",
-                        st.jump.value,
-                        at(st.jump.t_s),
-                        self.profile,
-                        self.speed_max
-                    ),
-                    "the framing jumps here",
-                    "as the actors move, the framing's camera has to change place at once (an \
-                     over-the-shoulder's other camera frames the profile better, or a two-shot's \
-                     size passes to the other actor, who is now nearer): cut to the framing as \
-                     it is after the change, or block the actors so that it does not happen"
-                        .to_string(),
-                ));
-            }
-            if !demand_reported && st.demand_speed.value > self.speed_max * SLACK {
-                demand_reported = true;
-                let need = st.demand_speed.value;
-                let help = if retimeable {
-                    format!("make it at least {:.1} s", round_up_1(duration * retime))
-                } else {
-                    "the framing follows the actors: slow their movement (a longer `over`) or \
-                     use a wider size"
-                        .to_string()
-                };
-                out.push(infeasible(
-                    format!(
-                        "this shot needs {need:.2} m/s ({}); {} flies {:.2} m/s",
-                        at(st.demand_speed.t_s),
-                        self.profile,
-                        self.speed_max
-                    ),
-                    "too fast for the drone",
-                    help,
-                ));
-            }
-            if !demand_reported && st.demand_accel.value > self.accel_max * SLACK {
-                demand_reported = true;
-                let need = st.demand_accel.value;
-                let help = if retimeable {
-                    format!("make it at least {:.1} s", round_up_1(duration * retime))
-                } else {
-                    "the framing follows the actors: make their movements smoother (a longer \
-                     `over`) or use a wider size"
-                        .to_string()
-                };
-                out.push(infeasible(
-                    format!(
-                        "this shot needs {need:.2} m/s² ({}); {} accelerates at most {:.2} m/s²",
-                        at(st.demand_accel.t_s),
-                        self.profile,
-                        self.accel_max
-                    ),
-                    "too abrupt for the drone",
-                    help,
-                ));
-            }
-            // A shot that the one before left behind its framing (that one's error already)
-            // is told only for what it adds: the lag it starts with is not its doing, and its
-            // fix ("make it longer") did not fix it. (Found compiling random scripts: 79 of
-            // 384 lag errors over 1,500 scripts were such a shot, starting up to 4.3 m behind.)
-            let entry_m = st.lag_carried.entry();
-            let own = st.lag.value > TRACKING_TOLERANCE_M;
-            let further = !own && st.lag_further.value > TRACKING_TOLERANCE_M;
-            if !demand_reported && !is_held_off(i) && (own || further) {
-                demand_reported = true;
-                out.push(infeasible(
-                    if further {
-                        format!(
-                            "the drone falls a further {:.2} m behind the framing ({}), {:.2} m \
-                             in all, within {}'s limits (it starts {:.2} m behind, where the shot \
-                             before left it)",
-                            st.lag_further.value,
-                            at(st.lag_further.t_s),
-                            st.lag_further.value + entry_m,
-                            self.profile,
-                            entry_m
-                        )
-                    } else {
-                        format!(
-                            "the drone falls {:.2} m behind the framing ({}) within {}'s limits",
-                            st.lag.value,
-                            at(st.lag.t_s),
-                            self.profile
-                        )
-                    },
-                    "the framing is lost here",
-                    if retimeable {
-                        format!(
-                            "make it longer (at least {:.1} s)",
-                            round_up_1(duration * 1.5)
-                        )
-                    } else {
-                        "slow the actors' movements or use a wider size".to_string()
-                    },
-                ));
-            }
-            let checks = [
-                (st.tilt, self.tilt_max, "tilt", "rad"),
-                (st.vz, self.vz_max, "vertical speed", "m/s"),
-                (st.yaw_rate, self.yaw_max, "yaw rate", "rad/s"),
-                (st.speed, self.speed_max, "speed", "m/s"),
-            ];
-            if !demand_reported {
-                for (peak, max, what, unit) in checks {
-                    if peak.value > max * SLACK {
-                        out.push(
-                            Diagnostic::error(
-                                Code::Infeasible,
-                                shot.span,
-                                format!(
-                                    "the reference needs a {what} of {:.2} {unit} ({}); {} allows {:.2} {unit}",
-                                    peak.value,
-                                    at(peak.t_s),
-                                    self.profile,
-                                    max
-                                ),
-                            )
-                            .with_label(format!("{what} over the limit"))
-                            .with_help(format!(
-                                "make the shot at least {:.1} s long",
-                                round_up_1(duration * peak.value / max)
-                            )),
-                        );
-                        break;
-                    }
-                }
-            }
-            let after_held_off = i > 0 && is_held_off(i - 1);
-            let (intrusion, intruded) =
-                if after_held_off || st.intrusion.value >= st.intrusion_on_the_way.value {
-                    (st.intrusion, st.intruded)
-                } else {
-                    (st.intrusion_on_the_way, st.intruded_on_the_way)
-                };
-            if intrusion.value > INTRUSION_TOLD_M {
-                let who = intruded
-                    .and_then(|i| self.names.get(i))
-                    .map(String::as_str)
-                    .unwrap_or("an actor");
-                out.push(
-                    Diagnostic::error(
-                        Code::TooClose,
-                        shot.span,
-                        format!(
-                            "the camera comes within {:.2} m of {who} ({}); {} keeps {:.2} m from actors",
-                            self.safety_m - intrusion.value,
-                            at(intrusion.t_s),
-                            self.profile,
-                            self.safety_m
-                        ),
-                    )
-                    .with_label(format!("too close to {who}"))
-                    .with_help(if on_the_flight(intrusion.t_s) {
-                        // No way there clear of the actor (routes keep clear where one is).
-                        format!(
-                            "the drone passes {who} on its way to this framing: frame the shot \
-                             from the side of {who} it comes from, or use a wider size or a \
-                             longer lens (`lens …`), which stand the framing further off"
-                        )
-                    } else {
-                        "use a wider size, a longer lens (`lens …`), or move the path away from \
-                         the actors"
-                            .to_string()
-                    }),
-                );
-            }
-            // Held at the margin: a warning (the shot is flown, a little off its framing) when
-            // the screen shows it (`IN_MARGIN_TOLD`), and the framing does not leave the stage
-            // (an error of its own).
-            if st.in_margin.value > IN_MARGIN_TOLD && st.outside.value <= OUTSIDE_TOLD_M {
-                let (p, by, when) = (st.in_margin_at, st.in_margin_m, at(st.in_margin.t_s));
-                let margin = self.margin_m;
-                let share = match st.in_margin_actor {
-                    Some((i, d)) => format!(
-                        " ({:.0} % of its {d:.2} m to {})",
-                        st.in_margin.value * 100.0,
-                        self.names.get(i).map_or("the actor", String::as_str)
-                    ),
-                    None => String::new(),
-                };
-                out.push(
-                    Diagnostic::warning(
-                        Code::InMargin,
-                        shot.span,
-                        format!(
-                            "this framing puts the camera {by:.2} m into the stage's {margin:.2} m \
-                             margin at ({:.2}, {:.2}, {:.2}) ({when}); the drone is held at the \
-                             margin, up to {by:.2} m off its framing{share}",
-                            p[0], p[1], p[2]
-                        ),
-                    )
-                    .with_label("into the stage's margin")
-                    .with_help(format!(
-                        "{} keeps {margin:.2} m from the stage's walls, floor and ceiling: make the \
-                         stage larger, or move the framing inward (a tighter size brings the \
-                         camera closer to the actors)",
-                        self.profile
-                    )),
-                );
-            }
-            if st.outside.value > OUTSIDE_TOLD_M {
-                let (p, by, when) = (st.outside_at, st.outside.value, at(st.outside.t_s));
-                let at_p = format!("at ({:.2}, {:.2}, {:.2}) ({when})", p[0], p[1], p[2]);
-                let message = if st.outside_framing {
-                    format!(
-                        "this framing puts the camera {by:.2} m outside the stage {at_p}; the \
-                         drone would be held inside, off its framing"
-                    )
-                } else {
-                    format!("the camera leaves the stage by {by:.2} m {at_p}")
-                };
-                out.push(
-                    Diagnostic::error(Code::LeavesStage, shot.span, message)
-                    .with_label("outside the flight volume")
-                    .with_help("make the stage larger, or move the path or the framing inside it (a tighter size brings the camera closer)"),
-                );
-            }
+        for i in 0..self.stats.len().min(shots.len()) {
+            self.shot_diagnostics(i, shots, timings, held_off, &mut out);
         }
         out
+    }
+
+    /// [`Monitor::diagnostics`] of shot `i` alone, into `out`: what a flight tells when the
+    /// shot is over (the samples of a shot end where the next shot's, its repositioning
+    /// flight's first, begin).
+    pub fn shot_diagnostics(
+        &self,
+        i: usize,
+        shots: &[Shot],
+        timings: &[ShotTiming],
+        held_off: &[bool],
+        out: &mut Vec<Diagnostic>,
+    ) {
+        let (Some(st), Some(shot)) = (self.stats.get(i), shots.get(i)) else {
+            return;
+        };
+        let is_held_off = |i: usize| held_off.get(i).copied().unwrap_or(false);
+        let duration = shot.end_s - shot.start_s;
+        let retimeable = matches!(shot.content, ShotContent::Path(_))
+            || dronecine_grammar::script::moves_camera(shots, i);
+        // When, said from the shot's start; a shot's samples begin with the repositioning
+        // flight inserted before it, if any.
+        let start = timings
+            .iter()
+            .find(|x| x.index == i)
+            .map(|x| x.start_s)
+            .unwrap_or(shot.start_s);
+        let on_the_flight = |t: f64| t < start - 0.005;
+        let at = |t: f64| {
+            if on_the_flight(t) {
+                format!(
+                    "on the repositioning flight, {:.1} s before the shot starts",
+                    round_up_1(start - t)
+                )
+            } else {
+                format!("{:.1} s into the shot", (t - start).max(0.0))
+            }
+        };
+        // How much longer a retimeable shot must be for both its speed and its
+        // acceleration to fit (speed scales as 1/T, acceleration as 1/T²), with 5% margin.
+        let retime = (st.demand_speed.value / self.speed_max)
+            .max((st.demand_accel.value / self.accel_max).sqrt())
+            * 1.05;
+        // What the shot asks that the drone cannot give: an error on its line, with what
+        // the label points at and the fix.
+        let infeasible = |message: String, label: &str, help: String| {
+            Diagnostic::error(Code::Infeasible, shot.span, message)
+                .with_label(label)
+                .with_help(help)
+        };
+        let mut demand_reported = false;
+        if st.jump.value > 0.0 {
+            // A jump sets the demand: said as such, with what changes it.
+            demand_reported = true;
+            out.push(infeasible(
+                format!(
+                    "the framing jumps {:.2} m from one sample to the next ({}): no drone \
+                     follows that, {} flies {:.2} m/s",
+                    st.jump.value,
+                    at(st.jump.t_s),
+                    self.profile,
+                    self.speed_max
+                ),
+                "the framing jumps here",
+                "as the actors move, the framing's camera has to change place at once (an \
+                 over-the-shoulder's other camera frames the profile better, or a two-shot's \
+                 size passes to the other actor, who is now nearer): cut to the framing as \
+                 it is after the change, or block the actors so that it does not happen"
+                    .to_string(),
+            ));
+        }
+        if !self.measured && !demand_reported && st.demand_speed.value > self.speed_max * SLACK {
+            demand_reported = true;
+            let need = st.demand_speed.value;
+            let help = if retimeable {
+                format!("make it at least {:.1} s", round_up_1(duration * retime))
+            } else {
+                "the framing follows the actors: slow their movement (a longer `over`) or \
+                 use a wider size"
+                    .to_string()
+            };
+            out.push(infeasible(
+                format!(
+                    "this shot needs {need:.2} m/s ({}); {} flies {:.2} m/s",
+                    at(st.demand_speed.t_s),
+                    self.profile,
+                    self.speed_max
+                ),
+                "too fast for the drone",
+                help,
+            ));
+        }
+        if !self.measured && !demand_reported && st.demand_accel.value > self.accel_max * SLACK {
+            demand_reported = true;
+            let need = st.demand_accel.value;
+            let help = if retimeable {
+                format!("make it at least {:.1} s", round_up_1(duration * retime))
+            } else {
+                "the framing follows the actors: make their movements smoother (a longer \
+                 `over`) or use a wider size"
+                    .to_string()
+            };
+            out.push(infeasible(
+                format!(
+                    "this shot needs {need:.2} m/s² ({}); {} accelerates at most {:.2} m/s²",
+                    at(st.demand_accel.t_s),
+                    self.profile,
+                    self.accel_max
+                ),
+                "too abrupt for the drone",
+                help,
+            ));
+        }
+        // A shot that the one before left behind its framing (that one's error already)
+        // is told only for what it adds: the lag it starts with is not its doing, and its
+        // fix ("make it longer") did not fix it. (Found compiling random scripts: 79 of
+        // 384 lag errors over 1,500 scripts were such a shot, starting up to 4.3 m behind.)
+        let entry_m = st.lag_carried.entry();
+        let own = st.lag.value > TRACKING_TOLERANCE_M;
+        let further = !own && st.lag_further.value > TRACKING_TOLERANCE_M;
+        if !self.measured && !demand_reported && !is_held_off(i) && (own || further) {
+            demand_reported = true;
+            out.push(infeasible(
+                if further {
+                    format!(
+                        "the drone falls a further {:.2} m behind the framing ({}), {:.2} m \
+                         in all, within {}'s limits (it starts {:.2} m behind, where the shot \
+                         before left it)",
+                        st.lag_further.value,
+                        at(st.lag_further.t_s),
+                        st.lag_further.value + entry_m,
+                        self.profile,
+                        entry_m
+                    )
+                } else {
+                    format!(
+                        "the drone falls {:.2} m behind the framing ({}) within {}'s limits",
+                        st.lag.value,
+                        at(st.lag.t_s),
+                        self.profile
+                    )
+                },
+                "the framing is lost here",
+                if retimeable {
+                    format!(
+                        "make it longer (at least {:.1} s)",
+                        round_up_1(duration * 1.5)
+                    )
+                } else {
+                    "slow the actors' movements or use a wider size".to_string()
+                },
+            ));
+        }
+        let checks = [
+            (st.tilt, self.tilt_max, "tilt", "rad"),
+            (st.vz, self.vz_max, "vertical speed", "m/s"),
+            (st.yaw_rate, self.yaw_max, "yaw rate", "rad/s"),
+            (st.speed, self.speed_max, "speed", "m/s"),
+        ];
+        if !demand_reported {
+            for (peak, max, what, unit) in checks {
+                if peak.value > max * SLACK {
+                    out.push(
+                        Diagnostic::error(
+                            Code::Infeasible,
+                            shot.span,
+                            format!(
+                                "the reference needs a {what} of {:.2} {unit} ({}); {} allows {:.2} {unit}",
+                                peak.value,
+                                at(peak.t_s),
+                                self.profile,
+                                max
+                            ),
+                        )
+                        .with_label(format!("{what} over the limit"))
+                        .with_help(format!(
+                            "make the shot at least {:.1} s long",
+                            round_up_1(duration * peak.value / max)
+                        )),
+                    );
+                    break;
+                }
+            }
+        }
+        let after_held_off = i > 0 && is_held_off(i - 1);
+        let (intrusion, intruded) =
+            if after_held_off || st.intrusion.value >= st.intrusion_on_the_way.value {
+                (st.intrusion, st.intruded)
+            } else {
+                (st.intrusion_on_the_way, st.intruded_on_the_way)
+            };
+        if intrusion.value > INTRUSION_TOLD_M {
+            let who = intruded
+                .and_then(|i| self.names.get(i))
+                .map(String::as_str)
+                .unwrap_or("an actor");
+            out.push(
+                Diagnostic::error(
+                    Code::TooClose,
+                    shot.span,
+                    format!(
+                        "the camera comes within {:.2} m of {who} ({}); {} keeps {:.2} m from actors",
+                        self.safety_m - intrusion.value,
+                        at(intrusion.t_s),
+                        self.profile,
+                        self.safety_m
+                    ),
+                )
+                .with_label(format!("too close to {who}"))
+                .with_help(if on_the_flight(intrusion.t_s) {
+                    // No way there clear of the actor (routes keep clear where one is).
+                    format!(
+                        "the drone passes {who} on its way to this framing: frame the shot \
+                         from the side of {who} it comes from, or use a wider size or a \
+                         longer lens (`lens …`), which stand the framing further off"
+                    )
+                } else {
+                    "use a wider size, a longer lens (`lens …`), or move the path away from \
+                     the actors"
+                        .to_string()
+                }),
+            );
+        }
+        // Held at the margin: a warning (the shot is flown, a little off its framing) when
+        // the screen shows it (`IN_MARGIN_TOLD`), and the framing does not leave the stage
+        // (an error of its own).
+        if st.in_margin.value > IN_MARGIN_TOLD && st.outside.value <= OUTSIDE_TOLD_M {
+            let (p, by, when) = (st.in_margin_at, st.in_margin_m, at(st.in_margin.t_s));
+            let margin = self.margin_m;
+            let share = match st.in_margin_actor {
+                Some((i, d)) => format!(
+                    " ({:.0} % of its {d:.2} m to {})",
+                    st.in_margin.value * 100.0,
+                    self.names.get(i).map_or("the actor", String::as_str)
+                ),
+                None => String::new(),
+            };
+            out.push(
+                Diagnostic::warning(
+                    Code::InMargin,
+                    shot.span,
+                    format!(
+                        "this framing puts the camera {by:.2} m into the stage's {margin:.2} m \
+                         margin at ({:.2}, {:.2}, {:.2}) ({when}); the drone is held at the \
+                         margin, up to {by:.2} m off its framing{share}",
+                        p[0], p[1], p[2]
+                    ),
+                )
+                .with_label("into the stage's margin")
+                .with_help(format!(
+                    "{} keeps {margin:.2} m from the stage's walls, floor and ceiling: make the \
+                     stage larger, or move the framing inward (a tighter size brings the \
+                     camera closer to the actors)",
+                    self.profile
+                )),
+            );
+        }
+        if st.outside.value > OUTSIDE_TOLD_M {
+            let (p, by, when) = (st.outside_at, st.outside.value, at(st.outside.t_s));
+            let at_p = format!("at ({:.2}, {:.2}, {:.2}) ({when})", p[0], p[1], p[2]);
+            let message = if st.outside_framing {
+                format!(
+                    "this framing puts the camera {by:.2} m outside the stage {at_p}; the \
+                     drone would be held inside, off its framing"
+                )
+            } else {
+                format!("the camera leaves the stage by {by:.2} m {at_p}")
+            };
+            out.push(
+                Diagnostic::error(Code::LeavesStage, shot.span, message)
+                .with_label("outside the flight volume")
+                .with_help("make the stage larger, or move the path or the framing inside it (a tighter size brings the camera closer)"),
+            );
+        }
     }
 }
 

@@ -586,6 +586,15 @@ impl<'s, 'b> Flight<'s, 'b> {
         });
     }
 
+    /// What the director's monitor found over shot `index`, now that it is over (the
+    /// reference's lag behind the framing and its limits, a framing out of the stage or held
+    /// at its margin, the camera near an actor), told as the director's own findings are.
+    fn tell_findings(&mut self, t_s: f64, director: &Director, index: usize) {
+        for d in director.shot_findings(index) {
+            self.director_finding(t_s, &d);
+        }
+    }
+
     fn tell(&mut self, e: Event) {
         self.director_errors += u64::from(e.is_director_error());
         self.observer.event(&e);
@@ -929,6 +938,10 @@ impl<'s, 'b> Flight<'s, 'b> {
                     self.director_finding(t, d);
                 }
                 if current != Some(sample.shot) {
+                    // The shot before is over: what the monitor found in it.
+                    if let Some(over) = current {
+                        self.tell_findings(t, &director, over);
+                    }
                     current = Some(sample.shot);
                     self.event(
                         t,
@@ -983,6 +996,9 @@ impl<'s, 'b> Flight<'s, 'b> {
                     completed = true;
                     break;
                 }
+            }
+            if let Some(last) = current {
+                self.tell_findings(t, &director, last);
             }
         }
 
