@@ -415,15 +415,25 @@ impl Director {
     /// the end ([`Director::finish`]). A framing told too close is not told again as the
     /// camera coming near the actor.
     pub fn shot_findings(&self, index: usize) -> Vec<Diagnostic> {
-        let too_close: Vec<bool> = self.closest.iter().map(Option::is_some).collect();
         let mut out = Vec::new();
-        self.monitor
-            .shot_diagnostics(index, &self.shots, &self.timings, &too_close, &mut out);
-        let told_close = |d: &Diagnostic| {
-            (self.diagnostics.iter()).any(|t| t.code == Code::TooClose && t.span == d.span)
-        };
-        out.retain(|d| !(d.code == Code::TooClose && told_close(d)));
+        self.findings_into(index, &mut out);
         out
+    }
+
+    /// [`Director::shot_findings`] of shot `index`, into `out`.
+    fn findings_into(&self, index: usize, out: &mut Vec<Diagnostic>) {
+        let from = out.len();
+        let held_off = |k: usize| self.closest.get(k).is_some_and(Option::is_some);
+        self.monitor
+            .shot_diagnostics(index, &self.shots, &self.timings, held_off, out);
+        let span = self.shots.get(index).map(|s| s.span);
+        let told_close =
+            (self.diagnostics.iter()).any(|t| t.code == Code::TooClose && Some(t.span) == span);
+        // (The monitor tells the camera near an actor once a shot at most.)
+        let near = out[from..].iter().position(|d| d.code == Code::TooClose);
+        if let (true, Some(k)) = (told_close, near) {
+            out.remove(from + k);
+        }
     }
 
     /// Whether the camera has a position: some step's framing (or path) has solved, or
@@ -1782,9 +1792,13 @@ impl Director {
     /// Diagnostics from planning and flying (repositions, cuts that do not fit, framings
     /// that cannot be solved, limits exceeded), in source order.
     pub fn finish(mut self) -> (Vec<ShotTiming>, Vec<Diagnostic>) {
-        let shots = std::mem::take(&mut self.shots);
+        // The monitor's, shot by shot, as a flight tells them (a framing told too close is
+        // not told again as the camera coming near the actor).
+        let mut found = Vec::new();
+        for i in 0..self.shots.len() {
+            self.findings_into(i, &mut found);
+        }
         let mut diags = std::mem::take(&mut self.diagnostics);
-        let too_close: Vec<bool> = self.closest.iter().map(Option::is_some).collect();
         // A framing too close: the closest it came, when it came closer than first told.
         for c in self.closest.iter().flatten() {
             if c.closest_m > c.first_m - 0.005 {
@@ -1804,12 +1818,8 @@ impl Director {
                 );
             }
         }
-        diags.extend(self.monitor.diagnostics(&shots, &self.timings, &too_close));
+        diags.append(&mut found);
         diags.sort_by_key(|d| (d.span.start, d.span.end, d.code));
-        // The monitor's closeness report repeats a framing already reported as too close.
-        diags.dedup_by(|b, a| {
-            a.code == Code::TooClose && b.code == Code::TooClose && a.span == b.span
-        });
         (self.timings, diags)
     }
 }

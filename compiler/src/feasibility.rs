@@ -112,8 +112,8 @@ pub struct Monitor {
     last_outside: Option<(usize, f64)>,
     /// The last in-shot sample's shot and how far inside an actor's distance the camera was.
     last_intrusion: Option<(usize, f64)>,
-    /// The actors are measured (a flight): what the framing demands is not told
-    /// ([`Monitor::actors_measured`]).
+    /// The actors are measured (a flight): what the framing demands, and the reference's
+    /// lag behind it, are not told ([`Monitor::actors_measured`]).
     measured: bool,
 }
 
@@ -301,39 +301,25 @@ impl Monitor {
         self.measured = true;
     }
 
-    /// The diagnostics of everything that exceeded a limit. `held_off[i]`: shot `i`'s framing
-    /// puts the camera inside an actor's safety distance, an error already reported. Its
-    /// consequences are not told again: how far the drone, keeping its distance, stays
-    /// behind that framing, and a repositioning flight after the shot that starts inside the
-    /// actor's distance, where the shot left the drone.
-    pub fn diagnostics(
-        &self,
-        shots: &[Shot],
-        timings: &[ShotTiming],
-        held_off: &[bool],
-    ) -> Vec<Diagnostic> {
-        let mut out = Vec::new();
-        for i in 0..self.stats.len().min(shots.len()) {
-            self.shot_diagnostics(i, shots, timings, held_off, &mut out);
-        }
-        out
-    }
-
-    /// [`Monitor::diagnostics`] of shot `i` alone, into `out`: what a flight tells when the
-    /// shot is over (the samples of a shot end where the next shot's, its repositioning
-    /// flight's first, begin).
+    /// The diagnostics of everything in shot `i` (its repositioning flight included) that
+    /// exceeded a limit, into `out`: `compile` tells every shot's at the end, a flight each
+    /// shot's when it is over (a shot's samples end where the next shot's, its repositioning
+    /// flight's first, begin). `is_held_off(k)`: shot `k`'s framing puts the camera inside an
+    /// actor's safety distance, an error already reported. Its consequences are not told
+    /// again: how far the drone, keeping its distance, stays behind that framing, and a
+    /// repositioning flight after the shot that starts inside the actor's distance, where
+    /// the shot left the drone.
     pub fn shot_diagnostics(
         &self,
         i: usize,
         shots: &[Shot],
         timings: &[ShotTiming],
-        held_off: &[bool],
+        is_held_off: impl Fn(usize) -> bool,
         out: &mut Vec<Diagnostic>,
     ) {
         let (Some(st), Some(shot)) = (self.stats.get(i), shots.get(i)) else {
             return;
         };
-        let is_held_off = |i: usize| held_off.get(i).copied().unwrap_or(false);
         let duration = shot.end_s - shot.start_s;
         let retimeable = matches!(shot.content, ShotContent::Path(_))
             || dronecine_grammar::script::moves_camera(shots, i);
