@@ -102,6 +102,11 @@ pub struct Safety {
     pub actor_distance_m: f64,
     /// The reference stays this far inside the stage walls, floor and ceiling.
     pub stage_margin_m: f64,
+    /// On set, the reference keeps `actor_distance_m` plus this from the actors, so that the
+    /// drone itself, which strays from its reference by its tracking error, keeps
+    /// `actor_distance_m` (the director, against measured actors). A compiled reference, a
+    /// perfect drone's, keeps `actor_distance_m` only.
+    pub tracking_margin_m: f64,
 }
 
 /// Settings of the runtime's LQG servo and Kalman filters (control.md §4).
@@ -125,6 +130,10 @@ pub struct Servo {
 
 /// The share of the tilt the reference may use for cruising speed when a profile names none.
 pub const DEFAULT_AUTHORITY: f64 = 0.5;
+
+/// The tracking margin of a profile that names none ([`Safety::tracking_margin_m`]): more
+/// than the built-in AR.Drone profiles' measured 0.08 m (indoor limits) and 0.12 m (outdoor).
+pub const DEFAULT_TRACKING_MARGIN_M: f64 = 0.15;
 
 const ARDRONE2_TOML: &str = include_str!("../profiles/ardrone2.toml");
 const ARDRONE2_OUTDOOR_TOML: &str = include_str!("../profiles/ardrone2-outdoor.toml");
@@ -305,6 +314,7 @@ impl Profile {
             num(self.safety.actor_distance_m),
         );
         line("stage_margin_m", num(self.safety.stage_margin_m));
+        line("tracking_margin_m", num(self.safety.tracking_margin_m));
         line("\n[servo]\nq", list(&s.q));
         line("r", list(&s.r));
         line("heading_gamma", num(s.heading_gamma));
@@ -726,6 +736,13 @@ const SAFETY: SectionSpec = SectionSpec {
             "0.3",
             "how far inside the stage's walls, floor and ceiling the drone stays",
         ),
+        optional(key(
+            "tracking_margin_m",
+            Kind::Num(Range::new(Lo::Ge(0.0), Hi::Le(10.0))),
+            " m",
+            "0.08",
+            "how far the drone strays from its reference: on set the reference keeps this much more than `actor_distance_m` from the actors",
+        )),
     ],
 };
 
@@ -1846,10 +1863,15 @@ impl<'s> Reader<'s> {
             s.absent("actor_distance_m");
         }
         let margin = s.num(self, "stage_margin_m");
+        let tracking = match s.opt_num(self, "tracking_margin_m") {
+            Got::Absent => Some(DEFAULT_TRACKING_MARGIN_M),
+            got => got.ok(),
+        };
         s.finish(self);
         Some(Safety {
             actor_distance_m: actor.ok()?,
             stage_margin_m: margin?,
+            tracking_margin_m: tracking?,
         })
     }
 
@@ -2182,6 +2204,7 @@ mod tests {
                 "authority",
                 "speed_max_mps",
                 "accel_max_mps2",
+                "tracking_margin_m",
             ];
             match Profile::from_toml("cut", &cut) {
                 Ok(_) => assert!(optional.contains(&key), "{key} is required"),

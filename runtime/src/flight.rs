@@ -589,9 +589,53 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// What the director's monitor found over shot `index`, now that it is over (the
     /// reference's lag behind the framing and its limits, a framing out of the stage or held
     /// at its margin, the camera near an actor), told as the director's own findings are.
+    ///
+    /// And the drone's own closest to an actor in it, as measured, when that is inside their
+    /// safety distance: the reference keeps the profile's tracking margin more on set, and a
+    /// drone that still comes inside tracks worse than its profile says.
     fn tell_findings(&mut self, t_s: f64, director: &Director, index: usize) {
         for d in director.shot_findings(index) {
             self.director_finding(t_s, &d);
+        }
+        let safety = &self.setup.profile.safety;
+        if let Some(c) = self.metrics.shot_closest(index) {
+            if c.distance_m < safety.actor_distance_m {
+                let name = self
+                    .setup
+                    .scene
+                    .actors
+                    .get(c.actor)
+                    .map_or("an actor", |a| &a.name);
+                let message = format!(
+                    "shot {}: the drone came {:.2} m from {name} at {:.2} s (as measured); {} \
+                     keeps {:.2} m from actors",
+                    index + 1,
+                    c.distance_m,
+                    c.t_s,
+                    self.setup.profile.name,
+                    safety.actor_distance_m
+                );
+                let help = format!(
+                    "on set the reference keeps the profile's `tracking_margin_m` ({:.2} m) \
+                     more than that from actors, and the drone strayed {:.2} m beyond it: \
+                     raise the margin, or frame the shot wider",
+                    safety.tracking_margin_m,
+                    safety.actor_distance_m - c.distance_m
+                );
+                let line = self.setup.script.timeline.get(index).map(|s| {
+                    let source = self.setup.source;
+                    let (line, _) = LineIndex::new(source).line_col(source, s.span.start);
+                    u32::try_from(line).unwrap_or(u32::MAX)
+                });
+                self.tell(Event {
+                    t_s,
+                    level: "warning".into(),
+                    kind: "drone_near_actor".into(),
+                    message,
+                    line,
+                    help: Some(help),
+                });
+            }
         }
     }
 

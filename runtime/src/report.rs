@@ -90,7 +90,18 @@ struct Accum {
     first_t_s: Option<f64>,
     last_t_s: f64,
     /// `None` until a measured tick with actors.
-    closest_m: Option<f64>,
+    closest: Option<Closest>,
+}
+
+/// Where the drone, as measured, came closest to an actor's body (the segment from their
+/// feet to the top of their head) over a shot or the flight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Closest {
+    pub distance_m: f64,
+    /// The actor's index in the scene.
+    pub actor: usize,
+    /// The tick's flight clock.
+    pub t_s: f64,
 }
 
 impl Accum {
@@ -103,7 +114,7 @@ impl Accum {
             rms_framing_error: rms(self.sq_framing, self.framing_n),
             saturated_fraction: (self.controlled > 0)
                 .then(|| self.saturated as f64 / self.controlled as f64),
-            closest_actor_m: self.closest_m,
+            closest_actor_m: self.closest.map(|c| c.distance_m),
             measured_ticks: self.n,
         }
     }
@@ -140,6 +151,12 @@ impl Metrics {
         (d.is_finite() && h.is_finite()).then_some((d, h))
     }
 
+    /// Where the drone came closest to an actor in shot `index` so far (`None` before a
+    /// measured tick of it).
+    pub fn shot_closest(&self, index: usize) -> Option<Closest> {
+        self.shots.get(index).and_then(|a| a.closest)
+    }
+
     /// One tick, from what the flight logs of it (the flight and replay both call this with
     /// a tick's fields: they hold them in different records).
     #[allow(clippy::too_many_arguments)]
@@ -156,11 +173,16 @@ impl Metrics {
         let (Phase::Shots, Some(i)) = (phase, shot) else {
             return;
         };
-        let closest_m = input.measurement.and_then(|m| {
+        let closest = input.measurement.and_then(|m| {
             let p = Vec3::from(m.position_m);
-            (actors.iter())
-                .map(|a| body_axis_distance_m(&p, a))
-                .min_by(f64::total_cmp)
+            (actors.iter().enumerate())
+                .map(|(actor, a)| Closest {
+                    distance_m: body_axis_distance_m(&p, a),
+                    actor,
+                    t_s: input.t_s,
+                })
+                .filter(|c| c.distance_m.is_finite())
+                .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m))
         });
         if let Some(l) = latency_s.filter(|l| l.is_finite()) {
             self.latency.0 += l;
@@ -183,8 +205,10 @@ impl Metrics {
             acc.last_t_s = input.t_s;
             acc.controlled += 1;
             acc.saturated += saturated as u64;
-            if let Some(d) = closest_m {
-                acc.closest_m = Some(acc.closest_m.map_or(d, |c| c.min(d)));
+            if let Some(d) = closest {
+                if acc.closest.is_none_or(|c| d.distance_m < c.distance_m) {
+                    acc.closest = Some(d);
+                }
             }
             if let Some((e, h)) = error {
                 acc.n += 1;
