@@ -2085,6 +2085,31 @@ mod tests {
     }
 
     #[test]
+    fn the_tracking_margin_is_read_defaulted_and_checked() {
+        assert_eq!(ardrone2().safety.tracking_margin_m, 0.08);
+        let outdoor = Profile::builtin("ardrone2-outdoor").unwrap();
+        assert_eq!(outdoor.safety.tracking_margin_m, 0.12);
+        // Absent: the conservative default, without a word.
+        let line = ARDRONE2_TOML
+            .lines()
+            .find(|l| l.starts_with("tracking_margin_m"))
+            .unwrap();
+        let (p, w) = Profile::from_toml("x", &ARDRONE2_TOML.replace(line, "")).unwrap();
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!(p.safety.tracking_margin_m, DEFAULT_TRACKING_MARGIN_M);
+        // Negative: refused, at the number.
+        let src = ARDRONE2_TOML.replace(line, "tracking_margin_m = -0.1");
+        let d = Profile::from_toml("x", &src).unwrap_err();
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(&src[d[0].span.start..d[0].span.end], "-0.1");
+        assert!(
+            d[0].message.contains("tracking_margin_m"),
+            "{}",
+            d[0].message
+        );
+    }
+
+    #[test]
     fn derived_limits_take_the_weaker_axis() {
         let mut m = ardrone2().model;
         m.gain_pitch_mps_per_rad = 10.0;
