@@ -14,7 +14,7 @@
 //!    interpolation of visual parameters between two compositions (a `then` move), a path,
 //!    or the repositioning trajectory;
 //! 3. steer the camera toward it (`steering`), kept inside the stage and out of the actors'
-//!    safety cylinders, and orient it so that the framing is true at the camera's actual
+//!    safety distance, and orient it so that the framing is true at the camera's actual
 //!    position;
 //! 4. check the sample against the profile (`feasibility`).
 

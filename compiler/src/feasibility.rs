@@ -204,12 +204,8 @@ impl Monitor {
         st.tilt.see(crate::norm_xy(x, y) / self.gain, t);
         st.vz.see(v.z.abs(), t);
         st.yaw_rate.see(s.heading_rate_radps.abs(), t);
-        let intrusion_of = |actor: &ActorPose| {
-            if p.z > actor.position_m[2] + actor.height_m + self.safety_m {
-                return f64::NEG_INFINITY;
-            }
-            self.safety_m - crate::norm_xy(p.x - actor.position_m[0], p.y - actor.position_m[1])
-        };
+        let intrusion_of =
+            |actor: &ActorPose| crate::route::body_intrusion_m(&p, actor, self.safety_m);
         let deepest = in_shot.then(|| actors.iter().map(intrusion_of).fold(0.0, f64::max));
         if let Some(deepest) = deepest {
             // As for the stage: a shot that continues the one before starts where that one

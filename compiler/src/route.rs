@@ -7,7 +7,7 @@
 //! the angle change together, so the camera keeps its distance from those actors. That arc
 //! can still cross the stage's walls, or pass through an actor who is not at the pivot (two
 //! actors: the pivot is between them). [`choose`] therefore flies the short arc when it keeps
-//! inside the stage and out of every actor's safety cylinder (as far as its two ends allow);
+//! inside the stage and out of every actor's safety distance (as far as its two ends allow);
 //! otherwise the shortest clear route among the long arc, the straight line and the arcs
 //! round each actor (the long way round the pivot can be nearly twice the straight line's
 //! length, and every metre is time taken from the script's clock; an arc round the actor in
@@ -35,13 +35,13 @@ const MIN_RADIUS_M: f64 = 0.2;
 const MIN_TURN_FOR_LONG_WAY_RAD: f64 = 0.5;
 /// Points at which a route's clearance is checked.
 const CHECKS: usize = 64;
-/// Intrusions (into an actor's cylinder or through a wall) up to this count as clear: the
+/// Intrusions (into an actor's safety distance or through a wall) up to this count as clear: the
 /// steering's containment and separation push the camera back from a route that only grazes
-/// them (the short arcs of `shots/scene.psl` come 0.021 m into a wall or a cylinder and are
+/// them (the short arcs of `shots/scene.psl` come 0.021 m into a wall or an actor's distance and are
 /// flown clear of both). A deeper intrusion is flown as is only when no other route is clearer.
 const TOLERANCE_M: f64 = 0.1;
-/// The same for an actor's cylinder, where separation pushes back less than containment does
-/// from a wall: a straight flight that came 0.09 m into a walking actor's cylinder (counted
+/// The same for an actor's safety distance, where separation pushes back less than containment does
+/// from a wall: a straight flight that came 0.09 m into a walking actor's distance (counted
 /// clear at 0.1 m) was flown 0.43 m from them, where the profile keeps 0.50 m, and compile
 /// refused the script (random script 2145). The arcs of `shots/scene.psl` graze 0.021 m.
 const ACTOR_TOLERANCE_M: f64 = 0.03;
@@ -208,8 +208,9 @@ pub fn merge_m_per_mps(u: f64, duration_s: f64, speed_mps: f64, limits: &SteerLi
 /// Where a route may go: inside the box `[lo, hi]` (the director gives the stage less the
 /// profile's `stage_margin_m`, where it keeps its target: a route that hugged a wall took the
 /// reference there, and a few centimetres of tracking error then landed the drone) and outside
-/// each actor's safety cylinder (radius `safety_m` round the body's vertical, up to
-/// `safety_m` above the head), where they stand and where they pass while the drone flies.
+/// each actor's safety distance `safety_m` (from the segment from their feet to the top of
+/// their head, as [`body_intrusion_m`] measures it), where they stand and where they pass
+/// while the drone flies.
 pub struct Keepout<'a> {
     pub lo: Vec3,
     pub hi: Vec3,
@@ -229,7 +230,7 @@ pub struct Keepout<'a> {
 /// way, the drone flies its route plus `arrive_v · merge(u)`, an offset that falls behind
 /// along the framing's velocity by up to 0.2·τ·speed (metres, for a framing that moves fast:
 /// random script 2378's flight, planned clear on its route alone, swung 0.19 m into an
-/// actor's cylinder).
+/// actor's distance).
 #[derive(Clone, Copy, Debug)]
 pub struct Merge<'a> {
     /// The framing's velocity on arrival.
@@ -258,13 +259,13 @@ pub fn stage_less_margin(stage: &dronecine_grammar::script::Stage, margin_m: f64
 }
 
 impl Keepout<'_> {
-    /// How far `p` is into a wall or an actor's cylinder (0 when clear).
+    /// How far `p` is into a wall or an actor's safety distance (0 when clear).
     pub fn intrusion_m(&self, p: &Vec3) -> f64 {
         let (walls, actors) = self.intrusions_m(p);
         walls.max(actors)
     }
 
-    /// How far `p` is into the walls, and into the actors' cylinders (each 0 when clear).
+    /// How far `p` is into the walls, and into the actors' safety distance (each 0 when clear).
     fn intrusions_m(&self, p: &Vec3) -> (f64, f64) {
         let mut walls: f64 = 0.0;
         for i in 0..3 {
@@ -273,12 +274,12 @@ impl Keepout<'_> {
         (walls, self.deepest_actor(p).map_or(0.0, |(_, d)| d))
     }
 
-    /// The actor (by index) whose safety cylinder `p` is deepest in, and how deep; `None`
+    /// The actor (by index) whose safety distance `p` is deepest in, and how deep; `None`
     /// when `p` is clear of every actor's.
     pub fn deepest_actor(&self, p: &Vec3) -> Option<(usize, f64)> {
         let mut deepest = None;
         for (i, a) in self.actors.iter().enumerate() {
-            let d = cylinder_intrusion_m(p, a, self.safety_m);
+            let d = body_intrusion_m(p, a, self.safety_m);
             if d > deepest.map_or(0.0, |(_, worst)| worst) {
                 deepest = Some((i, d));
             }
@@ -295,7 +296,7 @@ impl Keepout<'_> {
     }
 
     /// The deepest intrusions along `route` from `a` to `b`: into the walls, into the
-    /// actors' cylinders. An actor passing at a fraction `u` of the flight's time is checked
+    /// actors' safety distance. An actor passing at a fraction `u` of the flight's time is checked
     /// against where the flight is then (flown on a minimum-jerk clock, as the director flies
     /// it), and as early or late as the spacing of the passing poses, for a flight that runs
     /// a little behind or ahead.
@@ -332,21 +333,18 @@ impl Keepout<'_> {
                 .filter(|u| (0.0..=1.0).contains(u))
                 .map(flown)
                 .fold(worst, |w, p| {
-                    w.max(cylinder_intrusion_m(&p, pose, self.safety_m))
+                    w.max(body_intrusion_m(&p, pose, self.safety_m))
                 })
         });
         (walls, standing.max(passing))
     }
 }
 
-/// How far `p` is into the safety cylinder of the actor at `a` (radius `safety_m` round the
-/// body's vertical, up to `safety_m` above the head); 0 or less when clear.
-fn cylinder_intrusion_m(p: &Vec3, a: &ActorPose, safety_m: f64) -> f64 {
-    let [x, y, z] = a.position_m;
-    if p.z > z + a.height_m + safety_m {
-        return 0.0;
-    }
-    safety_m - crate::norm_xy(p.x - x, p.y - y)
+/// How far `p` is inside the actor's safety distance `safety_m`, measured as everywhere
+/// ([`framing::body_axis_distance_m`](crate::framing::body_axis_distance_m), to the segment
+/// from their feet to the top of their head); 0 or less when clear.
+pub fn body_intrusion_m(p: &Vec3, a: &ActorPose, safety_m: f64) -> f64 {
+    safety_m - crate::framing::body_axis_distance_m(p, a)
 }
 
 /// The route a flight takes unless something is in its way: round `pivot` the short way, or
@@ -394,7 +392,7 @@ pub fn choose(a: &Vec3, b: &Vec3, pivot: Option<Vec3>, keep: &Keepout) -> Route 
         ]
     };
     let long_round_pivot = pivot.map(|p| both_ways(p)[1]).unwrap_or(None);
-    // Round an actor who stands in the way: both ends are outside their cylinder, so an arc
+    // Round an actor who stands in the way: both ends are outside their distance, so an arc
     // that keeps its radius between the ends' keeps out of it.
     let round_actors = keep.actors.iter().flat_map(|actor| {
         let [x, y, _] = actor.position_m;
@@ -497,6 +495,47 @@ mod tests {
         }
     }
 
+    /// One measure of an actor's distance, the segment from their feet to the top of their
+    /// head: the routes, the monitor (both [`body_intrusion_m`]) and the steering's
+    /// separation agree with `framing::body_axis_distance_m`, above the head's corner too
+    /// (where the flat-topped cylinder they used before reached 0.5 m above the head at
+    /// any horizontal distance under 0.5 m).
+    #[test]
+    fn an_actors_distance_is_measured_one_way() {
+        use crate::framing::body_axis_distance_m;
+        use crate::steering::{separation, Body};
+        let a = actor(1.0, -1.0);
+        let top = a.position_m[2] + a.height_m;
+        let body = [Body {
+            feet_m: Vec3::from(a.position_m),
+            height_m: a.height_m,
+            velocity_mps: Vec3::zeros(),
+        }];
+        let (lo, hi) = (Vec3::new(-9.0, -9.0, -9.0), Vec3::new(9.0, 9.0, 9.0));
+        let actors = [a];
+        let keep = keepout(lo, hi, &actors);
+        for (out_m, up_m, inside) in [
+            (0.3, -0.5, true),  // beside the body
+            (0.6, -0.5, false), // beside, clear
+            (0.3, 0.3, true),   // over the head's corner: 0.42 m
+            (0.4, 0.45, false), // over the corner: 0.60 m (inside the old cylinder)
+            (0.0, 0.45, true),  // right over the head
+        ] {
+            let p = Vec3::new(1.0 + out_m, -1.0, top + up_m);
+            let d = body_axis_distance_m(&p, &a);
+            assert_eq!(d < 0.5, inside, "{out_m}, {up_m}: {d}");
+            assert_eq!(body_intrusion_m(&p, &a, 0.5), 0.5 - d);
+            assert_eq!(keep.deepest_actor(&p).is_some(), inside, "{out_m}, {up_m}");
+            let push = separation(&p, &body, 0.5, 3.0);
+            assert_eq!(push != Vec3::zeros(), inside && d > 1e-6, "{out_m}, {up_m}");
+            if push != Vec3::zeros() {
+                // Away from the body's nearest point.
+                let away = p - body[0].nearest_m(&p);
+                assert!(push.normalize().dot(&away.normalize()) > 1.0 - 1e-12);
+            }
+        }
+    }
+
     /// `stage 8m x 6m x 3m`.
     fn stage() -> (Vec3, Vec3) {
         (Vec3::new(-4.0, -3.0, 0.0), Vec3::new(4.0, 3.0, 3.0))
@@ -528,7 +567,7 @@ mod tests {
                 .map(|k| {
                     let u = k as f64 / 400.0;
                     let p = route.at(&a, &b, crate::blocking::min_jerk(u).0) + merge.offset_m(u);
-                    cylinder_intrusion_m(&p, &actors[0], 0.5)
+                    body_intrusion_m(&p, &actors[0], 0.5)
                 })
                 .fold(f64::NEG_INFINITY, f64::max)
         };
@@ -642,7 +681,7 @@ mod tests {
     /// From 0.63 m in front of an actor to 0.68 m behind their shoulder, the pivot between
     /// them and a second actor 2 m away (the over-the-shoulder shot after a close single in
     /// `shots/scene.psl`, rewritten `MS … MS …`): the straight line and both arcs round the
-    /// pivot cut into the actor's cylinder (they came 0.16 m into it, and compile refused the
+    /// pivot cut into the actor's distance (they came 0.16 m into it, and compile refused the
     /// script with a help to "move the path away from the actors", which a director cannot
     /// do). Round the actor, the flight keeps clear.
     #[test]
@@ -720,7 +759,7 @@ mod tests {
     }
 
     /// A route that grazes a wall by less than `TOLERANCE_M` is clear (containment pushes
-    /// the camera back); one that comes as far into an actor's cylinder is not (separation
+    /// the camera back); one that comes as far into an actor's distance is not (separation
     /// pushed back less: flown, such a route came within 0.43 m of an actor where the profile
     /// keeps 0.50 m).
     #[test]
@@ -739,7 +778,7 @@ mod tests {
         let wall = walled.route_intrusion_m(&arc, &a, &b);
         assert!((wall - 0.08).abs() < 1e-3, "{wall}");
         assert_eq!(choose(&a, &b, Some(pivot), &walled), arc);
-        // 0.08 m into the cylinder of an actor at (2.42, 0).
+        // 0.08 m into the distance of an actor at (2.42, 0).
         let (lo, hi) = stage();
         let actors = [actor(2.42, 0.0)];
         let near_actor = keepout(lo, hi, &actors);
@@ -753,7 +792,7 @@ mod tests {
     #[test]
     fn when_nothing_is_clear_the_least_intrusion_wins() {
         // A stage too narrow for any arc, an actor near the straight line: the straight line
-        // comes 0.2 m into the actor's cylinder, the arcs leave the stage by metres.
+        // comes 0.2 m into the actor's distance, the arcs leave the stage by metres.
         let lo = Vec3::new(-4.0, -0.6, 0.0);
         let hi = Vec3::new(4.0, 0.6, 3.0);
         let actors = [actor(0.0, 0.3)];

@@ -7,7 +7,7 @@
 //! feed-forward: `v_des = v_T + truncate(k_p·(p_T − p'))` capped at the speed limit, `p'`
 //! where the camera is at the step's end if it keeps its acceleration (the desired speed falls
 //! with the distance to the target, so the camera arrives without overshoot), `a_des = a_T +
-//! k_v·(v_des − v')` plus separation from the actors' safety cylinders and stage containment,
+//! k_v·(v_des − v')` plus separation from the actors' bodies and stage containment,
 //! capped at the acceleration limit; `v'` is the velocity the camera reaches when its
 //! acceleration is taken to the target's trend at full jerk, which keeps a jerk-limited camera
 //! from overshooting and, on a target that speeds up or slows down, on it. Near the stage's
@@ -682,21 +682,14 @@ pub fn step_heading(
     }
 }
 
-/// Separation from actors (camera-math §5): a push away from each actor's body axis when
-/// the camera is closer than `radius_m` horizontally (and not above the actor's head),
-/// growing as `gain·(radius − d)/d` (m/s²; `gain` at d = radius/2).
+/// Separation from actors (camera-math §5): a push away from each actor's body axis (the
+/// segment from their feet to the top of their head, [`Body::nearest_m`]) when the camera
+/// is closer than `radius_m` to it, growing as `gain·(radius − d)/d` (m/s²; `gain` at
+/// d = radius/2). Beside the body it pushes level; above the head, up and out.
 pub fn separation(p: &Vec3, axes: &[Body], radius_m: f64, gain: f64) -> Vec3 {
     let mut f = Vec3::zeros();
-    for Body {
-        feet_m: feet,
-        height_m: height,
-        ..
-    } in axes
-    {
-        if p.z > feet.z + height + radius_m {
-            continue;
-        }
-        let d = Vec3::new(p.x - feet.x, p.y - feet.y, 0.0);
+    for body in axes {
+        let d = p - body.nearest_m(p);
         let n = d.norm();
         if n < radius_m && n > 1e-6 {
             f += d / n * (gain * (radius_m - n) / n);

@@ -1390,7 +1390,7 @@ impl<'s, 'b> Flight<'s, 'b> {
     }
 
     /// Where the drone may go: the stage less its margin, and out of the actors' safety
-    /// cylinders as the actors stand now (the director's and the compiler's routes' rule).
+    /// distance as the actors stand now (the director's and the compiler's routes' rule).
     fn keepout(&self) -> Keepout<'_> {
         let (lo, hi) = route::stage_less_margin(
             &self.setup.scene.stage,
