@@ -32,7 +32,7 @@ use dronecine_compiler::director::Director;
 use dronecine_compiler::framing::ScreenTarget;
 use dronecine_compiler::profile::Profile;
 use dronecine_compiler::route::{self, Keepout, Route};
-use dronecine_compiler::steering::SteerLimits;
+use dronecine_compiler::steering::{self, Bodies, Body, Kinematics, SteerLimits};
 use dronecine_grammar::script::{Scene, Script};
 use dronecine_grammar::{Code, Diagnostic, LineIndex};
 use serde::Serialize;
@@ -442,6 +442,9 @@ struct Flight<'s, 'b> {
     actors: ActorTracker,
     targets: Vec<ScreenTarget>,
     framing: Vec<FramingRecord>,
+    /// The actors' bodies as they stand this tick, for [`Flight::clear_of_actors`] (reused:
+    /// no allocation per tick).
+    bodies: Vec<Body>,
     /// The last aim from a fresh measurement of the drone's position.
     last_aim: Option<Aim>,
     last_tick_s: Option<f64>,
@@ -523,6 +526,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             actors: ActorTracker::new(setup.scene),
             targets: Vec::with_capacity(4),
             framing: Vec::with_capacity(n_actors.max(2)),
+            bodies: Vec::with_capacity(n_actors),
             last_aim: None,
             last_tick_s: None,
             controller_started: false,
@@ -882,7 +886,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         // Against the actors as they stand now (they may have moved during take-off).
         let first = self.first_framing();
         let keep = self.keepout();
-        let glide = Glide::new(t, &here, &first, self.setup.profile, &keep);
+        let glide = Glide::new(t, &here, &first, self.setup.profile, &self.route_keepout());
         let way = glide.way();
         let intrusion_m = keep.route_intrusion_m(&glide.route, &glide.from_m, &glide.to_m);
         self.event(
@@ -910,7 +914,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         let mut last = glide.sample(t, first.camera_pitch_rad);
         while t < glide.end_s() {
             t = self.wait_tick(t + self.period_s)?;
-            last = glide.sample(t, first.camera_pitch_rad);
+            last = self.clear_of_actors(glide.sample(t, first.camera_pitch_rad));
             if let Outcome::Land = self.control(t, Phase::Approach, None, &last)? {
                 outcome = Outcome::Land;
                 break;
@@ -1052,9 +1056,8 @@ impl<'s, 'b> Flight<'s, 'b> {
             let end = t + HOLD_BEFORE_LANDING_S;
             while t < end {
                 t = self.wait_tick(t + self.period_s)?;
-                if let Outcome::Land =
-                    self.control(t, Phase::Landing, None, &hover_sample(t, &last))?
-                {
+                let hold = self.clear_of_actors(hover_sample(t, &last));
+                if let Outcome::Land = self.control(t, Phase::Landing, None, &hold)? {
                     completed = false;
                     break;
                 }
@@ -1065,9 +1068,8 @@ impl<'s, 'b> Flight<'s, 'b> {
                 let pitch_rad = last.camera_pitch_rad;
                 while t < glide.end_s() {
                     t = self.wait_tick(t + self.period_s)?;
-                    if let Outcome::Land =
-                        self.control(t, Phase::Landing, None, &glide.sample(t, pitch_rad))?
-                    {
+                    let home = self.clear_of_actors(glide.sample(t, pitch_rad));
+                    if let Outcome::Land = self.control(t, Phase::Landing, None, &home)? {
                         completed = false;
                         break;
                     }
@@ -1359,7 +1361,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         let keep = self.keepout();
         let pad = Vec3::new(home_xy[0], home_xy[1], 0.0);
         let taken = keep.deepest_actor(&pad);
-        let glide = Glide::new(t, &here, &home, self.setup.profile, &keep);
+        let glide = Glide::new(t, &here, &home, self.setup.profile, &self.route_keepout());
         let intrusion_m = keep.route_intrusion_m(&glide.route, &glide.from_m, &glide.to_m);
         if let Some((i, into_m)) = taken {
             let name = &self.setup.scene.actors[i].name;
@@ -1389,6 +1391,41 @@ impl<'s, 'b> Flight<'s, 'b> {
         Some(glide)
     }
 
+    /// A planned sample (the approach's and the way home's glides, the hold before landing)
+    /// held out of the actors' safety distance as they stand this tick, as the director holds
+    /// its goal (`steering::kept_clear`): the glides are planned clear of the actors as they
+    /// stood, and an actor who moves after that (a live actor drifting off their mark by a
+    /// few centimetres a second) walked into the reference (random script 264: 0.465 m from
+    /// B at the approach's end). The sample's position moves out along the line from the
+    /// body's nearest point, and its velocity and acceleration lose their inward part. The
+    /// distance is the profile's, without the tracking margin: the drone takes off from
+    /// that far, and more would jump the reference at the start.
+    fn clear_of_actors(&mut self, sample: Sample) -> Sample {
+        self.bodies.clear();
+        self.bodies.extend(self.actors.poses.iter().map(|a| Body {
+            feet_m: Vec3::from(a.position_m),
+            height_m: a.height_m,
+            velocity_mps: Vec3::from(a.velocity_mps),
+        }));
+        let kept = steering::kept_clear(
+            Kinematics {
+                p: Vec3::from(sample.position_m),
+                v: Vec3::from(sample.velocity_mps),
+                a: Vec3::from(sample.acceleration_mps2),
+            },
+            Bodies {
+                axes: &self.bodies,
+                clear_m: self.setup.profile.safety.actor_distance_m,
+            },
+        );
+        Sample {
+            position_m: kept.p.into(),
+            velocity_mps: kept.v.into(),
+            acceleration_mps2: kept.a.into(),
+            ..sample
+        }
+    }
+
     /// Where the drone may go: the stage less its margin, and out of the actors' safety
     /// distance as the actors stand now (the director's and the compiler's routes' rule).
     fn keepout(&self) -> Keepout<'_> {
@@ -1406,6 +1443,18 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
     }
 
+    /// [`Flight::keepout`] for choosing a glide's route: the actors' distance with the
+    /// profile's tracking margin, as the director keeps it on set, so that a route that
+    /// passes an actor passes where the drone, not only its reference, keeps the distance.
+    /// Whether the route is clear is still judged against the distance itself.
+    fn route_keepout(&self) -> Keepout<'_> {
+        let safety = &self.setup.profile.safety;
+        Keepout {
+            safety_m: safety.actor_distance_m + safety.tracking_margin_m,
+            ..self.keepout()
+        }
+    }
+
     /// The first shot's framing against the actors as they stand now.
     fn first_framing(&self) -> Sample {
         self.probe().0
@@ -1415,6 +1464,9 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// its target as solved, and why it did not solve (the director's message), if it did not.
     fn probe(&self) -> (Sample, Vec3, Option<String>) {
         let mut probe = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
+        // As the flight's director sees them: measured (the first framing held the tracking
+        // margin off an actor it comes near, so that the approach ends where the shots do).
+        probe.actors_measured();
         let sample = probe.step(0.0, &self.actors.poses);
         let unsolved = (!probe.placed()).then(|| {
             (probe.diagnostics_so_far().iter().find(|d| d.is_error()))
