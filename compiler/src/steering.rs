@@ -726,6 +726,28 @@ mod tests {
         }
     }
 
+    /// One step toward `target`, its acceleration fed forward as it is, with no pushes, no
+    /// walls within reach and no actors.
+    fn open_step(
+        s: &Kinematics,
+        target: &Kinematics,
+        lim: &SteerLimits,
+        gains: &SteerGains,
+        dt: f64,
+    ) -> Kinematics {
+        step(
+            s,
+            target,
+            &target.a,
+            Vec3::zeros(),
+            OPEN,
+            Bodies::NONE,
+            lim,
+            gains,
+            dt,
+        )
+    }
+
     fn limits() -> SteerLimits {
         SteerLimits {
             speed_h_mps: 1.8,
@@ -866,17 +888,7 @@ mod tests {
             let mut target = at(k as f64 * dt);
             // A goal that keeps ahead of the camera: where the camera would be at its speed.
             target.p = s.p + target.v * 0.5;
-            s = step(
-                &s,
-                &target,
-                &target.a,
-                Vec3::zeros(),
-                OPEN,
-                Bodies::NONE,
-                &lim,
-                &gains,
-                dt,
-            );
+            s = open_step(&s, &target, &lim, &gains, dt);
             top = top.max(s.v.x.hypot(s.v.y));
         }
         assert!(
@@ -902,17 +914,7 @@ mod tests {
         let dt = 0.01;
         let mut prev = s;
         for k in 0..2000 {
-            s = step(
-                &s,
-                &target,
-                &target.a,
-                Vec3::zeros(),
-                OPEN,
-                Bodies::NONE,
-                &lim,
-                &gains,
-                dt,
-            );
+            s = open_step(&s, &target, &lim, &gains, dt);
             assert!(
                 s.v.x.hypot(s.v.y) <= lim.speed_h_mps + 1e-9,
                 "tick {k}: {:?}",
