@@ -60,11 +60,11 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "DIR")]
     report: Option<std::path::PathBuf>,
     /// Calibrate a real AR.Drone 2.0 (or `dronecine emulate`) instead of the simulator:
-    /// ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]. Needs --mocap. The tests fly around the
+    /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`. Needs --mocap. The tests fly around the
     /// point where it takes off, inside --stage (centred on the mocap's origin).
     #[arg(long, value_name = "URL")]
     drone: Option<String>,
-    /// Its positions from OptiTrack NatNet: natnet://SERVER[:PORT][?multicast=GROUP|?unicast].
+    /// Its positions from OptiTrack NatNet: `natnet://SERVER[:PORT][?multicast=GROUP|?unicast]`.
     #[arg(long, value_name = "URL")]
     mocap: Option<String>,
     /// The drone's rigid-body id and the mocap's up axis (TOML, as `shoot --rig`)

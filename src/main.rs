@@ -114,7 +114,7 @@ enum Command {
         #[arg(value_name = "FILE")]
         file: PathBuf,
         /// The flight log to write, a new file (a recording is never overwritten), or a folder
-        /// to write the time-stamped one in [default: flights/<script>-<UTC time>.mcap].
+        /// to write the time-stamped one in (by default `flights/<script>-<UTC time>.mcap`).
         #[arg(long, value_name = "FILE|DIR")]
         log: Option<PathBuf>,
         /// The simulator's seed (noise, wind, radio loss, the actors' deviations) [default: 1].
@@ -147,10 +147,10 @@ enum Command {
         #[command(flatten)]
         effects: SimEffects,
         /// Fly a real AR.Drone 2.0 (or `dronecine emulate`):
-        /// ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]. Needs --mocap.
+        /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`. Needs --mocap.
         #[arg(long, value_name = "URL")]
         drone: Option<String>,
-        /// Its positions from OptiTrack NatNet: natnet://SERVER[:PORT][?multicast=GROUP|?unicast].
+        /// Its positions from OptiTrack NatNet: `natnet://SERVER[:PORT][?multicast=GROUP|?unicast]`.
         #[arg(long, value_name = "URL")]
         mocap: Option<String>,
         /// Rigid-body ids of the drone and the actors (TOML) [default: drone 1, actors 2, 3, …].
@@ -176,7 +176,7 @@ enum Command {
     /// velocities and the set state flags, once or continuously. Only reads: writes no
     /// limits and sends no take-off or landing command.
     Status {
-        /// The drone: ardrone://HOST[:AT_PORT[:NAVDATA_PORT]] (its Wi-Fi: ardrone://192.168.1.1).
+        /// The drone: `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]` (its Wi-Fi: ardrone://192.168.1.1).
         #[arg(long, value_name = "URL")]
         drone: String,
         /// Keep printing (every --interval) until interrupted.

@@ -404,7 +404,7 @@ impl Director {
 
     /// The actor poses it will be stepped with are measured (a motion capture's, tracked), not
     /// the script's blocking: the target's acceleration, mostly their noise differentiated, is
-    /// fed forward as its trend ([`TREND_TAU_S`]) instead of as it is (a path's, which is
+    /// fed forward as its trend (low-passed over 30 ms) instead of as it is (a path's, which is
     /// the path's own, as it is). On set the acceleration
     /// of a framing that follows an actor swings by up to ±18 m/s² from one tick to the next
     /// (a close framing swings with the actor's facing, whose rate is the noise of the
