@@ -675,11 +675,7 @@ impl Director {
             },
         };
         self.axes.clear();
-        self.axes.extend(actors.iter().map(|a| steering::Body {
-            feet_m: Vec3::from(a.position_m),
-            height_m: a.height_m,
-            velocity_mps: Vec3::from(a.velocity_mps),
-        }));
+        self.axes.extend(actors.iter().map(steering::Body::from));
         let bodies = steering::Bodies {
             axes: &self.axes,
             clear_m: self.keep_m,

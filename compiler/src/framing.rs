@@ -1756,9 +1756,7 @@ pub fn screen_targets_into(
 
 /// Distance from a point to an actor's body axis (the vertical segment feet → head).
 pub fn body_axis_distance_m(point_m: &Vec3, actor: &ActorPose) -> f64 {
-    let f = feet(actor);
-    let z = (point_m.z - f.z).clamp(0.0, actor.height_m.max(0.0));
-    (point_m - (f + Vec3::new(0.0, 0.0, z))).norm()
+    crate::steering::Body::from(actor).distance_m(point_m)
 }
 
 /// [`body_axis_distance_m`] for every actor, in the actors' order.

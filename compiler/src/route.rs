@@ -506,11 +506,7 @@ mod tests {
         use crate::steering::{separation, Body};
         let a = actor(1.0, -1.0);
         let top = a.position_m[2] + a.height_m;
-        let body = [Body {
-            feet_m: Vec3::from(a.position_m),
-            height_m: a.height_m,
-            velocity_mps: Vec3::zeros(),
-        }];
+        let body = [Body::from(&a)];
         let (lo, hi) = (Vec3::new(-9.0, -9.0, -9.0), Vec3::new(9.0, 9.0, 9.0));
         let actors = [a];
         let keep = keepout(lo, hi, &actors);

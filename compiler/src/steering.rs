@@ -86,6 +86,22 @@ impl Body {
         let z = (p.z - self.feet_m.z).clamp(0.0, self.height_m.max(0.0));
         self.feet_m + Vec3::new(0.0, 0.0, z)
     }
+
+    /// Distance from `p` to the body's axis: the one measure of an actor's distance
+    /// ([`crate::framing::body_axis_distance_m`] is this for an actor's pose).
+    pub fn distance_m(&self, p: &Vec3) -> f64 {
+        (p - self.nearest_m(p)).norm()
+    }
+}
+
+impl From<&crate::reference::ActorPose> for Body {
+    fn from(a: &crate::reference::ActorPose) -> Body {
+        Body {
+            feet_m: Vec3::from(a.position_m),
+            height_m: a.height_m,
+            velocity_mps: Vec3::from(a.velocity_mps),
+        }
+    }
 }
 
 /// The actors' bodies and the distance the camera keeps from each one's axis.
@@ -503,12 +519,10 @@ fn stop_before_bodies(a: Vec3, state: &Kinematics, bodies: Bodies, limits: &Stee
         // The course the camera is on with the acceleration it is given, until braking at
         // that share would have stopped it closing: does it come within the distance?
         let horizon_s = speed / brake;
-        let from_feet = state.p - b.feet_m;
+        // (Relative to the body: its axis stands where it is now, the camera moves at `rel`.)
         let enters = (1..=COURSE_POINTS).any(|k| {
             let t = horizon_s * k as f64 / COURSE_POINTS as f64;
-            let q = from_feet + rel * t + a * (t * t / 2.0);
-            let z = q.z.clamp(0.0, b.height_m.max(0.0));
-            (q - Vec3::new(0.0, 0.0, z)).norm() < bodies.clear_m
+            b.distance_m(&(state.p + rel * t + a * (t * t / 2.0))) < bodies.clear_m
         });
         if !enters {
             continue;

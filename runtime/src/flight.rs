@@ -602,44 +602,46 @@ impl<'s, 'b> Flight<'s, 'b> {
             self.director_finding(t_s, &d);
         }
         let safety = &self.setup.profile.safety;
-        if let Some(c) = self.metrics.shot_closest(index) {
-            if c.distance_m < safety.actor_distance_m {
-                let name = self
-                    .setup
-                    .scene
-                    .actors
-                    .get(c.actor)
-                    .map_or("an actor", |a| &a.name);
-                let message = format!(
-                    "shot {}: the drone came {:.2} m from {name} at {:.2} s (as measured); {} \
-                     keeps {:.2} m from actors",
-                    index + 1,
-                    c.distance_m,
-                    c.t_s,
-                    self.setup.profile.name,
-                    safety.actor_distance_m
-                );
-                let help = format!(
-                    "on set the reference keeps the profile's `tracking_margin_m` ({:.2} m) \
-                     more than that from actors, and the drone strayed {:.2} m beyond it: \
-                     raise the margin, or frame the shot wider",
-                    safety.tracking_margin_m,
-                    safety.actor_distance_m - c.distance_m
-                );
-                let line = self.setup.script.timeline.get(index).map(|s| {
-                    let source = self.setup.source;
-                    let (line, _) = LineIndex::new(source).line_col(source, s.span.start);
-                    u32::try_from(line).unwrap_or(u32::MAX)
-                });
-                self.tell(Event {
-                    t_s,
-                    level: "warning".into(),
-                    kind: "drone_near_actor".into(),
-                    message,
-                    line,
-                    help: Some(help),
-                });
-            }
+        let inside = self
+            .metrics
+            .shot_closest(index)
+            .filter(|c| c.distance_m < safety.actor_distance_m);
+        if let Some(c) = inside {
+            let name = self
+                .setup
+                .scene
+                .actors
+                .get(c.actor)
+                .map_or("an actor", |a| &a.name);
+            let message = format!(
+                "shot {}: the drone came {:.2} m from {name} at {:.2} s (as measured); {} \
+                 keeps {:.2} m from actors",
+                index + 1,
+                c.distance_m,
+                c.t_s,
+                self.setup.profile.name,
+                safety.actor_distance_m
+            );
+            let help = format!(
+                "on set the reference keeps the profile's `tracking_margin_m` ({:.2} m) \
+                 more than that from actors, and the drone strayed {:.2} m beyond it: \
+                 raise the margin, or frame the shot wider",
+                safety.tracking_margin_m,
+                safety.actor_distance_m - c.distance_m
+            );
+            let line = self.setup.script.timeline.get(index).map(|s| {
+                let source = self.setup.source;
+                let (line, _) = LineIndex::new(source).line_col(source, s.span.start);
+                u32::try_from(line).unwrap_or(u32::MAX)
+            });
+            self.tell(Event {
+                t_s,
+                level: "warning".into(),
+                kind: "drone_near_actor".into(),
+                message,
+                line,
+                help: Some(help),
+            });
         }
     }
 
@@ -1402,11 +1404,7 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// that far, and more would jump the reference at the start.
     fn clear_of_actors(&mut self, sample: Sample) -> Sample {
         self.bodies.clear();
-        self.bodies.extend(self.actors.poses.iter().map(|a| Body {
-            feet_m: Vec3::from(a.position_m),
-            height_m: a.height_m,
-            velocity_mps: Vec3::from(a.velocity_mps),
-        }));
+        self.bodies.extend(self.actors.poses.iter().map(Body::from));
         let kept = steering::kept_clear(
             Kinematics {
                 p: Vec3::from(sample.position_m),
