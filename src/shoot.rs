@@ -670,7 +670,16 @@ pub fn render_report_as(
          error RMS {framing}; saturated {saturated}% of ticks"
     );
     if let Some(d) = r.figures.closest_actor_m {
-        let _ = writeln!(s, "  closest to an actor {d:.2} m (the drone, as measured)");
+        let _ = write!(s, "  closest to an actor {d:.2} m (the drone, as measured)");
+        // The tracking margin the drone used where the reference was near the actors.
+        if let Some(c) = r.figures.cut_in_m {
+            let _ = write!(
+                s,
+                "; near them up to {:.1} cm nearer than its reference",
+                c * 100.0
+            );
+        }
+        s.push('\n');
     }
     let count = |n: u64, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
     if r.failsafes + r.faults + r.deadline_misses > 0 {
@@ -861,6 +870,7 @@ mod tests {
             rms_framing_error: Some(0.021),
             saturated_fraction: Some(0.5),
             closest_actor_m: Some(0.623),
+            cut_in_m: None,
             measured_ticks: 100,
         };
         let blind = Figures {
@@ -911,6 +921,16 @@ mod tests {
         assert!(
             text.contains("\n  closest to an actor 0.62 m (the drone, as measured)\n"),
             "{text}"
+        );
+        let mut near = r.clone();
+        near.figures.cut_in_m = Some(0.0614);
+        let text_near = render_report(&near, "ardrone2", "lqg");
+        assert!(
+            text_near.contains(
+                "\n  closest to an actor 0.62 m (the drone, as measured); near them up to \
+                 6.1 cm nearer than its reference\n"
+            ),
+            "{text_near}"
         );
         let rows: Vec<&str> = text.lines().filter(|l| l.ends_with("shot 1")).collect();
         assert_eq!(rows.len(), 1, "{text}");

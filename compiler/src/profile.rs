@@ -740,8 +740,8 @@ const SAFETY: SectionSpec = SectionSpec {
             "tracking_margin_m",
             Kind::Num(Range::new(Lo::Ge(0.0), Hi::Le(10.0))),
             " m",
-            "0.08",
-            "how far the drone strays from its reference: on set the reference keeps this much more than `actor_distance_m` from the actors",
+            "0.10",
+            "how far the drone strays from its reference (a flight reports it as `cut_in_m`): on set the reference keeps this much more than `actor_distance_m` from the actors",
         )),
     ],
 };
@@ -2086,9 +2086,9 @@ mod tests {
 
     #[test]
     fn the_tracking_margin_is_read_defaulted_and_checked() {
-        assert_eq!(ardrone2().safety.tracking_margin_m, 0.08);
+        assert_eq!(ardrone2().safety.tracking_margin_m, 0.10);
         let outdoor = Profile::builtin("ardrone2-outdoor").unwrap();
-        assert_eq!(outdoor.safety.tracking_margin_m, 0.12);
+        assert_eq!(outdoor.safety.tracking_margin_m, 0.14);
         // Absent: the conservative default, without a word.
         let line = ARDRONE2_TOML
             .lines()

@@ -530,7 +530,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             last_aim: None,
             last_tick_s: None,
             controller_started: false,
-            metrics: Metrics::new(setup.script.timeline.len()),
+            metrics: Metrics::new(setup.script.timeline.len(), &setup.profile.safety),
             failsafes: 0,
             director_errors: 0,
             faults: 0,
@@ -595,31 +595,38 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// at its margin, the camera near an actor), told as the director's own findings are.
     ///
     /// And the drone's own closest to an actor in it, as measured, when that is inside their
-    /// safety distance: the reference keeps the profile's tracking margin more on set, and a
-    /// drone that still comes inside tracks worse than its profile says.
+    /// safety distance (`drone_near_actor`): the reference keeps the profile's tracking
+    /// margin more on set, and a drone that still comes inside tracks worse than its profile
+    /// says. Else, when the drone strayed toward an actor by more than the margin where the
+    /// reference was near the line it keeps (`tracking_margin_exceeded`,
+    /// [`CutIn`](crate::report::CutIn)): it did not come inside this time, but a reference
+    /// held at the line would have had it inside.
     fn tell_findings(&mut self, t_s: f64, director: &Director, index: usize) {
         for d in director.shot_findings(index) {
             self.director_finding(t_s, &d);
         }
         let safety = &self.setup.profile.safety;
+        let profile = &self.setup.profile.name;
+        let name = |actor: usize| {
+            let actors = &self.setup.scene.actors;
+            actors.get(actor).map_or("an actor", |a| a.name.as_str())
+        };
         let inside = self
             .metrics
             .shot_closest(index)
             .filter(|c| c.distance_m < safety.actor_distance_m);
-        if let Some(c) = inside {
-            let name = self
-                .setup
-                .scene
-                .actors
-                .get(c.actor)
-                .map_or("an actor", |a| &a.name);
+        let strayed = self
+            .metrics
+            .shot_cut_in(index)
+            .filter(|c| c.cut_in_m > safety.tracking_margin_m);
+        let (kind, message, help) = if let Some(c) = inside {
             let message = format!(
-                "shot {}: the drone came {:.2} m from {name} at {:.2} s (as measured); {} \
+                "shot {}: the drone came {:.2} m from {} at {:.2} s (as measured); {profile} \
                  keeps {:.2} m from actors",
                 index + 1,
                 c.distance_m,
+                name(c.actor),
                 c.t_s,
-                self.setup.profile.name,
                 safety.actor_distance_m
             );
             let help = format!(
@@ -629,20 +636,45 @@ impl<'s, 'b> Flight<'s, 'b> {
                 safety.tracking_margin_m,
                 safety.actor_distance_m - c.distance_m
             );
-            let line = self.setup.script.timeline.get(index).map(|s| {
-                let source = self.setup.source;
-                let (line, _) = LineIndex::new(source).line_col(source, s.span.start);
-                u32::try_from(line).unwrap_or(u32::MAX)
-            });
-            self.tell(Event {
-                t_s,
-                level: "warning".into(),
-                kind: "drone_near_actor".into(),
-                message,
-                line,
-                help: Some(help),
-            });
-        }
+            ("drone_near_actor", message, help)
+        } else if let Some(c) = strayed {
+            let message = format!(
+                "shot {}: the drone came {:.2} m nearer {} than its reference at {:.2} s (as \
+                 measured), the reference {:.2} m from them; {profile}'s `tracking_margin_m` \
+                 is {:.2} m",
+                index + 1,
+                c.cut_in_m,
+                name(c.actor),
+                c.t_s,
+                c.reference_m,
+                safety.tracking_margin_m
+            );
+            let help = format!(
+                "on set the reference keeps {:.2} m from actors so that a drone straying by up \
+                 to the margin keeps their {:.2} m; this one strayed more, and with the \
+                 reference at that line it would have come inside: raise `[safety] \
+                 tracking_margin_m` to {:.2} m or more in the profile",
+                safety.actor_distance_m + safety.tracking_margin_m,
+                safety.actor_distance_m,
+                (c.cut_in_m * 100.0).ceil() / 100.0
+            );
+            ("tracking_margin_exceeded", message, help)
+        } else {
+            return;
+        };
+        let line = self.setup.script.timeline.get(index).map(|s| {
+            let source = self.setup.source;
+            let (line, _) = LineIndex::new(source).line_col(source, s.span.start);
+            u32::try_from(line).unwrap_or(u32::MAX)
+        });
+        self.tell(Event {
+            t_s,
+            level: "warning".into(),
+            kind: kind.into(),
+            message,
+            line,
+            help: Some(help),
+        });
     }
 
     fn tell(&mut self, e: Event) {

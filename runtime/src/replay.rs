@@ -66,7 +66,7 @@ fn same_output(a: &Result<TickOutput, TickFault>, b: &Result<TickOutput, TickFau
 pub fn replay(log: &FlightLog) -> Result<Replay, String> {
     let profile = &log.header.profile;
     let mut controller = controller_for(&log.header.controller, profile, log.header.rate_hz)?;
-    let mut metrics = Metrics::new(0);
+    let mut metrics = Metrics::new(0, &profile.safety);
     let (mut mismatches, mut first_mismatch) = (0usize, None);
     let mut started = false;
     let replayable = log.first_gap().unwrap_or(log.ticks.len());

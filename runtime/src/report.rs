@@ -10,11 +10,19 @@
 //! - framing error: the screen distance between where an actor is (projected through the
 //!   measured camera pose) and where the script puts it, over the holds; an actor behind the
 //!   camera counts as √8 (corner to opposite corner);
-//! - saturated fraction: ticks where the controller clamped a set-point, over controlled ticks.
+//! - saturated fraction: ticks where the controller clamped a set-point, over controlled ticks;
+//! - closest to an actor: the least distance from the measured drone to an actor's body (the
+//!   segment from their feet to the top of their head, [`body_axis_distance_m`]);
+//! - cut-in: how much nearer an actor's body the measured drone was than its reference, on
+//!   the ticks where the reference was near the distance it keeps from actors on set
+//!   (`actor_distance_m + tracking_margin_m`, within one margin more): the part of the
+//!   profile's tracking margin the drone used where the margin is what keeps it out of the
+//!   actors' distance. The flight's measure of the margin a drone needs (see [`CutIn`]).
 
 use dronecine_compiler::camera::Vec3;
 use dronecine_compiler::compile::{framing_miss_sq, FRAMING_MISS_MAX_SQ};
 use dronecine_compiler::framing::body_axis_distance_m;
+use dronecine_compiler::profile::Safety;
 use serde::Serialize;
 
 use crate::control::{TickFault, TickInput, TickOutput};
@@ -38,6 +46,12 @@ pub struct Figures {
     /// their feet to the top of their head (as tracked): how near the profile's actor
     /// distance the flight came, or how far inside it. `None` without actors.
     pub closest_actor_m: Option<f64>,
+    /// The most the drone (as measured) came nearer an actor's body than its reference was,
+    /// over the ticks where the reference stood within `actor_distance_m + 2 ×
+    /// tracking_margin_m` of that actor ([`CutIn`]): the tracking margin the drone used.
+    /// Negative when it always stood farther than its reference; `None` when the reference
+    /// never came that near an actor.
+    pub cut_in_m: Option<f64>,
     /// Ticks with a measurement.
     pub measured_ticks: u64,
 }
@@ -91,6 +105,8 @@ struct Accum {
     last_t_s: f64,
     /// `None` until a measured tick with actors.
     closest: Option<Closest>,
+    /// `None` until a measured tick with the reference near an actor.
+    cut_in: Option<CutIn>,
 }
 
 /// Where the drone, as measured, came closest to an actor's body (the segment from their
@@ -104,6 +120,29 @@ pub struct Closest {
     pub t_s: f64,
 }
 
+/// How much nearer an actor's body the drone, as measured, was than its reference, at the
+/// tick of a shot or the flight where that was most, among the ticks where the reference
+/// stood within `actor_distance_m + 2 × tracking_margin_m` of the actor.
+///
+/// On set the director holds the reference `actor_distance_m + tracking_margin_m` from the
+/// actors (`Director::actors_measured`), so that a drone which strays from it by up to the
+/// margin still keeps `actor_distance_m`. Where the reference is at that line or near it
+/// (within one margin more), this is the part of the margin the drone used; more than the
+/// margin, and a reference held at the line would have had the drone inside the actor's
+/// distance. Far from the actors the drone's lag toward one is not counted: there the margin
+/// does not matter, and the reference's faster moves there would overstate the need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CutIn {
+    /// Reference's distance to the actor's body minus the drone's.
+    pub cut_in_m: f64,
+    /// The actor's index in the scene.
+    pub actor: usize,
+    /// The tick's flight clock.
+    pub t_s: f64,
+    /// The reference's distance to that actor's body then.
+    pub reference_m: f64,
+}
+
 impl Accum {
     fn figures(&self) -> Figures {
         let rms = |s: f64, n: u64| (n > 0).then(|| (s / n as f64).sqrt());
@@ -115,6 +154,7 @@ impl Accum {
             saturated_fraction: (self.controlled > 0)
                 .then(|| self.saturated as f64 / self.controlled as f64),
             closest_actor_m: self.closest.map(|c| c.distance_m),
+            cut_in_m: self.cut_in.map(|c| c.cut_in_m),
             measured_ticks: self.n,
         }
     }
@@ -127,14 +167,19 @@ pub struct Metrics {
     shots: Vec<Accum>,
     /// Sum, max and count of the mocap-to-command latencies.
     latency: (f64, f64, u64),
+    /// The reference's distance to an actor's body under which a tick counts for the cut-in:
+    /// `actor_distance_m + 2 × tracking_margin_m` of the profile flown.
+    cut_in_within_m: f64,
 }
 
 impl Metrics {
-    pub fn new(shots: usize) -> Metrics {
+    /// For `shots` shots (more are added as met), flown with a profile's `safety`.
+    pub fn new(shots: usize, safety: &Safety) -> Metrics {
         Metrics {
             total: Accum::default(),
             shots: vec![Accum::default(); shots],
             latency: (0.0, 0.0, 0),
+            cut_in_within_m: safety.actor_distance_m + 2.0 * safety.tracking_margin_m,
         }
     }
 
@@ -155,6 +200,12 @@ impl Metrics {
     /// measured tick of it).
     pub fn shot_closest(&self, index: usize) -> Option<Closest> {
         self.shots.get(index).and_then(|a| a.closest)
+    }
+
+    /// The drone's most cut-in toward an actor in shot `index` so far ([`CutIn`]; `None`
+    /// before a measured tick of it with the reference near an actor).
+    pub fn shot_cut_in(&self, index: usize) -> Option<CutIn> {
+        self.shots.get(index).and_then(|a| a.cut_in)
     }
 
     /// One tick, from what the flight logs of it (the flight and replay both call this with
@@ -184,6 +235,24 @@ impl Metrics {
                 .filter(|c| c.distance_m.is_finite())
                 .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m))
         });
+        let cut_in = input.measurement.and_then(|m| {
+            let (p, r) = (
+                Vec3::from(m.position_m),
+                Vec3::from(input.reference.position_m),
+            );
+            (actors.iter().enumerate())
+                .filter_map(|(actor, a)| {
+                    let reference_m = body_axis_distance_m(&r, a);
+                    (reference_m < self.cut_in_within_m).then(|| CutIn {
+                        cut_in_m: reference_m - body_axis_distance_m(&p, a),
+                        actor,
+                        t_s: input.t_s,
+                        reference_m,
+                    })
+                })
+                .filter(|c| c.cut_in_m.is_finite())
+                .max_by(|a, b| a.cut_in_m.total_cmp(&b.cut_in_m))
+        });
         if let Some(l) = latency_s.filter(|l| l.is_finite()) {
             self.latency.0 += l;
             self.latency.1 = self.latency.1.max(l);
@@ -208,6 +277,11 @@ impl Metrics {
             if let Some(d) = closest {
                 if acc.closest.is_none_or(|c| d.distance_m < c.distance_m) {
                     acc.closest = Some(d);
+                }
+            }
+            if let Some(c) = cut_in {
+                if acc.cut_in.is_none_or(|m| c.cut_in_m > m.cut_in_m) {
+                    acc.cut_in = Some(c);
                 }
             }
             if let Some((e, h)) = error {
@@ -298,6 +372,13 @@ mod tests {
     use super::*;
     use crate::control::{Measurement, Reference};
 
+    /// `ardrone2`'s: 0.5 m from actors, a tracking margin of 0.08 m.
+    fn safety() -> Safety {
+        dronecine_compiler::profile::Profile::builtin("ardrone2")
+            .unwrap()
+            .safety
+    }
+
     fn input(t_s: f64, err_m: f64, heading_err_rad: f64, measured: bool) -> TickInput {
         TickInput {
             t_s,
@@ -316,7 +397,7 @@ mod tests {
 
     #[test]
     fn figures_are_rms_and_max_over_the_shots_only() {
-        let mut m = Metrics::new(2);
+        let mut m = Metrics::new(2, &safety());
         let ok = Ok(TickOutput::default());
         let sat = Ok(TickOutput {
             saturated: true,
@@ -389,7 +470,7 @@ mod tests {
     #[test]
     fn a_shot_never_measured_has_null_errors_not_zero() {
         // Shot 0 measured, shot 1 flown blind (its body lost throughout).
-        let mut m = Metrics::new(2);
+        let mut m = Metrics::new(2, &safety());
         let ok = Ok(TickOutput::default());
         m.record(
             Phase::Shots,
@@ -442,14 +523,14 @@ mod tests {
         }
         assert!(json["rms_position_error_m"].is_number());
         // Nothing flown: nothing to average, not even the saturation.
-        let r = Metrics::new(1).report(&["a".into()], Counts::default());
+        let r = Metrics::new(1, &safety()).report(&["a".into()], Counts::default());
         assert_eq!(r.figures, Figures::default());
         assert_eq!(r.figures.saturated_fraction, None);
     }
 
     #[test]
     fn framing_error_is_the_screen_distance() {
-        let mut m = Metrics::new(1);
+        let mut m = Metrics::new(1, &safety());
         let f = [
             FramingRecord {
                 actor: 0,
@@ -508,5 +589,76 @@ mod tests {
             (r.figures.rms_framing_error.unwrap() - ((0.25 + 8.0 + 8.0) / 3.0f64).sqrt()).abs()
                 < 1e-12
         );
+    }
+
+    /// The cut-in counts only the ticks with the reference near an actor (within
+    /// `actor_distance_m + 2 × tracking_margin_m` of their body), takes the most of them, and
+    /// may be negative (the drone farther than its reference); a shot whose reference stayed
+    /// away has none.
+    #[test]
+    fn the_cut_in_is_measured_where_the_reference_is_near_an_actor() {
+        let safety = safety();
+        let within_m = safety.actor_distance_m + 2.0 * safety.tracking_margin_m;
+        let actor = ActorPose {
+            position_m: [0.0, 0.0, 0.0],
+            velocity_mps: [0.0; 3],
+            facing_rad: 0.0,
+            facing_rate_radps: 0.0,
+            height_m: 1.8,
+        };
+        let tick = |t_s: f64, reference: [f64; 3], drone: Option<[f64; 3]>| TickInput {
+            t_s,
+            dt_s: 0.01,
+            measurement: drone.map(|position_m| Measurement {
+                position_m,
+                heading_rad: 0.0,
+            }),
+            reference: Reference {
+                position_m: reference,
+                ..Reference::default()
+            },
+        };
+        let mut m = Metrics::new(3, &safety);
+        let ok = Ok(TickOutput::default());
+        let mut record = |shot: usize, input: TickInput| {
+            m.record(Phase::Shots, Some(shot), &input, &ok, &[], &[actor], None)
+        };
+        let near = within_m - 0.01;
+        // Shot 0: 4 cm nearer beside the actor; then far off, 1 m nearer, not counted.
+        record(
+            0,
+            tick(1.0, [near, 0.0, 1.0], Some([near - 0.04, 0.0, 1.0])),
+        );
+        record(
+            0,
+            tick(1.01, [within_m + 1.0, 0.0, 1.0], Some([1.0, 0.0, 1.0])),
+        );
+        // Unmeasured: not counted, however near.
+        record(0, tick(1.02, [0.5, 0.0, 1.0], None));
+        // Shot 1: over the head (distance to its top), 3 cm farther than the reference.
+        record(
+            1,
+            tick(2.0, [0.0, 0.0, 1.8 + near], Some([0.0, 0.0, 1.83 + near])),
+        );
+        // Shot 2: only far.
+        record(
+            2,
+            tick(3.0, [0.0, within_m + 0.2, 1.0], Some([0.0, 0.1, 1.0])),
+        );
+        let cut = |shot: usize| m.shot_cut_in(shot).map(|c| c.cut_in_m);
+        let close = |x: Option<f64>, want: f64| x.is_some_and(|x| (x - want).abs() < 1e-12);
+        assert!(close(cut(0), 0.04), "{:?}", cut(0));
+        assert!(close(cut(1), -0.03), "{:?}", cut(1));
+        assert_eq!(cut(2), None);
+        let c = m.shot_cut_in(0).unwrap();
+        assert_eq!((c.actor, c.t_s), (0, 1.0));
+        assert!((c.reference_m - near).abs() < 1e-12);
+        let r = m.report(&[], Counts::default());
+        assert!(close(r.figures.cut_in_m, 0.04));
+        assert!(close(r.shots[1].figures.cut_in_m, -0.03));
+        assert_eq!(r.shots[2].figures.cut_in_m, None);
+        let json = serde_json::to_value(&r).unwrap();
+        assert!(json["shots"][2]["cut_in_m"].is_null());
+        assert!(json["cut_in_m"].is_number());
     }
 }

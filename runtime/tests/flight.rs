@@ -1131,9 +1131,10 @@ fn after_the_last_shot_the_drone_lands_where_it_took_off() {
     let home = close_up_take_off_m();
     let [end, landed] = [rec.shots_end_m.unwrap(), rec.last_measured_m.unwrap()];
     let flat = |p: [f64; 3], q: [f64; 3]| (p[0] - q[0]).hypot(p[1] - q[1]);
-    // The last shot ends a close-up's distance from A (0.6 m); the drone took off clear of
-    // A's mark by the actor distance and the actors' reach (0.8 m), 0.5 m from there.
-    assert!(flat(end, [0.0; 3]) < 0.65, "{end:?}");
+    // The last shot ends a close-up's distance from A (0.6 m: on set the actor distance and
+    // the tracking margin, 0.5 + 0.1 m); the drone took off clear of A's mark by the actor
+    // distance and the actors' reach (0.8 m), 0.5 m from there.
+    assert!(flat(end, [0.0; 3]) < 0.7, "{end:?}");
     assert!(flat(home, [0.0; 3]) > 0.75, "{home:?}");
     assert!(flat(end, home) > 0.4, "{end:?} {home:?}");
     // It lands over its take-off spot.
