@@ -574,6 +574,20 @@ struct Strays {
     near: Vec<usize>,
 }
 
+impl Strays {
+    /// For a flight with `profile`: the ticks with the reference within `actor_distance_m
+    /// + 2 × tracking_margin_m` of an actor count.
+    fn new(profile: &Profile) -> Strays {
+        let safety = &profile.safety;
+        Strays {
+            within_m: safety.actor_distance_m + 2.0 * safety.tracking_margin_m,
+            cut_in_m: Vec::new(),
+            told: Vec::new(),
+            near: Vec::new(),
+        }
+    }
+}
+
 /// The shot (1-based) an event of a shot names ("shot N: …").
 fn shot_of(e: &Event) -> usize {
     let rest = e.message.strip_prefix("shot ").unwrap();
@@ -627,15 +641,10 @@ impl FlightSink for Strays {
 fn a_drone_that_strays_beyond_its_tracking_margin_is_told() {
     let (text, script) = load("shots/scene.psl");
     let shipped = profile_of(&script);
-    let mut thin = shipped.clone();
-    thin.safety.tracking_margin_m = 0.3;
-    let mut s = Strays {
-        within_m: thin.safety.actor_distance_m + 2.0 * thin.safety.tracking_margin_m,
-        cut_in_m: Vec::new(),
-        told: Vec::new(),
-        near: Vec::new(),
-    };
-    let r = fly_profile_into(&text, &script, &thin, "pid", SimConfig::new(4), &mut s);
+    let mut wide = shipped.clone();
+    wide.safety.tracking_margin_m = 0.3;
+    let mut s = Strays::new(&wide);
+    let r = fly_profile_into(&text, &script, &wide, "pid", SimConfig::new(4), &mut s);
     assert!(r.completed);
     let most = s.cut_in_m.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let got = r.figures.cut_in_m.unwrap();
@@ -688,12 +697,7 @@ fn a_drone_that_strays_beyond_its_tracking_margin_is_told() {
         assert!(set >= cut && set < cut + 0.01, "{set} for {cut}");
     }
     // With the shipped margin the drone strays within it.
-    let mut s = Strays {
-        within_m: shipped.safety.actor_distance_m + 2.0 * shipped.safety.tracking_margin_m,
-        cut_in_m: Vec::new(),
-        told: Vec::new(),
-        near: Vec::new(),
-    };
+    let mut s = Strays::new(&shipped);
     let r = fly_profile_into(&text, &script, &shipped, "lqg", SimConfig::new(7), &mut s);
     let used = r.figures.cut_in_m.unwrap();
     assert!(used < shipped.safety.tracking_margin_m, "{used}");
