@@ -27,18 +27,27 @@ impl FlightSink for Log {
 }
 
 fn fly_to_log(controller: &str, path: &std::path::Path) -> dronecine_runtime::report::FlightReport {
+    fly_script_to_log(SCRIPT, controller, path)
+}
+
+/// [`fly_to_log`] of `text`, whose one actor is named A.
+fn fly_script_to_log(
+    text: &str,
+    controller: &str,
+    path: &std::path::Path,
+) -> dronecine_runtime::report::FlightReport {
     let opts = dronecine_grammar::Options {
         known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
         base_dir: None,
     };
-    let script = dronecine_grammar::check(SCRIPT, &opts).script.unwrap();
+    let script = dronecine_grammar::check(text, &opts).script.unwrap();
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
     let setup = ControllerSetup::new(controller);
     let names = vec!["A".to_string()];
     let header = FlightHeader {
         script_name: "walk.psl".into(),
-        script_text: SCRIPT.into(),
+        script_text: text.into(),
         profile_name: profile.name.clone(),
         profile_toml: profile.to_toml(),
         profile: profile.clone(),
@@ -66,7 +75,7 @@ fn fly_to_log(controller: &str, path: &std::path::Path) -> dronecine_runtime::re
     let report = fly_simulated(
         &SimFlight {
             script: &script,
-            source: SCRIPT,
+            source: text,
             scene,
             profile: &profile,
             rate_hz: 100.0,
@@ -198,4 +207,24 @@ fn the_report_says_how_close_the_drone_came_to_an_actor() {
     assert!((got - closest).abs() < 1e-12, "{got} against {closest}");
     assert_eq!(flown.shots[0].figures.closest_actor_m, Some(per_shot));
     assert!((0.5..1.5).contains(&got), "{got}");
+}
+
+/// The tracking margin the drone used (`cut_in_m`) is computed again from the log, with the
+/// logged profile's margin: here a close-up of A (0.6 m on set, inside the 0.70 m where the
+/// reference counts), whose report has one.
+#[test]
+fn replay_measures_the_tracking_margin_used_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("close.mcap");
+    let text = "stage 8m x 6m x 3m\ndrone ardrone2\n\
+                actor A height 1.80m at (0, 0) facing 0deg\n\
+                at 1s A walks to (0.5, 0.5) over 3s\n\
+                MCU on A 34left for 5s\n";
+    let flown = fly_script_to_log(text, "lqg", &path);
+    let used = flown.figures.cut_in_m.expect("the reference near A");
+    assert!(used.abs() < 0.1, "{used}");
+    let r = replay(&FlightLog::open(&path).unwrap()).unwrap();
+    assert_eq!(r.mismatches, 0);
+    assert_eq!(r.report.figures.cut_in_m, Some(used));
+    assert_eq!(r.report, flown);
 }
