@@ -2088,7 +2088,7 @@ mod tests {
     fn the_tracking_margin_is_read_defaulted_and_checked() {
         assert_eq!(ardrone2().safety.tracking_margin_m, 0.10);
         let outdoor = Profile::builtin("ardrone2-outdoor").unwrap();
-        assert_eq!(outdoor.safety.tracking_margin_m, 0.14);
+        assert_eq!(outdoor.safety.tracking_margin_m, 0.15);
         // Absent: the conservative default, without a word.
         let line = ARDRONE2_TOML
             .lines()

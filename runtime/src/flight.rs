@@ -619,9 +619,11 @@ impl<'s, 'b> Flight<'s, 'b> {
             .metrics
             .shot_cut_in(index)
             .filter(|c| c.cut_in_m > safety.tracking_margin_m);
+        // The drone's distances in millimetres: at two decimals a drone 0.4996 m from an actor
+        // read "came 0.50 m from Bob" against "keeps 0.50 m".
         let (kind, message, help) = if let Some(c) = inside {
             let message = format!(
-                "shot {}: the drone came {:.2} m from {} at {:.2} s (as measured); {profile} \
+                "shot {}: the drone came {:.3} m from {} at {:.2} s (as measured); {profile} \
                  keeps {:.2} m from actors",
                 index + 1,
                 c.distance_m,
@@ -629,17 +631,17 @@ impl<'s, 'b> Flight<'s, 'b> {
                 c.t_s,
                 safety.actor_distance_m
             );
+            let inside = short_distance(safety.actor_distance_m - c.distance_m);
             let help = format!(
                 "on set the reference keeps the profile's `tracking_margin_m` ({:.2} m) \
-                 more than that from actors, and the drone strayed {:.2} m beyond it: \
+                 more than that from actors, and the drone strayed {inside} beyond it: \
                  raise the margin, or frame the shot wider",
                 safety.tracking_margin_m,
-                safety.actor_distance_m - c.distance_m
             );
             ("drone_near_actor", message, help)
         } else if let Some(c) = strayed {
             let message = format!(
-                "shot {}: the drone came {:.2} m nearer {} than its reference at {:.2} s (as \
+                "shot {}: the drone came {:.3} m nearer {} than its reference at {:.2} s (as \
                  measured), the reference {:.2} m from them; {profile}'s `tracking_margin_m` \
                  is {:.2} m",
                 index + 1,
@@ -1432,9 +1434,12 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// few centimetres a second) walked into the reference (random script 264: 0.465 m from
     /// B at the approach's end). The sample's position moves out along the line from the
     /// body's nearest point, and its velocity and acceleration lose their inward part. The
-    /// distance is the profile's, without the tracking margin: the drone takes off from
-    /// that far, and more would jump the reference at the start.
+    /// distance is the director's on set: the profile's actor distance and its tracking
+    /// margin, so that the drone, lagging its reference, keeps the actor distance (with the
+    /// actor distance alone, random script 379 flew home 0.464 m from A). A drone that took
+    /// off nearer than that has its approach's reference start out at that distance.
     fn clear_of_actors(&mut self, sample: Sample) -> Sample {
+        let safety = &self.setup.profile.safety;
         self.bodies.clear();
         self.bodies.extend(self.actors.poses.iter().map(Body::from));
         let kept = steering::kept_clear(
@@ -1445,7 +1450,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             },
             Bodies {
                 axes: &self.bodies,
-                clear_m: self.setup.profile.safety.actor_distance_m,
+                clear_m: safety.actor_distance_m + safety.tracking_margin_m,
             },
         );
         Sample {
@@ -1558,6 +1563,16 @@ impl<'s, 'b> Flight<'s, 'b> {
     }
 }
 
+/// A distance as a warning says it: in metres to the centimetre, or under a centimetre in
+/// millimetres (a drone 0.3 mm inside an actor's distance strayed "0.3 mm", not "0.00 m").
+fn short_distance(m: f64) -> String {
+    if m.abs() < 0.01 {
+        format!("{:.1} mm", m * 1000.0)
+    } else {
+        format!("{m:.2} m")
+    }
+}
+
 /// The sample to fly when the drone has never been measured (cannot happen after the
 /// pre-flight check; kept total instead of panicking).
 fn unreachable_measurement(first: &Sample, t: f64) -> Sample {
@@ -1572,6 +1587,14 @@ fn inside(stage: &dronecine_grammar::script::Stage, p: &[f64; 3], margin_m: f64)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_short_distance_is_said_in_millimetres() {
+        assert_eq!(short_distance(0.0003), "0.3 mm");
+        assert_eq!(short_distance(0.0099), "9.9 mm");
+        assert_eq!(short_distance(0.01), "0.01 m");
+        assert_eq!(short_distance(0.456), "0.46 m");
+    }
 
     /// Kalata's closed form against the steady state of the Kalman filter it stands for,
     /// iterated to convergence: a position measured with variance σ_n² every `T`, its
