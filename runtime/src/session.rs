@@ -89,28 +89,19 @@ pub fn start_pose(
     );
     let near_m = profile.safety.actor_distance_m + sim.actor_reach_m().max(0.0);
     let drifting_m = near_m + sim.takeoff_drift_m();
-    let [x, y] = find_clear_spot(below, &marks, drifting_m, floor_lo, floor_hi)
-        .or_else(|| find_clear_spot(below, &marks, near_m, floor_lo, floor_hi))
+    // No spot at all (a stage too small for its actors): below the framing, and the
+    // pre-flight check says why.
+    let [x, y] = clear_spot(below, &marks, drifting_m, floor_lo, floor_hi)
+        .or_else(|| clear_spot(below, &marks, near_m, floor_lo, floor_hi))
         .unwrap_or(below);
     ([x, y, 0.0], first.heading_rad)
 }
 
 /// The nearest spot to `spot` at least `keep_m` from every mark and inside the floor's box
 /// `lo..hi`: `spot` itself when it is, else the first found on rings around it, 2 cm apart,
-/// each searched from the direction away from the nearest mark. `spot` when no spot is
-/// (a stage too small for its actors: the pre-flight check then says why).
+/// each searched from the direction away from the nearest mark. `None` when no spot is (a
+/// stage too small for its actors).
 pub fn clear_spot(
-    spot: [f64; 2],
-    marks: &[[f64; 2]],
-    keep_m: f64,
-    lo: [f64; 2],
-    hi: [f64; 2],
-) -> [f64; 2] {
-    find_clear_spot(spot, marks, keep_m, lo, hi).unwrap_or(spot)
-}
-
-/// [`clear_spot`], `None` when no spot is clear.
-fn find_clear_spot(
     spot: [f64; 2],
     marks: &[[f64; 2]],
     keep_m: f64,
@@ -367,6 +358,36 @@ mod tests {
         Profile::builtin("ardrone2").unwrap()
     }
 
+    /// The simulated drone takes off clear of an actor's mark by the actor distance, the
+    /// actors' reach and its take-off drift; where the stage has no such spot (6 × 3 m: the
+    /// walls keep it within 0.3 m of the middle line), clear by the distance and the reach.
+    #[test]
+    fn the_drone_waits_clear_of_its_take_off_drift_where_the_stage_allows() {
+        let profile = ardrone2();
+        let sim = SimConfig::new(1);
+        let near_m = profile.safety.actor_distance_m + sim.actor_reach_m();
+        let drifting_m = near_m + sim.takeoff_drift_m();
+        assert!(sim.takeoff_drift_m() > 1.0, "{}", sim.takeoff_drift_m());
+        let waits = |stage: &str| {
+            let text = format!(
+                "{stage}\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+                 MS on A front for 4s\n"
+            );
+            let opts = dronecine_grammar::Options {
+                known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+                base_dir: None,
+            };
+            let script = dronecine_grammar::check(&text, &opts).script.unwrap();
+            let scene = script.scene.as_ref().unwrap();
+            let (p, _) = start_pose(&script, scene, &profile, &sim);
+            p[0].hypot(p[1])
+        };
+        let wide = waits("stage 10m x 8m x 3m");
+        assert!(wide >= drifting_m - 1e-9, "{wide}");
+        let narrow = waits("stage 6m x 3m x 3m");
+        assert!(narrow >= near_m - 1e-9 && narrow < drifting_m, "{narrow}");
+    }
+
     /// The simulated drone's spot: below the framing when that is clear, else the nearest
     /// clear spot, away from the actor first, inside the box, never on another mark.
     #[test]
@@ -375,24 +396,24 @@ mod tests {
         let dist = |p: [f64; 2], m: [f64; 2]| (p[0] - m[0]).hypot(p[1] - m[1]);
         // Clear: unchanged, bit for bit.
         let spot = [1.234, -0.5];
-        assert_eq!(clear_spot(spot, &[[0.0, 0.0]], 0.7, lo, hi), spot);
+        assert_eq!(clear_spot(spot, &[[0.0, 0.0]], 0.7, lo, hi), Some(spot));
         // 0.3 m east of a mark: straight away from it, to the first ring past 0.7 m.
-        let p = clear_spot([0.3, 0.0], &[[0.0, 0.0]], 0.7, lo, hi);
+        let p = clear_spot([0.3, 0.0], &[[0.0, 0.0]], 0.7, lo, hi).unwrap();
         assert!(
             p[1].abs() < 1e-12 && p[0] >= 0.7 && p[0] < 0.7 + 0.021,
             "{p:?}"
         );
         // Between two marks 1 m apart: clear of both (sideways).
         let marks = [[-0.5, 0.0], [0.5, 0.0]];
-        let p = clear_spot([0.1, 0.0], &marks, 0.7, lo, hi);
+        let p = clear_spot([0.1, 0.0], &marks, 0.7, lo, hi).unwrap();
         assert!(marks.iter().all(|&m| dist(p, m) >= 0.7), "{p:?}");
         assert!(dist(p, [0.1, 0.0]) < 0.6, "the nearest: {p:?}");
         // Against a wall, away from the mark is out of the box: along it instead.
-        let p = clear_spot([3.6, 0.0], &[[3.3, 0.0]], 0.7, lo, hi);
+        let p = clear_spot([3.6, 0.0], &[[3.3, 0.0]], 0.7, lo, hi).unwrap();
         assert!(p[0] <= hi[0] && dist(p, [3.3, 0.0]) >= 0.7, "{p:?}");
-        // No spot is clear (a box inside the keep-out): where it was.
+        // No spot is clear (a box inside the keep-out).
         let p = clear_spot([0.1, 0.0], &[[0.0, 0.0]], 5.0, [-1.0, -1.0], [1.0, 1.0]);
-        assert_eq!(p, [0.1, 0.0]);
+        assert_eq!(p, None);
     }
 
     #[test]
