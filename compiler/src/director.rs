@@ -131,8 +131,8 @@ pub struct Director {
     /// first, or when it does not turn).
     route_turn: Option<f64>,
     safety_m: f64,
-    /// The profile's [`Safety::tracking_margin_m`](crate::profile::Safety::tracking_margin_m).
-    tracking_margin_m: f64,
+    /// The distance kept on set ([`Safety::on_set_m`](crate::profile::Safety::on_set_m)).
+    on_set_m: f64,
     /// How far the steering keeps the reference from the actors' bodies: `safety_m`, and on
     /// set (see [`Director::actors_measured`]) the tracking margin more. The monitor, the
     /// shots' errors and the routes judge against `safety_m`.
@@ -310,7 +310,7 @@ impl Director {
             measured: false,
             route_turn: None,
             safety_m: profile.safety.actor_distance_m,
-            tracking_margin_m: profile.safety.tracking_margin_m,
+            on_set_m: profile.safety.on_set_m(),
             keep_m: profile.safety.actor_distance_m,
             profile_name: profile.name.clone(),
             phase: Phase::NotStarted,
@@ -418,10 +418,11 @@ impl Director {
     /// safety distance: it is the drone that must keep that distance, and it flies a few
     /// centimetres off its reference. On `scene.psl`, seeds 1–100, the drone (as measured)
     /// came to 0.44 m of an actor with the reference kept at 0.50 m; with 0.08 m more, no
-    /// closer than 0.51 m. A compiled reference is a perfect drone's: no margin.
+    /// closer than 0.51 m (the margin is 0.10 m since: see the profile). A compiled
+    /// reference is a perfect drone's: no margin.
     pub fn actors_measured(&mut self) {
         self.measured = true;
-        self.keep_m = self.safety_m + self.tracking_margin_m;
+        self.keep_m = self.on_set_m;
         self.monitor.actors_measured();
     }
 

@@ -109,6 +109,14 @@ pub struct Safety {
     pub tracking_margin_m: f64,
 }
 
+impl Safety {
+    /// The distance the reference keeps from the actors' bodies on set:
+    /// `actor_distance_m + tracking_margin_m`.
+    pub fn on_set_m(&self) -> f64 {
+        self.actor_distance_m + self.tracking_margin_m
+    }
+}
+
 /// Settings of the runtime's LQG servo and Kalman filters (control.md §4).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Servo {
@@ -131,8 +139,8 @@ pub struct Servo {
 /// The share of the tilt the reference may use for cruising speed when a profile names none.
 pub const DEFAULT_AUTHORITY: f64 = 0.5;
 
-/// The tracking margin of a profile that names none ([`Safety::tracking_margin_m`]): more
-/// than the built-in AR.Drone profiles' measured 0.08 m (indoor limits) and 0.12 m (outdoor).
+/// The tracking margin of a profile that names none ([`Safety::tracking_margin_m`]): no less
+/// than the built-in AR.Drone profiles' measured 0.10 m (indoor limits) and 0.15 m (outdoor).
 pub const DEFAULT_TRACKING_MARGIN_M: f64 = 0.15;
 
 const ARDRONE2_TOML: &str = include_str!("../profiles/ardrone2.toml");

@@ -656,7 +656,7 @@ impl<'s, 'b> Flight<'s, 'b> {
                  to the margin keeps their {:.2} m; this one strayed more, and with the \
                  reference at that line it would have come inside: raise `[safety] \
                  tracking_margin_m` to {:.2} m or more in the profile",
-                safety.actor_distance_m + safety.tracking_margin_m,
+                safety.on_set_m(),
                 safety.actor_distance_m,
                 (c.cut_in_m * 100.0).ceil() / 100.0
             );
@@ -1439,7 +1439,6 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// actor distance alone, random script 379 flew home 0.464 m from A). A drone that took
     /// off nearer than that has its approach's reference start out at that distance.
     fn clear_of_actors(&mut self, sample: Sample) -> Sample {
-        let safety = &self.setup.profile.safety;
         self.bodies.clear();
         self.bodies.extend(self.actors.poses.iter().map(Body::from));
         let kept = steering::kept_clear(
@@ -1450,7 +1449,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             },
             Bodies {
                 axes: &self.bodies,
-                clear_m: safety.actor_distance_m + safety.tracking_margin_m,
+                clear_m: self.setup.profile.safety.on_set_m(),
             },
         );
         Sample {
@@ -1483,9 +1482,8 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// passes an actor passes where the drone, not only its reference, keeps the distance.
     /// Whether the route is clear is still judged against the distance itself.
     fn route_keepout(&self) -> Keepout<'_> {
-        let safety = &self.setup.profile.safety;
         Keepout {
-            safety_m: safety.actor_distance_m + safety.tracking_margin_m,
+            safety_m: self.setup.profile.safety.on_set_m(),
             ..self.keepout()
         }
     }

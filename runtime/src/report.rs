@@ -179,7 +179,7 @@ impl Metrics {
             total: Accum::default(),
             shots: vec![Accum::default(); shots],
             latency: (0.0, 0.0, 0),
-            cut_in_within_m: safety.actor_distance_m + 2.0 * safety.tracking_margin_m,
+            cut_in_within_m: safety.on_set_m() + safety.tracking_margin_m,
         }
     }
 
@@ -224,35 +224,35 @@ impl Metrics {
         let (Phase::Shots, Some(i)) = (phase, shot) else {
             return;
         };
-        let closest = input.measurement.and_then(|m| {
+        // One pass over the actors: the drone's distance to each body serves both figures.
+        let (mut closest, mut cut_in) = (None::<Closest>, None::<CutIn>);
+        if let Some(m) = input.measurement {
             let p = Vec3::from(m.position_m);
-            (actors.iter().enumerate())
-                .map(|(actor, a)| Closest {
-                    distance_m: body_axis_distance_m(&p, a),
-                    actor,
-                    t_s: input.t_s,
-                })
-                .filter(|c| c.distance_m.is_finite())
-                .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m))
-        });
-        let cut_in = input.measurement.and_then(|m| {
-            let (p, r) = (
-                Vec3::from(m.position_m),
-                Vec3::from(input.reference.position_m),
-            );
-            (actors.iter().enumerate())
-                .filter_map(|(actor, a)| {
-                    let reference_m = body_axis_distance_m(&r, a);
-                    (reference_m < self.cut_in_within_m).then(|| CutIn {
-                        cut_in_m: reference_m - body_axis_distance_m(&p, a),
+            let r = Vec3::from(input.reference.position_m);
+            for (actor, a) in actors.iter().enumerate() {
+                let distance_m = body_axis_distance_m(&p, a);
+                if distance_m.is_finite() && closest.is_none_or(|c| distance_m < c.distance_m) {
+                    closest = Some(Closest {
+                        distance_m,
+                        actor,
+                        t_s: input.t_s,
+                    });
+                }
+                let reference_m = body_axis_distance_m(&r, a);
+                let cut_in_m = reference_m - distance_m;
+                if reference_m < self.cut_in_within_m
+                    && cut_in_m.is_finite()
+                    && cut_in.is_none_or(|c| cut_in_m >= c.cut_in_m)
+                {
+                    cut_in = Some(CutIn {
+                        cut_in_m,
                         actor,
                         t_s: input.t_s,
                         reference_m,
-                    })
-                })
-                .filter(|c| c.cut_in_m.is_finite())
-                .max_by(|a, b| a.cut_in_m.total_cmp(&b.cut_in_m))
-        });
+                    });
+                }
+            }
+        }
         if let Some(l) = latency_s.filter(|l| l.is_finite()) {
             self.latency.0 += l;
             self.latency.1 = self.latency.1.max(l);

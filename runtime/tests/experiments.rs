@@ -580,7 +580,7 @@ impl Strays {
     fn new(profile: &Profile) -> Strays {
         let safety = &profile.safety;
         Strays {
-            within_m: safety.actor_distance_m + 2.0 * safety.tracking_margin_m,
+            within_m: safety.on_set_m() + safety.tracking_margin_m,
             cut_in_m: Vec::new(),
             told: Vec::new(),
             near: Vec::new(),
@@ -828,7 +828,7 @@ fn the_drone_keeps_the_actors_distance_from_take_off_to_landing() {
         );
         assert!(landing >= safety_m, "seed {seed}: landing {landing:.3} m");
         // The glides' references keep the tracking margin too.
-        let kept_m = safety_m + profile.safety.tracking_margin_m;
+        let kept_m = profile.safety.on_set_m();
         assert!(
             g.approach_m >= kept_m - 1e-9,
             "seed {seed}: {:.4}",
