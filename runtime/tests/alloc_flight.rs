@@ -14,7 +14,7 @@ use std::cell::Cell;
 use dronecine_compiler::profile::Profile;
 use dronecine_runtime::flight::{FlightSink, Observer, Progress};
 use dronecine_runtime::log::{FlightLogWriter, LogScene, LogThread};
-use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
+use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase};
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::SimConfig;
 
@@ -84,17 +84,6 @@ impl Observer for Watch {
     }
 }
 
-struct Log(FlightLogWriter);
-
-impl FlightSink for Log {
-    fn tick(&mut self, r: &TickRecord) -> std::io::Result<()> {
-        self.0.write_tick(r)
-    }
-    fn event(&mut self, e: &Event) -> std::io::Result<()> {
-        self.0.write_event(e)
-    }
-}
-
 #[derive(Clone, Copy, PartialEq)]
 enum Sink {
     None,
@@ -141,10 +130,10 @@ fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
         },
     )
     .unwrap();
-    let mut log = Some(Log(writer));
+    let mut log = Some(writer);
     let mut thread = None;
     if mode == Sink::Thread {
-        thread = Some(LogThread::spawn(log.take().unwrap().0, 100.0).unwrap());
+        thread = Some(LogThread::spawn(log.take().unwrap(), 100.0).unwrap());
     }
     let mut null = dronecine_runtime::flight::NullSink;
     let sink: &mut dyn FlightSink = match (mode, &mut log, &mut thread) {
@@ -171,7 +160,7 @@ fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
     )
     .unwrap();
     match (log, thread) {
-        (Some(log), _) => log.0.finish().unwrap(),
+        (Some(log), _) => log.finish().unwrap(),
         (_, Some(thread)) => thread.finish().unwrap(),
         _ => {}
     }

@@ -3,9 +3,9 @@
 //! damage, and what follows still counts in the report.
 
 use dronecine_compiler::profile::Profile;
-use dronecine_runtime::flight::{FlightSink, NoObserver};
+use dronecine_runtime::flight::NoObserver;
 use dronecine_runtime::log::{FlightLog, FlightLogWriter, LogScene};
-use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase, TickRecord};
+use dronecine_runtime::record::{ControllerSetup, FlightHeader, Phase};
 use dronecine_runtime::replay::replay;
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::SimConfig;
@@ -14,17 +14,6 @@ const SCRIPT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                       actor A height 1.80m at (0, 0) facing 0deg\n\
                       at 1s A walks to (1, 0.5) over 3s\n\
                       MS on A 34left for 5s\n";
-
-struct Log(FlightLogWriter);
-
-impl FlightSink for Log {
-    fn tick(&mut self, r: &TickRecord) -> std::io::Result<()> {
-        self.0.write_tick(r)
-    }
-    fn event(&mut self, e: &Event) -> std::io::Result<()> {
-        self.0.write_event(e)
-    }
-}
 
 fn fly_to_log(controller: &str, path: &std::path::Path) -> dronecine_runtime::report::FlightReport {
     fly_script_to_log(SCRIPT, controller, path)
@@ -71,7 +60,7 @@ fn fly_script_to_log(
         },
     )
     .unwrap();
-    let mut log = Log(writer);
+    let mut log = writer;
     let report = fly_simulated(
         &SimFlight {
             script: &script,
@@ -89,7 +78,7 @@ fn fly_script_to_log(
         &mut NoObserver,
     )
     .unwrap();
-    log.0.finish().unwrap();
+    log.finish().unwrap();
     report
 }
 

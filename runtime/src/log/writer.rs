@@ -627,3 +627,15 @@ fn header_metadata(header: &FlightHeader) -> Result<BTreeMap<String, String>, St
         .map(|(k, v)| (k, v.to_string()))
         .collect())
 }
+
+/// The writer as a flight's sink on the loop's own thread: each tick written as it comes
+/// (tests, tools). `shoot` writes through [`LogThread`](super::LogThread) instead, so that
+/// formatting and the disk never sit on the control loop.
+impl crate::flight::FlightSink for FlightLogWriter {
+    fn tick(&mut self, record: &TickRecord) -> io::Result<()> {
+        self.write_tick(record)
+    }
+    fn event(&mut self, event: &Event) -> io::Result<()> {
+        self.write_event(event)
+    }
+}
