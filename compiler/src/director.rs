@@ -1244,15 +1244,19 @@ impl Director {
         scratch: &mut Vec<ActorPose>,
         passing: &mut Vec<(f64, ActorPose)>,
     ) -> f64 {
-        // How far the blocking takes actor `i` on the floor from `t0_s` to `t1_s` (the live
-        // pose moves as the blocking does: `arriving_into`).
-        let moved_m = |i: usize, t0_s: f64, t1_s: f64| {
-            let (a, b) = (self.blocking.pose(i, t0_s), self.blocking.pose(i, t1_s));
-            let (dx, dy) = (
-                b.position_m[0] - a.position_m[0],
-                b.position_m[1] - a.position_m[1],
-            );
-            (dx * dx + dy * dy).sqrt()
+        // The most the blocking takes an actor on the floor from `t0_s` to `t1_s` (a live pose
+        // moves as the blocking does: `arriving_into`).
+        let moved_m = |t0_s: f64, t1_s: f64| {
+            (0..actors.len().min(self.blocking.len()))
+                .map(|i| {
+                    let (a, b) = (self.blocking.pose(i, t0_s), self.blocking.pose(i, t1_s));
+                    let (dx, dy) = (
+                        b.position_m[0] - a.position_m[0],
+                        b.position_m[1] - a.position_m[1],
+                    );
+                    (dx * dx + dy * dy).sqrt()
+                })
+                .fold(0.0, f64::max)
         };
         let mut step_m: f64 = 0.0;
         let mut before_s = actors_s;
@@ -1260,22 +1264,19 @@ impl Director {
             let t_s = actors_s + (at_s - actors_s) * k as f64 / steps as f64;
             self.arriving_into(actors, actors_s, t_s, scratch);
             let u = (t_s - start_s) / (at_s - start_s);
-            for (i, (then, now)) in scratch.iter().zip(actors).enumerate() {
-                if same_pose(then, now) {
-                    continue;
-                }
-                passing.push((u, *then));
-                if i < self.blocking.len() {
-                    step_m = step_m.max(moved_m(i, before_s, t_s));
-                }
-            }
+            passing.extend(
+                scratch
+                    .iter()
+                    .zip(actors)
+                    .filter(|(then, now)| !same_pose(then, now))
+                    .map(|(then, _)| (u, *then)),
+            );
+            step_m = step_m.max(moved_m(before_s, t_s));
             before_s = t_s;
         }
         // The last step, to the arrival (its poses are not passing ones: they stand at the
         // goal, kept out of as such).
-        (0..actors.len().min(self.blocking.len()))
-            .map(|i| moved_m(i, before_s, at_s))
-            .fold(step_m, f64::max)
+        step_m.max(moved_m(before_s, at_s))
     }
 
     /// The actors as they will stand at `at_s`, from their poses `actors` at `now_s`: each
