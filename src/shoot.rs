@@ -325,6 +325,9 @@ pub fn run(a: &Args) -> ExitCode {
         Target::Sim => {
             let mut sim = SimConfig::new(seed);
             sim.effects = effects;
+            // As fast as it can: the director on a thread of its own if there is a core for
+            // it (the same flight either way). Paced, the loop waits anyway.
+            sim.actors_ahead = !a.realtime && session::director_thread_pays(true);
             let flight = SimFlight {
                 script,
                 source: &r.text,

@@ -112,7 +112,9 @@ pub struct ShotTiming {
     pub reposition: Option<(f64, f64)>,
 }
 
-/// The evaluator. See the module documentation.
+/// The evaluator. See the module documentation. A clone steps on as the original would,
+/// bit for bit (a flight keeps one to rewind to: `dronecine_runtime::ahead`).
+#[derive(Clone)]
 pub struct Director {
     shots: Vec<Shot>,
     plans: Vec<Plan>,
@@ -213,6 +215,7 @@ const SOLVED_SLOTS: usize = 8;
 /// the actors the composition names (and of the held solve, which for the same poses is the
 /// solve itself), so while those actors stand still (and for the 1 ms look-ahead of a still
 /// actor, which is the same pose) the solve is reused, bit for bit.
+#[derive(Clone)]
 struct Solved {
     plan: usize,
     end: usize,
@@ -477,6 +480,34 @@ impl Director {
         self.raw_target
     }
 
+    /// The visual held at the last [`Director::step`]: in a hold, once its first
+    /// `SETTLE_S` are past; `None` during a move, a path, a repositioning flight or a
+    /// settle.
+    fn held_visual(&self) -> Option<&framing::Visual> {
+        let Phase::Shot { index, start_s, .. } = self.phase else {
+            return None;
+        };
+        if !matches!(self.plans.get(index), Some(Plan::Hold(_)))
+            || self.last_t_s < start_s + SETTLE_S
+        {
+            return None;
+        }
+        self.visual.as_ref()
+    }
+
+    /// The framing held at the last [`Director::step`] with the lens and gimbal that aim it
+    /// ([`Held`]), or `None` outside holds (as [`Director::hold_targets`]). Owned, and
+    /// allocating nothing (a hold's visual is one or two actors', never a blend): a flight
+    /// that steps the director on another thread sends it back each tick.
+    pub fn held(&self) -> Option<Held> {
+        let v = self.held_visual()?;
+        (!matches!(v, framing::Visual::Blend { .. })).then(|| Held {
+            visual: v.clone(),
+            lens: self.lens,
+            gimbal: self.gimbal,
+        })
+    }
+
     /// The framing held at the last [`Director::step`]: each framed actor's aim point and the
     /// screen point the script puts it at, for a camera at `camera_m` (cleared and filled
     /// into `out`, allocating nothing once it has room for two). Returns false, with `out`
@@ -489,19 +520,10 @@ impl Director {
         out: &mut Vec<framing::ScreenTarget>,
     ) -> bool {
         out.clear();
-        let Phase::Shot { index, start_s, .. } = self.phase else {
-            return false;
-        };
-        if !matches!(self.plans.get(index), Some(Plan::Hold(_)))
-            || self.last_t_s < start_s + SETTLE_S
-        {
-            return false;
+        match self.held_visual() {
+            Some(v) => hold_targets(v, &self.lens, &self.gimbal, actors, camera_m, out),
+            None => false,
         }
-        let Some(v) = &self.visual else {
-            return false;
-        };
-        framing::screen_targets_into(v, actors, &self.lens, &self.gimbal, camera_m, out);
-        !out.is_empty()
     }
 
     /// The heading and camera pitch that frame the hold of the last [`Director::step`] from a
@@ -509,28 +531,8 @@ impl Director {
     /// be — or `None` outside holds (as [`Director::hold_targets`]). `shoot` aims the camera
     /// with it, so a position error does not also become a framing error.
     pub fn hold_orientation(&self, actors: &[ActorPose], camera_m: &Vec3) -> Option<(f64, f64)> {
-        let Phase::Shot { index, start_s, .. } = self.phase else {
-            return None;
-        };
-        if !matches!(self.plans.get(index), Some(Plan::Hold(_)))
-            || self.last_t_s < start_s + SETTLE_S
-        {
-            return None;
-        }
-        let v = self.visual.as_ref()?;
-        if matches!(self.gimbal, Gimbal::None) {
-            // A level camera: a two-actor hold's heading is the balanced one, and aiming the
-            // primary (below) would only give the pitch, which is 0.
-            if let Some(h) = framing::balanced_heading(v, actors, &self.lens, camera_m, 0.0) {
-                return Some((h, 0.0));
-            }
-        }
-        let (heading, pitch, _) =
-            framing::orient_visual(v, actors, &self.lens, &self.gimbal, camera_m);
-        // Two actors: balance their screen-x errors rather than aim the primary exactly.
-        let heading =
-            framing::balanced_heading(v, actors, &self.lens, camera_m, pitch).unwrap_or(heading);
-        (heading.is_finite() && pitch.is_finite()).then_some((heading, pitch))
+        let v = self.held_visual()?;
+        hold_orientation(v, &self.lens, &self.gimbal, actors, camera_m)
     }
 
     /// The visual of a two-shot hold being flown this tick, moved [`EPS_S`] ahead along θ at
@@ -1945,6 +1947,76 @@ fn contained(mut goal: Kinematics, lo: &Vec3, hi: &Vec3) -> Kinematics {
         }
     }
     goal
+}
+
+/// A held framing and the lens and gimbal that aim it ([`Director::held`]): the same
+/// aim and the same framing targets as [`Director::hold_orientation`] and
+/// [`Director::hold_targets`] at the step it was taken from, bit for bit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Held {
+    visual: framing::Visual,
+    lens: Lens,
+    gimbal: Gimbal,
+}
+
+impl Held {
+    /// [`Director::hold_orientation`] of the step it was taken from.
+    pub fn orientation(&self, actors: &[ActorPose], camera_m: &Vec3) -> Option<(f64, f64)> {
+        hold_orientation(&self.visual, &self.lens, &self.gimbal, actors, camera_m)
+    }
+
+    /// [`Director::hold_targets`] of the step it was taken from.
+    pub fn targets_into(
+        &self,
+        actors: &[ActorPose],
+        camera_m: &Vec3,
+        out: &mut Vec<framing::ScreenTarget>,
+    ) -> bool {
+        out.clear();
+        hold_targets(
+            &self.visual,
+            &self.lens,
+            &self.gimbal,
+            actors,
+            camera_m,
+            out,
+        )
+    }
+}
+
+/// Each framed actor's aim point and screen point of held visual `v` ([`Director::hold_targets`]).
+fn hold_targets(
+    v: &framing::Visual,
+    lens: &Lens,
+    gimbal: &Gimbal,
+    actors: &[ActorPose],
+    camera_m: &Vec3,
+    out: &mut Vec<framing::ScreenTarget>,
+) -> bool {
+    framing::screen_targets_into(v, actors, lens, gimbal, camera_m, out);
+    !out.is_empty()
+}
+
+/// The heading and pitch that frame held visual `v` from `camera_m`
+/// ([`Director::hold_orientation`]).
+fn hold_orientation(
+    v: &framing::Visual,
+    lens: &Lens,
+    gimbal: &Gimbal,
+    actors: &[ActorPose],
+    camera_m: &Vec3,
+) -> Option<(f64, f64)> {
+    if matches!(gimbal, Gimbal::None) {
+        // A level camera: a two-actor hold's heading is the balanced one, and aiming the
+        // primary (below) would only give the pitch, which is 0.
+        if let Some(h) = framing::balanced_heading(v, actors, lens, camera_m, 0.0) {
+            return Some((h, 0.0));
+        }
+    }
+    let (heading, pitch, _) = framing::orient_visual(v, actors, lens, gimbal, camera_m);
+    // Two actors: balance their screen-x errors rather than aim the primary exactly.
+    let heading = framing::balanced_heading(v, actors, lens, camera_m, pitch).unwrap_or(heading);
+    (heading.is_finite() && pitch.is_finite()).then_some((heading, pitch))
 }
 
 /// An actor moved on by its velocity and turn rate over `dt_s`.

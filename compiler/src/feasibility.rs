@@ -91,6 +91,7 @@ const JUMP_MIN_M: f64 = 0.3;
 const JUMP_SPEEDS: f64 = 10.0;
 
 /// Per-shot peaks of everything checked.
+#[derive(Clone)]
 pub struct Monitor {
     stats: Vec<ShotStats>,
     speed_max: f64,

@@ -79,6 +79,23 @@ pub trait Mocap {
     /// start their blocking (the script's clock) from this moment; live actors take the cue
     /// from the set, so real backends ignore it.
     fn action(&mut self, _t_s: f64) {}
+
+    /// The actors' part of the frames to come, if this motion capture knows it ahead of the
+    /// flight's clock: a simulation's, whose actors do not depend on the drone (taken after
+    /// [`Mocap::action`], it follows the cue). The flight then steps its director on a thread
+    /// of its own, ahead of the loop (`crate::ahead`). Real backends know nothing ahead.
+    fn actors_ahead(&self) -> Option<Box<dyn ActorFeed>> {
+        None
+    }
+}
+
+/// The actors' part of a motion capture's frames, read ahead of the flight
+/// ([`Mocap::actors_ahead`]).
+pub trait ActorFeed: Send {
+    /// Fills `frame` as [`Mocap::poll`] would after the flight's clock slept until `t_s`
+    /// (called with increasing `t_s`), the drone left out (`None`); `false` when no frame
+    /// arrived since the last call.
+    fn poll_at(&mut self, t_s: f64, frame: &mut MocapFrame) -> bool;
 }
 
 pub trait Clock {

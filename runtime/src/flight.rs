@@ -28,7 +28,7 @@
 use std::io;
 
 use dronecine_compiler::camera::{CameraPose, Lens, Vec3};
-use dronecine_compiler::director::Director;
+use dronecine_compiler::director::{Director, Held};
 use dronecine_compiler::framing::ScreenTarget;
 use dronecine_compiler::profile::Profile;
 use dronecine_compiler::route::{self, Keepout, Route};
@@ -37,6 +37,7 @@ use dronecine_grammar::script::{Scene, Script};
 use dronecine_grammar::{Code, Diagnostic, LineIndex};
 use serde::Serialize;
 
+use crate::ahead::{direct, Ahead, AheadStart, DirectedTick, Directing};
 use crate::backend::{BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame};
 use crate::control::{Controller, Measurement, Reference, TickInput};
 use crate::frames::{wrap_angle_rad, ActorPose, Command, Sample};
@@ -187,8 +188,9 @@ impl From<BackendError> for FlightError {
 /// Facing: α = 0.7, β = 0.2. Smoothing it more was tried (α = 0.3, β = 0.05): the one-actor
 /// holds of `scene.psl`, whose framings turn with the actors' drifting facing, tracked worse
 /// (its first shot 2.9 → 3.8 cm RMS over seeds 1–10).
-struct ActorTracker {
-    poses: Vec<ActorPose>,
+#[derive(Clone, Debug)]
+pub(crate) struct ActorTracker {
+    pub(crate) poses: Vec<ActorPose>,
     last_t_s: Vec<Option<f64>>,
 }
 
@@ -228,7 +230,7 @@ impl ActorTracker {
     }
 
     /// Folds a frame in. Untracked actors keep moving with their last velocity for the tick.
-    fn update(&mut self, frame: &MocapFrame) {
+    pub(crate) fn update(&mut self, frame: &MocapFrame) {
         for (i, pose) in self.poses.iter_mut().enumerate() {
             let Some(Some(m)) = frame.actors.get(i) else {
                 continue;
@@ -262,6 +264,17 @@ impl ActorTracker {
             self.last_t_s[i] = Some(frame.t_s);
         }
     }
+}
+
+/// Whether a frame just polled is newer than the last one used, which it then becomes: an
+/// out-of-order or replayed frame is not used. (The one rule, for the loop and for the
+/// director ahead of it: `crate::ahead`.)
+pub(crate) fn take_newer(last_frame_t_s: &mut Option<f64>, frame: &MocapFrame) -> bool {
+    if last_frame_t_s.is_some_and(|t0| frame.t_s <= t0) {
+        return false;
+    }
+    *last_frame_t_s = Some(frame.t_s);
+    true
 }
 
 fn finite_pose(p: &BodyPose) -> bool {
@@ -465,6 +478,40 @@ struct Flight<'s, 'b> {
     written_t_s: f64,
 }
 
+/// Who steps the director during the shots: the loop itself, or a thread ahead of it
+/// ([`Ahead`]). Both give the same [`DirectedTick`]s ([`direct`]).
+enum Stepper {
+    Here(Director, Directing, DirectedTick),
+    Ahead(Ahead),
+}
+
+impl Stepper {
+    fn here(director: Director) -> Stepper {
+        Stepper::Here(director, Directing::default(), DirectedTick::default())
+    }
+}
+
+/// Whether two lists of actor poses are the same, bit for bit.
+fn same_poses(a: &[ActorPose], b: &[ActorPose]) -> bool {
+    let bits = |p: &ActorPose| {
+        let [x, y, z] = p.position_m;
+        let [vx, vy, vz] = p.velocity_mps;
+        [
+            x,
+            y,
+            z,
+            vx,
+            vy,
+            vz,
+            p.facing_rad,
+            p.facing_rate_radps,
+            p.height_m,
+        ]
+        .map(f64::to_bits)
+    };
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
+}
+
 /// A heading aimed from a fresh measurement of the drone's position, and its rate.
 #[derive(Clone, Copy, Debug)]
 struct Aim {
@@ -601,9 +648,9 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// reference was near the line it keeps (`tracking_margin_exceeded`,
     /// [`CutIn`](crate::report::CutIn)): it did not come inside this time, but a reference
     /// held at the line would have had it inside.
-    fn tell_findings(&mut self, t_s: f64, director: &Director, index: usize) {
-        for d in director.shot_findings(index) {
-            self.director_finding(t_s, &d);
+    fn tell_findings(&mut self, t_s: f64, findings: &[Diagnostic], index: usize) {
+        for d in findings {
+            self.director_finding(t_s, d);
         }
         let safety = &self.setup.profile.safety;
         let profile = &self.setup.profile.name;
@@ -705,7 +752,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
         self.fresh = self.mocap.poll(&mut self.frame)?;
         if self.fresh {
-            if self.last_frame_t_s.is_some_and(|t0| self.frame.t_s <= t0) {
+            if !take_newer(&mut self.last_frame_t_s, &self.frame) {
                 // Out of order or replayed: its measurement is not used.
                 self.fresh = false;
                 self.event(
@@ -718,7 +765,6 @@ impl<'s, 'b> Flight<'s, 'b> {
                     ),
                 );
             } else {
-                self.last_frame_t_s = Some(self.frame.t_s);
                 self.actors.update(&self.frame);
                 for (seen, body) in self.actor_seen_s.iter_mut().zip(&self.frame.actors) {
                     if body.as_ref().is_some_and(finite_pose) {
@@ -1007,24 +1053,66 @@ impl<'s, 'b> Flight<'s, 'b> {
             let action_s = t + self.period_s;
             self.mocap.action(action_s);
             self.event(action_s, "info", "action", "action!".into());
+            // The director: on a thread of its own, ahead of the loop, when the mocap knows
+            // the actors' future (the simulator); else stepped here, tick by tick.
+            let mut stepper = match (self.mocap.actors_ahead(), self.mocap.actors_ahead()) {
+                (Some(feed), Some(rewind_feed)) => {
+                    let start = AheadStart {
+                        director,
+                        tracker: &self.actors,
+                        frame: &self.frame,
+                        last_frame_t_s: self.last_frame_t_s,
+                        t_s: t,
+                        action_s,
+                        period_s: self.period_s,
+                    };
+                    match Ahead::spawn(start, feed, rewind_feed) {
+                        Ok(ahead) => Stepper::Ahead(ahead),
+                        Err(director) => Stepper::here(*director),
+                    }
+                }
+                _ => Stepper::here(director),
+            };
             let mut current: Option<usize> = None;
-            let mut told = 0;
+            // The last shot's findings, when the director finished.
+            let mut last_findings = Vec::new();
             loop {
                 t = self.wait_tick(t + self.period_s)?;
                 let script_t = t - action_s;
-                let sample = director.step(script_t, &self.actors.poses);
-                self.written_t_s = director.written_t_s(script_t);
+                let tick: &DirectedTick = match &mut stepper {
+                    Stepper::Here(director, state, tick) => {
+                        direct(director, state, t, script_t, &self.actors.poses, tick);
+                        tick
+                    }
+                    Stepper::Ahead(ahead) => match ahead.next() {
+                        Some(tick)
+                            if tick.t_s == t && same_poses(&tick.actors, &self.actors.poses) =>
+                        {
+                            tick
+                        }
+                        _ => {
+                            self.failsafe(
+                                t,
+                                "the director, stepped ahead of the loop, saw other actors than \
+                                 the loop (an internal error): landing",
+                            );
+                            break;
+                        }
+                    },
+                };
+                let sample = tick.sample;
+                self.written_t_s = tick.written_t_s;
                 // What the director found against the live actors, told as it arises: a
                 // framing it cannot solve holds the drone where it is until it solves, which
                 // the report alone would show only as a thinner framing figure.
-                while let Some(d) = director.diagnostics_so_far().get(told) {
-                    told += 1;
+                for d in &tick.diagnostics {
                     self.director_finding(t, d);
                 }
                 if current != Some(sample.shot) {
                     // The shot before is over: what the monitor found in it.
                     if let Some(over) = current {
-                        self.tell_findings(t, &director, over);
+                        debug_assert_eq!(tick.over, Some(over));
+                        self.tell_findings(t, &tick.over_findings, over);
                     }
                     current = Some(sample.shot);
                     self.event(
@@ -1044,11 +1132,11 @@ impl<'s, 'b> Flight<'s, 'b> {
                 let usable = self.measured.filter(|m| {
                     m.position_m.iter().all(|x| x.is_finite()) && m.heading_rad.is_finite()
                 });
-                self.aim(&director, t, usable.is_some(), &mut world_sample);
+                self.aim(tick.held.as_ref(), t, usable.is_some(), &mut world_sample);
                 // The framing as the drone really films it: the measured pose, the camera
                 // pitch the reference asks of the gimbal (level without one).
                 self.framing.clear();
-                if let Some(m) = usable {
+                if let (Some(m), Some(held)) = (usable, &tick.held) {
                     // Its axes once for every actor projected.
                     let camera = CameraPose {
                         position_m: Vec3::from(m.position_m),
@@ -1056,11 +1144,8 @@ impl<'s, 'b> Flight<'s, 'b> {
                         pitch_rad: world_sample.camera_pitch_rad,
                     }
                     .frame();
-                    if director.hold_targets(
-                        &self.actors.poses,
-                        &camera.position_m,
-                        &mut self.targets,
-                    ) {
+                    if held.targets_into(&self.actors.poses, &camera.position_m, &mut self.targets)
+                    {
                         for target in &self.targets {
                             self.framing.push(FramingRecord {
                                 actor: target.actor,
@@ -1070,19 +1155,31 @@ impl<'s, 'b> Flight<'s, 'b> {
                         }
                     }
                 }
+                let finished = tick.finished;
+                if finished {
+                    last_findings.clone_from(&tick.last_findings);
+                }
                 last = world_sample;
                 if let Outcome::Land =
                     self.control(t, Phase::Shots, Some(sample.shot), &world_sample)?
                 {
                     break;
                 }
-                if director.finished() {
+                if finished {
                     completed = true;
                     break;
                 }
             }
             if let Some(last) = current {
-                self.tell_findings(t, &director, last);
+                // Over too: the last shot, or the one a failsafe cut short, as the director
+                // had it at this tick.
+                if !completed {
+                    last_findings = match stepper {
+                        Stepper::Here(director, ..) => director.shot_findings(last),
+                        Stepper::Ahead(ahead) => ahead.rewound().shot_findings(last),
+                    };
+                }
+                self.tell_findings(t, &last_findings, last);
             }
         }
 
@@ -1516,14 +1613,14 @@ impl<'s, 'b> Flight<'s, 'b> {
     /// heading and dropped the rate: at 200 Hz against a 100 Hz mocap every other tick, and
     /// `two-actors.psl`'s heading error went from 0.29° to 2.6° RMS, its framing error
     /// from 0.023 to 0.061.
-    fn aim(&mut self, director: &Director, t: f64, fresh: bool, sample: &mut Sample) {
+    fn aim(&mut self, held: Option<&Held>, t: f64, fresh: bool, sample: &mut Sample) {
         let Some((seen_s, m)) = self.drone_m else {
             self.last_aim = None;
             return;
         };
         // A drone not seen this long hovers (its failsafe): nothing to aim from.
         let Some((heading, pitch)) = (t - seen_s < self.setup.safety.mocap_hover_s)
-            .then(|| director.hold_orientation(&self.actors.poses, &Vec3::from(m.position_m)))
+            .then(|| held?.orientation(&self.actors.poses, &Vec3::from(m.position_m)))
             .flatten()
         else {
             self.last_aim = None;

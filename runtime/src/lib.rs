@@ -19,6 +19,7 @@
 //! - `ardrone`, `natnet`: the AR.Drone 2.0 (AT commands, navdata) and NatNet wire codecs.
 //! - `emulator`: the simulator in real time behind those protocols (`dronecine emulate`).
 
+mod ahead;
 pub mod ardrone;
 pub mod backend;
 pub mod calibrate;

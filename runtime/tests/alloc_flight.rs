@@ -6,7 +6,8 @@
 //! With the MCAP flight log on, the `mcap` crate's chunk writer grows a fresh buffer for each
 //! chunk (one a second) and its record encoder allocates now and then: a handful of
 //! allocations a second, bounded here; dronecine's own log code reuses its buffers. Written
-//! as `shoot` writes it, on its own thread (`LogThread`), the loop's thread allocates nothing.
+//! as `shoot` writes it, on its own thread (`LogThread`), the loop's thread allocates nothing;
+//! nor with the director stepped ahead of it on another thread (`SimConfig::actors_ahead`).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -96,6 +97,11 @@ enum Sink {
 /// Flies the script; returns (shot-tick intervals, allocating intervals after warm-up as
 /// (time, count)).
 fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
+    fly_with(mode, false)
+}
+
+/// [`fly`], the director stepped ahead of the loop on a thread of its own or not.
+fn fly_with(mode: Sink, ahead: bool) -> (usize, Vec<(f64, usize)>) {
     let opts = dronecine_grammar::Options {
         known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
         base_dir: None,
@@ -151,7 +157,10 @@ fn fly(mode: Sink) -> (usize, Vec<(f64, usize)>) {
             rate_hz: 100.0,
             controller: setup,
             plant: None,
-            sim: SimConfig::new(2),
+            sim: SimConfig {
+                actors_ahead: ahead,
+                ..SimConfig::new(2)
+            },
             realtime: false,
             interrupts: None,
         },
@@ -207,4 +216,13 @@ fn with_the_flight_log_only_the_mcap_chunks_allocate() {
 #[test]
 fn with_the_log_on_its_own_thread_the_loop_allocates_nothing() {
     assert_none_late(fly(Sink::Thread));
+}
+
+/// With the director stepped ahead of the loop on a thread of its own (the counts are per
+/// thread: that thread's director is the one the tests above count on the loop's): the loop
+/// takes its ticks from reused batches, and allocates nothing, its log on its own thread too.
+#[test]
+fn with_the_director_ahead_the_loop_allocates_nothing() {
+    assert_none_late(fly_with(Sink::None, true));
+    assert_none_late(fly_with(Sink::Thread, true));
 }

@@ -3,7 +3,8 @@
 //! placed in the text and a help; or by a pre-flight check that says why) or flown to the end
 //! on the simulator with every effect on, the drone as measured never inside the actors'
 //! distance, and its flight log replayed to the same commands, bit for bit, and the same
-//! report.
+//! report; flown again with the director stepped ahead of the loop on a thread of its own
+//! (`SimConfig::actors_ahead`), the same log, byte for byte.
 //!
 //! The scenes are drawn from a fixed seed list by a small generator of their own (one to three
 //! actors who walk and turn, one- and two-actor framings, over-the-shoulders, moves, holds,
@@ -336,35 +337,41 @@ fn take(seed: u64, dir: &std::path::Path, tally: &mut Tally) {
         dronecine_version: "test".into(),
     };
     let lens = *Director::new(&script, scene, &profile).lens();
-    let writer = FlightLogWriter::create(
-        &path,
-        &header,
-        &LogScene {
-            stage: scene.stage,
-            lens,
-            actor_names: &names,
-            actor_heights_m: &heights,
-        },
-    )
-    .expect("a log in a temporary folder");
-    let mut log = writer;
-    let flown = fly_simulated(
-        &SimFlight {
-            script: &script,
-            source: &text,
-            scene,
-            profile: &profile,
-            rate_hz: 100.0,
-            controller: setup,
-            plant: None,
-            sim: SimConfig::new(seed),
-            realtime: false,
-            interrupts: None,
-        },
-        &mut log,
-        &mut NoObserver,
-    );
-    log.finish().expect("the log closes");
+    // The flight with its log at `path`, its director stepped ahead of the loop or not.
+    let fly_into = |path: &std::path::Path, ahead: bool| {
+        let mut log = FlightLogWriter::create(
+            path,
+            &header,
+            &LogScene {
+                stage: scene.stage,
+                lens,
+                actor_names: &names,
+                actor_heights_m: &heights,
+            },
+        )
+        .expect("a log in a temporary folder");
+        let mut sim = SimConfig::new(seed);
+        sim.actors_ahead = ahead;
+        let flown = fly_simulated(
+            &SimFlight {
+                script: &script,
+                source: &text,
+                scene,
+                profile: &profile,
+                rate_hz: 100.0,
+                controller: setup.clone(),
+                plant: None,
+                sim,
+                realtime: false,
+                interrupts: None,
+            },
+            &mut log,
+            &mut NoObserver,
+        );
+        log.finish().expect("the log closes");
+        flown
+    };
+    let flown = fly_into(&path, false);
     let report = match flown {
         Ok(r) => r,
         Err(SessionError::Flight(FlightError::Preflight(why))) => {
@@ -403,6 +410,25 @@ fn take(seed: u64, dir: &std::path::Path, tally: &mut Tally) {
     );
     assert!(again.ticks > 0, "seed {seed}: nothing replayed");
     assert_eq!(again.report, report, "seed {seed}: the report again");
+
+    // The director stepped ahead of the loop, on a thread of its own: the same flight, its
+    // log the same bytes.
+    let ahead_path = dir.join(format!("scene-{seed}-ahead.mcap"));
+    let ahead = fly_into(&ahead_path, true).expect("flown once, it flies again");
+    assert_eq!(
+        ahead, report,
+        "seed {seed}: the report with the director ahead"
+    );
+    let (a, b) = (
+        std::fs::read(&path).unwrap(),
+        std::fs::read(&ahead_path).unwrap(),
+    );
+    assert!(
+        a == b,
+        "seed {seed}: the log with the director ahead differs (from byte {:?} on)",
+        a.iter().zip(&b).position(|(x, y)| x != y)
+    );
+    let _ = std::fs::remove_file(&ahead_path);
     tally.flown += 1;
 }
 

@@ -207,6 +207,14 @@ pub struct SimConfig {
     /// (`Mocap::action`), then walk the script from its time 0 — as on set. Default false:
     /// the script's clock is the world's from t = 0.
     pub wait_for_action: bool,
+    /// The simulated motion capture offers the flight its actors' future
+    /// (`Mocap::actors_ahead`: they do not depend on the drone), and the flight steps its
+    /// director on a second thread, ahead of the loop: the same flight, bit for bit
+    /// (`runtime/tests/ahead.rs`), in less time when the machine has a core for that thread
+    /// ([`crate::session::director_thread_pays`]). Default false: the director is stepped on
+    /// the loop's thread, as with a real motion capture.
+    #[serde(default)]
+    pub actors_ahead: bool,
 }
 
 impl SimConfig {
@@ -248,6 +256,7 @@ impl SimConfig {
             battery_drain_percent_per_min: 7.0,
             battery_min_takeoff_percent: 20.0,
             wait_for_action: false,
+            actors_ahead: false,
         }
     }
 

@@ -29,7 +29,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use crate::backend::{
-    BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame, Telemetry,
+    ActorFeed, BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame, Telemetry,
 };
 use crate::frames::{self, ActorPose, Command};
 use dronecine_compiler::profile::Profile;
@@ -97,6 +97,7 @@ pub struct LinkStats {
     pub delivered: u64,
 }
 
+#[derive(Clone)]
 struct MocapGen {
     rate_hz: f64,
     /// Index of the next frame to produce (frame `n` is at `n / rate`).
@@ -128,39 +129,46 @@ struct World {
     actors: Actors,
     mocap: MocapGen,
     battery_on: bool,
+    /// [`SimConfig::actors_ahead`].
+    actors_ahead: bool,
     zig: &'static Ziggurat,
 }
 
-impl World {
-    fn advance_to(&mut self, t_s: f64) {
-        if !t_s.is_finite() || t_s <= self.now_s {
-            return;
-        }
-        let h = self.plant.h;
-        loop {
-            let t_end = (self.plant.k + 1) as f64 * h;
-            let t_frame = self.mocap.next as f64 / self.mocap.rate_hz;
-            if t_frame <= t_s + TIME_EPS_S && t_frame < t_end - TIME_EPS_S {
-                self.emit_frame(t_frame);
-            } else if t_end <= t_s + TIME_EPS_S {
-                if self.wind_on {
-                    let t = self.plant.t_k();
-                    self.last_wind = [
-                        self.wind[0].value(t, self.zig),
-                        self.wind[1].value(t, self.zig),
-                    ];
-                }
-                self.plant.step(&mut self.link, self.last_wind);
-            } else {
-                break;
-            }
-        }
-        self.now_s = t_s;
-    }
+/// What the world does next on its way to `t_s`: the mocap frame due before the plant's next
+/// step ends, else that step, else nothing (the world is at `t_s`). One schedule, for the
+/// world and its actors-only copy ([`ActorWorld`]): the frames come at the same moments of
+/// the physics in both.
+enum Event {
+    Frame(f64),
+    Step,
+    Done,
+}
 
-    fn emit_frame(&mut self, t_s: f64) {
-        let zig = self.zig;
-        let m = &mut self.mocap;
+fn next_event(k: u64, h: f64, mocap: &MocapGen, t_s: f64) -> Event {
+    let t_end = (k + 1) as f64 * h;
+    let t_frame = mocap.next as f64 / mocap.rate_hz;
+    if t_frame <= t_s + TIME_EPS_S && t_frame < t_end - TIME_EPS_S {
+        Event::Frame(t_frame)
+    } else if t_end <= t_s + TIME_EPS_S {
+        Event::Step
+    } else {
+        Event::Done
+    }
+}
+
+impl MocapGen {
+    /// Takes the frame at `t_s` into `latest`: the drone where `drone_at` says (asked only
+    /// when it is tracked in this frame), every actor where they are, each with its noise and
+    /// dropouts. The random draws do not depend on where the drone is, so an actors-only copy
+    /// that passes any `drone_at` draws the same numbers and finds the same actors.
+    fn emit(
+        &mut self,
+        t_s: f64,
+        actors: &mut Actors,
+        zig: &Ziggurat,
+        drone_at: impl FnOnce() -> ([f64; 3], f64),
+    ) {
+        let m = self;
         let n = m.next;
         m.next += 1;
         m.latest.t_s = t_s;
@@ -175,8 +183,7 @@ impl World {
         m.latest.drone = if m.burst[0] {
             None
         } else {
-            let mut p = self.plant.position_at(t_s);
-            let mut c = self.plant.heading_at(t_s);
+            let (mut p, mut c) = drone_at();
             if m.noise {
                 for x in &mut p {
                     *x += m.sigma_p * m.noise_rng.normal(zig);
@@ -188,9 +195,9 @@ impl World {
                 heading_rad: c,
             })
         };
-        for i in 0..self.actors.len() {
+        for i in 0..actors.len() {
             // Actors move whether tracked or not: read every frame, forward in time.
-            let pose = self.actors.pose(i, t_s, zig);
+            let pose = actors.pose(i, t_s, zig);
             m.latest.actors[i] = if m.burst[i + 1] {
                 None
             } else {
@@ -208,6 +215,38 @@ impl World {
                 })
             };
         }
+    }
+}
+
+impl World {
+    fn advance_to(&mut self, t_s: f64) {
+        if !t_s.is_finite() || t_s <= self.now_s {
+            return;
+        }
+        loop {
+            match next_event(self.plant.k, self.plant.h, &self.mocap, t_s) {
+                Event::Frame(t_frame) => self.emit_frame(t_frame),
+                Event::Step => {
+                    if self.wind_on {
+                        let t = self.plant.t_k();
+                        self.last_wind = [
+                            self.wind[0].value(t, self.zig),
+                            self.wind[1].value(t, self.zig),
+                        ];
+                    }
+                    self.plant.step(&mut self.link, self.last_wind);
+                }
+                Event::Done => break,
+            }
+        }
+        self.now_s = t_s;
+    }
+
+    fn emit_frame(&mut self, t_s: f64) {
+        let plant = &self.plant;
+        self.mocap.emit(t_s, &mut self.actors, self.zig, || {
+            (plant.position_at(t_s), plant.heading_at(t_s))
+        });
     }
 
     fn truth_into(&mut self, out: &mut Truth) {
@@ -322,6 +361,7 @@ impl Simulator {
             actors,
             mocap,
             battery_on: eff.battery,
+            actors_ahead: config.actors_ahead,
             zig,
         };
         world.emit_frame(0.0);
@@ -483,6 +523,67 @@ impl Mocap for SimMocap {
 
     fn action(&mut self, t_s: f64) {
         self.world.borrow_mut().actors.action(t_s);
+    }
+
+    fn actors_ahead(&self) -> Option<Box<dyn ActorFeed>> {
+        let w = self.world.borrow();
+        if !w.actors_ahead {
+            return None;
+        }
+        Some(Box::new(ActorWorld {
+            now_s: w.now_s,
+            k: w.plant.k,
+            h: w.plant.h,
+            actors: w.actors.clone(),
+            mocap: w.mocap.clone(),
+            zig: w.zig,
+            last_returned: self.last_returned,
+        }))
+    }
+}
+
+/// The world's actors and motion capture without the drone ([`Mocap::actors_ahead`]): a
+/// copy taken from the world that goes on by the same schedule ([`next_event`]), stepping
+/// the plant's clock but not its physics, and takes each frame as the world does, drawing
+/// the same random numbers (the drone's noise included, added to nothing). Its frames'
+/// actors are the world's, bit for bit (`tests/ahead.rs` flies both ways).
+struct ActorWorld {
+    now_s: f64,
+    /// The plant's step count and step, as in the world.
+    k: u64,
+    h: f64,
+    actors: Actors,
+    mocap: MocapGen,
+    zig: &'static Ziggurat,
+    /// The last frame returned, as [`SimMocap`]'s.
+    last_returned: Option<u64>,
+}
+
+impl ActorFeed for ActorWorld {
+    fn poll_at(&mut self, t_s: f64, frame: &mut MocapFrame) -> bool {
+        if t_s.is_finite() && t_s > self.now_s {
+            loop {
+                match next_event(self.k, self.h, &self.mocap, t_s) {
+                    Event::Frame(t) => self
+                        .mocap
+                        .emit(t, &mut self.actors, self.zig, || ([0.0; 3], 0.0)),
+                    Event::Step => self.k += 1,
+                    Event::Done => break,
+                }
+            }
+            self.now_s = t_s;
+        }
+        let latest = &self.mocap.latest;
+        if self.last_returned == Some(latest.frame) {
+            return false;
+        }
+        self.last_returned = Some(latest.frame);
+        frame.t_s = latest.t_s;
+        frame.received_s = latest.t_s;
+        frame.frame = latest.frame;
+        frame.drone = None;
+        frame.actors.clone_from(&latest.actors);
+        true
     }
 }
 

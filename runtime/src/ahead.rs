@@ -1,0 +1,297 @@
+//! The director stepped ahead of the flight's loop, on a thread of its own, when the motion
+//! capture knows the actors' future ([`Mocap::actors_ahead`](crate::backend::Mocap): the
+//! simulator's actors do not depend on the drone).
+//!
+//! During the shots the director needs only the script's clock and the tracked actors, and
+//! the loop needs from it only what [`direct`] puts in a [`DirectedTick`]: the sample, where
+//! the shots are on the script's clock, the held framing (the aim and the framing figures
+//! from where the drone is), what it found this tick and the findings of a shot that ended.
+//! So a second thread ([`Ahead`]) reads the actors' frames from the feed, tracks them as the
+//! loop does and steps the director, tick after tick, filling batches of [`DirectedTick`]s
+//! that the loop takes in order; the loop flies the drone meanwhile. The same [`direct`] runs
+//! on the loop's thread when the mocap knows nothing ahead (hardware), so both fly the same
+//! flight to the bit (`tests/ahead.rs` flies shipped and random scenes both ways and compares
+//! their logs byte for byte).
+//!
+//! The loop checks each tick against its own: the director's tick time and the tracked poses
+//! it stepped with must be the loop's, bit for bit, or the loop lands the drone (a failsafe
+//! that says so; it would be a bug). A flight cut short mid-shot (a failsafe) tells that
+//! shot's findings as the director had them at that tick, not as the thread, ticks ahead,
+//! has them: [`Ahead::rewound`] steps a copy taken at "action!" to that tick, on the loop's
+//! thread (once per flight, only when it is cut short).
+//!
+//! Batches of [`BATCH_TICKS`] go back and forth over two bounded channels, as the flight
+//! log's do ([`LogThread`](crate::log::LogThread)); their vectors are reused, so neither
+//! thread allocates per tick once the batches have grown (a tick with a finding allocates its
+//! messages, as on the loop's thread). Measured on the hour's flight (the `flight` bench):
+//! see `runtime/benches/README.md`.
+
+use std::sync::mpsc::{self, Receiver, SyncSender};
+use std::thread::JoinHandle;
+
+use dronecine_compiler::director::{Director, Held};
+use dronecine_compiler::reference::Sample;
+use dronecine_grammar::Diagnostic;
+
+use crate::backend::{ActorFeed, MocapFrame};
+use crate::flight::{take_newer, ActorTracker};
+use crate::frames::ActorPose;
+
+/// Ticks per batch: 2.56 s of flight at 100 Hz.
+const BATCH_TICKS: usize = 256;
+/// Batches the thread may fill ahead of the loop.
+const BATCHES: usize = 4;
+
+/// One tick of the director, as the loop uses it.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct DirectedTick {
+    /// The flight clock's time of the tick.
+    pub t_s: f64,
+    pub sample: Sample,
+    /// [`Director::written_t_s`] of the tick.
+    pub written_t_s: f64,
+    /// [`Director::finished`] after the tick.
+    pub finished: bool,
+    /// [`Director::held`] after the tick.
+    pub held: Option<Held>,
+    /// What the director found this tick ([`Director::diagnostics_so_far`], the new ones).
+    pub diagnostics: Vec<Diagnostic>,
+    /// The shot that ended this tick (the sample's shot is another one) and the monitor's
+    /// findings over it ([`Director::shot_findings`]).
+    pub over: Option<usize>,
+    pub over_findings: Vec<Diagnostic>,
+    /// When the director finished this tick: the findings over the last shot.
+    pub last_findings: Vec<Diagnostic>,
+    /// The tracked actors the director stepped with (the loop checks them against its own).
+    pub actors: Vec<ActorPose>,
+}
+
+/// What [`direct`] keeps from tick to tick besides the director.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Directing {
+    /// The director's diagnostics already handed on.
+    told: usize,
+    /// The shot of the last tick.
+    current: Option<usize>,
+}
+
+/// Steps `director` at script time `script_t_s` with the tracked `actors` and writes what the
+/// loop needs of the tick into `out` (its vectors reused). The one place that says what a
+/// directed tick is, for both threads.
+pub(crate) fn direct(
+    director: &mut Director,
+    state: &mut Directing,
+    t_s: f64,
+    script_t_s: f64,
+    actors: &[ActorPose],
+    out: &mut DirectedTick,
+) {
+    let sample = director.step(script_t_s, actors);
+    out.t_s = t_s;
+    out.sample = sample;
+    out.written_t_s = director.written_t_s(script_t_s);
+    out.finished = director.finished();
+    out.held = director.held();
+    out.diagnostics.clear();
+    let found = director.diagnostics_so_far();
+    if let Some(new) = found.get(state.told..) {
+        out.diagnostics.extend_from_slice(new);
+    }
+    state.told = found.len();
+    out.over = None;
+    out.over_findings.clear();
+    if state.current != Some(sample.shot) {
+        out.over = state.current;
+        state.current = Some(sample.shot);
+        if let Some(over) = out.over {
+            out.over_findings = director.shot_findings(over);
+        }
+    }
+    out.last_findings.clear();
+    if out.finished {
+        out.last_findings = director.shot_findings(sample.shot);
+    }
+    out.actors.clear();
+    out.actors.extend_from_slice(actors);
+}
+
+/// The director's side of a flight ahead: the actors' feed, the tracker, the director, and
+/// the flight's clock, as the loop has them at "action!".
+#[derive(Clone)]
+struct Side {
+    director: Director,
+    directing: Directing,
+    tracker: ActorTracker,
+    frame: MocapFrame,
+    last_frame_t_s: Option<f64>,
+    /// The last tick's time on the flight clock, and "action!"'s.
+    t_s: f64,
+    action_s: f64,
+    period_s: f64,
+}
+
+impl Side {
+    /// The next tick, as the loop will have it: its clock one period on, the frame the mocap
+    /// gives then, the tracker and the director stepped.
+    fn tick(&mut self, feed: &mut dyn ActorFeed, out: &mut DirectedTick) {
+        self.t_s += self.period_s;
+        let t = self.t_s;
+        if feed.poll_at(t, &mut self.frame) && take_newer(&mut self.last_frame_t_s, &self.frame) {
+            self.tracker.update(&self.frame);
+        }
+        let script_t = t - self.action_s;
+        let actors = &self.tracker.poses;
+        direct(
+            &mut self.director,
+            &mut self.directing,
+            t,
+            script_t,
+            actors,
+            out,
+        );
+    }
+}
+
+/// The director stepping ahead of the loop on its own thread.
+pub(crate) struct Ahead {
+    full: Option<Receiver<Vec<DirectedTick>>>,
+    empty: Option<SyncSender<Vec<DirectedTick>>>,
+    thread: Option<JoinHandle<()>>,
+    /// The batch being read, and the next tick in it.
+    batch: Vec<DirectedTick>,
+    next: usize,
+    /// The director's side as at "action!", and a second feed from there, to rewind to a
+    /// tick ([`Ahead::rewound`]).
+    start: Side,
+    rewind_feed: Box<dyn ActorFeed>,
+    /// Ticks taken by the loop.
+    taken: u64,
+}
+
+/// What the loop hands over at "action!" to step the director ahead.
+pub(crate) struct AheadStart<'a> {
+    pub director: Director,
+    pub tracker: &'a ActorTracker,
+    pub frame: &'a MocapFrame,
+    pub last_frame_t_s: Option<f64>,
+    /// The tick before the first shot tick, and "action!", on the flight clock.
+    pub t_s: f64,
+    pub action_s: f64,
+    pub period_s: f64,
+}
+
+impl Ahead {
+    /// Starts the thread with `feed`; `rewind_feed` is a second feed from the same moment.
+    /// Gives the director back if the thread cannot be started (the loop then steps it
+    /// itself).
+    pub(crate) fn spawn(
+        start: AheadStart,
+        feed: Box<dyn ActorFeed>,
+        rewind_feed: Box<dyn ActorFeed>,
+    ) -> Result<Ahead, Box<Director>> {
+        let side = Side {
+            director: start.director,
+            directing: Directing::default(),
+            tracker: start.tracker.clone(),
+            frame: start.frame.clone(),
+            last_frame_t_s: start.last_frame_t_s,
+            t_s: start.t_s,
+            action_s: start.action_s,
+            period_s: start.period_s,
+        };
+        let (full_tx, full_rx) = mpsc::sync_channel::<Vec<DirectedTick>>(BATCHES);
+        let (empty_tx, empty_rx) = mpsc::sync_channel::<Vec<DirectedTick>>(BATCHES + 1);
+        for _ in 0..BATCHES {
+            let _ = empty_tx.send(Vec::with_capacity(BATCH_TICKS));
+        }
+        let mut thread_side = side.clone();
+        let mut feed = feed;
+        let spawned = std::thread::Builder::new()
+            .name("flight-director".into())
+            .spawn(move || {
+                // Each batch: up to BATCH_TICKS ticks, fewer at the last (the director
+                // finished). Ends when the loop drops its ends of the channels.
+                let mut done = false;
+                while let Ok(mut batch) = empty_rx.recv() {
+                    if done {
+                        break;
+                    }
+                    let mut n = 0;
+                    while n < BATCH_TICKS && !done {
+                        if batch.len() <= n {
+                            batch.push(DirectedTick::default());
+                        }
+                        thread_side.tick(feed.as_mut(), &mut batch[n]);
+                        done = batch[n].finished;
+                        n += 1;
+                    }
+                    batch.truncate(n);
+                    if full_tx.send(batch).is_err() {
+                        break;
+                    }
+                }
+            });
+        match spawned {
+            Ok(thread) => Ok(Ahead {
+                full: Some(full_rx),
+                empty: Some(empty_tx),
+                thread: Some(thread),
+                batch: Vec::new(),
+                next: 0,
+                start: side,
+                rewind_feed,
+                taken: 0,
+            }),
+            Err(_) => Err(Box::new(side.director)),
+        }
+    }
+
+    /// The next tick, in order; `None` if the thread is gone (it panicked: a bug) or the
+    /// director finished before.
+    pub(crate) fn next(&mut self) -> Option<&DirectedTick> {
+        if self.next >= self.batch.len() {
+            let full = self.full.as_ref()?;
+            let batch = full.recv().ok()?;
+            let spent = std::mem::replace(&mut self.batch, batch);
+            if spent.capacity() > 0 {
+                if let Some(empty) = &self.empty {
+                    let _ = empty.send(spent);
+                }
+            }
+            self.next = 0;
+            if self.batch.is_empty() {
+                return None;
+            }
+        }
+        self.next += 1;
+        self.taken += 1;
+        self.batch.get(self.next - 1)
+    }
+
+    /// The director as it was after the last tick the loop took: the copy taken at
+    /// "action!", stepped again to there on this thread (the thread's own is ahead). Stops
+    /// the thread.
+    pub(crate) fn rewound(mut self) -> Director {
+        self.stop();
+        let mut side = self.start.clone();
+        let mut scratch = DirectedTick::default();
+        for _ in 0..self.taken {
+            side.tick(self.rewind_feed.as_mut(), &mut scratch);
+        }
+        side.director
+    }
+
+    fn stop(&mut self) {
+        self.full = None;
+        self.empty = None;
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+impl Drop for Ahead {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
