@@ -512,7 +512,8 @@ impl Director {
     /// screen point the script puts it at, for a camera at `camera_m` (cleared and filled
     /// into `out`, allocating nothing once it has room for two). Returns false, with `out`
     /// empty, outside holds: during a move, a path, a repositioning flight, or the first
-    /// `SETTLE_S` of a shot. `shoot` measures its framing error with it.
+    /// `SETTLE_S` of a shot. `compile` measures its framing with it (a flight with
+    /// [`Held::targets_into`], the same targets).
     pub fn hold_targets(
         &self,
         actors: &[ActorPose],
@@ -524,15 +525,6 @@ impl Director {
             Some(v) => hold_targets(v, &self.lens, &self.gimbal, actors, camera_m, out),
             None => false,
         }
-    }
-
-    /// The heading and camera pitch that frame the hold of the last [`Director::step`] from a
-    /// camera at `camera_m` — on set, where the drone really is rather than where it should
-    /// be — or `None` outside holds (as [`Director::hold_targets`]). `shoot` aims the camera
-    /// with it, so a position error does not also become a framing error.
-    pub fn hold_orientation(&self, actors: &[ActorPose], camera_m: &Vec3) -> Option<(f64, f64)> {
-        let v = self.held_visual()?;
-        hold_orientation(v, &self.lens, &self.gimbal, actors, camera_m)
     }
 
     /// The visual of a two-shot hold being flown this tick, moved [`EPS_S`] ahead along θ at
@@ -1949,8 +1941,8 @@ fn contained(mut goal: Kinematics, lo: &Vec3, hi: &Vec3) -> Kinematics {
     goal
 }
 
-/// A held framing and the lens and gimbal that aim it ([`Director::held`]): the same
-/// aim and the same framing targets as [`Director::hold_orientation`] and
+/// A held framing and the lens and gimbal that aim it ([`Director::held`]): the aim of
+/// the hold from where the drone is, and the same framing targets as
 /// [`Director::hold_targets`] at the step it was taken from, bit for bit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Held {
@@ -1960,9 +1952,24 @@ pub struct Held {
 }
 
 impl Held {
-    /// [`Director::hold_orientation`] of the step it was taken from.
+    /// The heading and camera pitch that frame the hold from a camera at `camera_m` — on
+    /// set, where the drone really is rather than where it should be (`shoot` aims the
+    /// camera with it, so a position error does not also become a framing error); `None`
+    /// when they are not finite.
     pub fn orientation(&self, actors: &[ActorPose], camera_m: &Vec3) -> Option<(f64, f64)> {
-        hold_orientation(&self.visual, &self.lens, &self.gimbal, actors, camera_m)
+        let (v, lens) = (&self.visual, &self.lens);
+        if matches!(self.gimbal, Gimbal::None) {
+            // A level camera: a two-actor hold's heading is the balanced one, and aiming the
+            // primary (below) would only give the pitch, which is 0.
+            if let Some(h) = framing::balanced_heading(v, actors, lens, camera_m, 0.0) {
+                return Some((h, 0.0));
+            }
+        }
+        let (heading, pitch, _) = framing::orient_visual(v, actors, lens, &self.gimbal, camera_m);
+        // Two actors: balance their screen-x errors rather than aim the primary exactly.
+        let heading =
+            framing::balanced_heading(v, actors, lens, camera_m, pitch).unwrap_or(heading);
+        (heading.is_finite() && pitch.is_finite()).then_some((heading, pitch))
     }
 
     /// [`Director::hold_targets`] of the step it was taken from.
@@ -1995,28 +2002,6 @@ fn hold_targets(
 ) -> bool {
     framing::screen_targets_into(v, actors, lens, gimbal, camera_m, out);
     !out.is_empty()
-}
-
-/// The heading and pitch that frame held visual `v` from `camera_m`
-/// ([`Director::hold_orientation`]).
-fn hold_orientation(
-    v: &framing::Visual,
-    lens: &Lens,
-    gimbal: &Gimbal,
-    actors: &[ActorPose],
-    camera_m: &Vec3,
-) -> Option<(f64, f64)> {
-    if matches!(gimbal, Gimbal::None) {
-        // A level camera: a two-actor hold's heading is the balanced one, and aiming the
-        // primary (below) would only give the pitch, which is 0.
-        if let Some(h) = framing::balanced_heading(v, actors, lens, camera_m, 0.0) {
-            return Some((h, 0.0));
-        }
-    }
-    let (heading, pitch, _) = framing::orient_visual(v, actors, lens, gimbal, camera_m);
-    // Two actors: balance their screen-x errors rather than aim the primary exactly.
-    let heading = framing::balanced_heading(v, actors, lens, camera_m, pitch).unwrap_or(heading);
-    (heading.is_finite() && pitch.is_finite()).then_some((heading, pitch))
 }
 
 /// An actor moved on by its velocity and turn rate over `dt_s`.
