@@ -225,20 +225,6 @@ struct Solved {
     result: Result<framing::Visual, FramingError>,
 }
 
-/// Whether two poses are the same, bit for bit (NaN and signed zeros included).
-fn same_pose(a: &ActorPose, b: &ActorPose) -> bool {
-    let same = |x: f64, y: f64| x.to_bits() == y.to_bits();
-    same(a.position_m[0], b.position_m[0])
-        && same(a.position_m[1], b.position_m[1])
-        && same(a.position_m[2], b.position_m[2])
-        && same(a.velocity_mps[0], b.velocity_mps[0])
-        && same(a.velocity_mps[1], b.velocity_mps[1])
-        && same(a.velocity_mps[2], b.velocity_mps[2])
-        && same(a.facing_rad, b.facing_rad)
-        && same(a.facing_rate_radps, b.facing_rate_radps)
-        && same(a.height_m, b.height_m)
-}
-
 impl Director {
     /// A director for a script with a scene. Diagnostics found while planning are kept and
     /// returned by [`Director::finish`].
@@ -781,7 +767,7 @@ impl Director {
         };
         matches!(self.plans.get(index), Some(Plan::Hold(_)))
             && self.framed[index][0].iter().all(
-                |&i| matches!((actors.get(i), ahead.get(i)), (Some(a), Some(b)) if same_pose(a, b)),
+                |&i| matches!((actors.get(i), ahead.get(i)), (Some(a), Some(b)) if a.same_bits(b)),
             )
     }
 
@@ -1262,7 +1248,7 @@ impl Director {
                 scratch
                     .iter()
                     .zip(actors)
-                    .filter(|(then, now)| !same_pose(then, now))
+                    .filter(|(then, now)| !then.same_bits(now))
                     .map(|(then, _)| (u, *then)),
             );
             step_m = step_m.max(moved_m(before_s, t_s));
@@ -1294,11 +1280,11 @@ impl Director {
                 return *a;
             }
             let (p0, p1) = (self.blocking.pose(i, now_s), self.blocking.pose(i, at_s));
-            if same_pose(&p0, &p1) {
+            if p0.same_bits(&p1) {
                 return *a;
             }
             moving = true;
-            if same_pose(a, &p0) {
+            if a.same_bits(&p0) {
                 // On its mark (as in `compile`): the blocking's pose then.
                 return ActorPose {
                     height_m: a.height_m,
@@ -1469,7 +1455,7 @@ impl Director {
                     && framed
                         .iter()
                         .zip(&m.poses)
-                        .all(|(&i, p)| same_pose(&actors[i], p))
+                        .all(|(&i, p)| actors[i].same_bits(p))
             })
         } else {
             None
@@ -2174,8 +2160,8 @@ mod tests {
         let now = blocking.poses(2.5);
         assert!(director.arriving_into(&now, 2.5, 7.0, &mut out));
         let then = blocking.poses(7.0);
-        assert!(same_pose(&out[0], &then[0]), "{:?} {:?}", out[0], then[0]);
-        assert!(same_pose(&out[1], &now[1]), "B stands");
+        assert!(out[0].same_bits(&then[0]), "{:?} {:?}", out[0], then[0]);
+        assert!(out[1].same_bits(&now[1]), "B stands");
         // Off the mark by (0.1, −0.2) m and 0.05 rad: as far off at the arrival.
         let mut live = now.clone();
         live[0].position_m[0] += 0.1;
@@ -2189,7 +2175,7 @@ mod tests {
         // Nothing moves between 7 s and 9 s: the live poses, and no movement.
         let late = blocking.poses(7.0);
         assert!(!director.arriving_into(&late, 7.0, 9.0, &mut out));
-        assert!(out.iter().zip(&late).all(|(a, b)| same_pose(a, b)));
+        assert!(out.iter().zip(&late).all(|(a, b)| a.same_bits(b)));
     }
 
     fn goal(p: [f64; 3], v: [f64; 3]) -> Kinematics {

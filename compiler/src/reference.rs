@@ -36,3 +36,17 @@ pub struct ActorPose {
     pub facing_rate_radps: f64,
     pub height_m: f64,
 }
+
+impl ActorPose {
+    /// Whether `other` is the same pose, bit for bit (NaN and signed zeros included; `==`
+    /// says a NaN differs from itself and `-0.0` equals `0.0`).
+    pub fn same_bits(&self, other: &ActorPose) -> bool {
+        let bits = |p: &ActorPose| {
+            let [x, y, z] = p.position_m;
+            let [vx, vy, vz] = p.velocity_mps;
+            let (f, r, h) = (p.facing_rad, p.facing_rate_radps, p.height_m);
+            [x, y, z, vx, vy, vz, f, r, h].map(f64::to_bits)
+        };
+        bits(self) == bits(other)
+    }
+}

@@ -9,9 +9,11 @@
 //! So a second thread ([`Ahead`]) reads the actors' frames from the feed, tracks them as the
 //! loop does and steps the director, tick after tick, filling batches of [`DirectedTick`]s
 //! that the loop takes in order; the loop flies the drone meanwhile. The same [`direct`] runs
-//! on the loop's thread when the mocap knows nothing ahead (hardware), so both fly the same
-//! flight to the bit (`tests/ahead.rs` flies shipped and random scenes both ways and compares
-//! their logs byte for byte).
+//! on the loop's thread when the mocap knows nothing ahead (hardware) or the simulator is
+//! not asked to ([`SimConfig::actors_ahead`](crate::sim::SimConfig)), so both fly the same
+//! flight to the bit: `tests/ahead.rs` flies the shipped scripts and flights cut short both
+//! ways and compares every tick's record and every event, `tests/random_flights.rs` the
+//! logs of the random scenes that fly, byte for byte.
 //!
 //! The loop checks each tick against its own: the director's tick time and the tracked poses
 //! it stepped with must be the loop's, bit for bit, or the loop lands the drone (a failsafe
@@ -28,6 +30,7 @@
 
 use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::thread::JoinHandle;
+use std::time::Duration;
 
 use dronecine_compiler::director::{Director, Held};
 use dronecine_compiler::reference::Sample;
@@ -152,6 +155,14 @@ impl Side {
     }
 }
 
+/// std's channels give a thread a waiter the first time it blocks on one, an allocation
+/// (once per thread). The loop blocks when it catches up with the director: it does so here
+/// once, for 20 µs, at "action!", so that its first wait mid-flight allocates nothing.
+fn warm_waiter() {
+    let (_tx, rx) = mpsc::sync_channel::<()>(1);
+    let _ = rx.recv_timeout(Duration::from_micros(20));
+}
+
 /// The director stepping ahead of the loop on its own thread.
 pub(crate) struct Ahead {
     full: Option<Receiver<Vec<DirectedTick>>>,
@@ -199,6 +210,7 @@ impl Ahead {
             action_s: start.action_s,
             period_s: start.period_s,
         };
+        warm_waiter();
         let (full_tx, full_rx) = mpsc::sync_channel::<Vec<DirectedTick>>(BATCHES);
         let (empty_tx, empty_rx) = mpsc::sync_channel::<Vec<DirectedTick>>(BATCHES + 1);
         for _ in 0..BATCHES {

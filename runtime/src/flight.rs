@@ -493,23 +493,7 @@ impl Stepper {
 
 /// Whether two lists of actor poses are the same, bit for bit.
 fn same_poses(a: &[ActorPose], b: &[ActorPose]) -> bool {
-    let bits = |p: &ActorPose| {
-        let [x, y, z] = p.position_m;
-        let [vx, vy, vz] = p.velocity_mps;
-        [
-            x,
-            y,
-            z,
-            vx,
-            vy,
-            vz,
-            p.facing_rad,
-            p.facing_rate_radps,
-            p.height_m,
-        ]
-        .map(f64::to_bits)
-    };
-    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.same_bits(q))
 }
 
 /// A heading aimed from a fresh measurement of the drone's position, and its rate.
