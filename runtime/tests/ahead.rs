@@ -2,7 +2,8 @@
 //! `runtime/src/ahead.rs`) flies the same flight as the director stepped on the loop's
 //! thread, to the bit: every tick as the log records it (`/servo/tick`'s CDR: the input, the
 //! output, the command sent, the actors the director saw and the framing), every event in
-//! order, and the report. On every shipped script that has a scene to fly (two seeds each), on flights cut short in
+//! order, and the report. On every shipped script that has a scene to fly (two seeds each),
+//! with the motion capture faster and slower than the loop, on flights cut short in
 //! the middle of a shot (Ctrl-C: the cut shot's findings are the director's at that tick,
 //! not the thread's, which is ahead), and on the random scenes that fly
 //! (`random_flights.rs` flies each both ways).
@@ -92,6 +93,33 @@ impl Observer for CtrlC<'_> {
 /// Flies `path` with `seed`, the director ahead or not, Ctrl-C pressed `ctrl_c_s` into the
 /// shots if asked: what the flight recorded, and its report (or its error) in words.
 fn fly(path: &str, seed: u64, ahead: bool, ctrl_c_s: Option<f64>) -> (Recording, String) {
+    fly_at(path, seed, ahead, ctrl_c_s, Rates::default())
+}
+
+/// The loop's rate and the motion capture's.
+#[derive(Clone, Copy)]
+struct Rates {
+    loop_hz: f64,
+    mocap_hz: f64,
+}
+
+impl Default for Rates {
+    fn default() -> Rates {
+        Rates {
+            loop_hz: 100.0,
+            mocap_hz: 100.0,
+        }
+    }
+}
+
+/// [`fly`] at other rates.
+fn fly_at(
+    path: &str,
+    seed: u64,
+    ahead: bool,
+    ctrl_c_s: Option<f64>,
+    rates: Rates,
+) -> (Recording, String) {
     let (text, script) = match path.strip_prefix("inline:") {
         Some(text) => (text.to_string(), parse(text)),
         None => load(path),
@@ -103,6 +131,7 @@ fn fly(path: &str, seed: u64, ahead: bool, ctrl_c_s: Option<f64>) -> (Recording,
     };
     let mut sim = SimConfig::new(seed);
     sim.actors_ahead = ahead;
+    sim.mocap_rate_hz = rates.mocap_hz;
     let interrupts = AtomicU32::new(0);
     let mut recording = Recording::default();
     let report = fly_simulated(
@@ -111,7 +140,7 @@ fn fly(path: &str, seed: u64, ahead: bool, ctrl_c_s: Option<f64>) -> (Recording,
             source: &text,
             scene,
             profile: &profile,
-            rate_hz: 100.0,
+            rate_hz: rates.loop_hz,
             controller: ControllerSetup::new("lqg"),
             plant: None,
             sim,
@@ -128,8 +157,17 @@ fn fly(path: &str, seed: u64, ahead: bool, ctrl_c_s: Option<f64>) -> (Recording,
 }
 
 fn same_flight(path: &str, seed: u64, ctrl_c_s: Option<f64>) -> (Recording, String) {
-    let (here, here_report) = fly(path, seed, false, ctrl_c_s);
-    let (ahead, ahead_report) = fly(path, seed, true, ctrl_c_s);
+    same_flight_at(path, seed, ctrl_c_s, Rates::default())
+}
+
+fn same_flight_at(
+    path: &str,
+    seed: u64,
+    ctrl_c_s: Option<f64>,
+    rates: Rates,
+) -> (Recording, String) {
+    let (here, here_report) = fly_at(path, seed, false, ctrl_c_s, rates);
+    let (ahead, ahead_report) = fly_at(path, seed, true, ctrl_c_s, rates);
     assert!(
         here.count > 500,
         "{path}, seed {seed}: {} ticks",
@@ -193,6 +231,22 @@ fn a_flight_cut_short_mid_shot_tells_the_same_findings_with_the_director_ahead()
             assert!(
                 recording.events.iter().any(|e| e.contains("Ctrl-C")),
                 "{path}: the interrupt was not taken"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_director_ahead_takes_the_frames_the_loop_takes_at_any_rates() {
+    // A faster motion capture than the loop (frames the loop never sees), a slower one (ticks
+    // without a frame), and a loop at 50 Hz.
+    for (loop_hz, mocap_hz) in [(100.0, 240.0), (100.0, 60.0), (50.0, 120.0)] {
+        let rates = Rates { loop_hz, mocap_hz };
+        for path in ["shots/two-actors.psl", "shots/scene.psl"] {
+            let (_, report) = same_flight_at(path, 4, None, rates);
+            assert!(
+                report.contains("completed: true"),
+                "{path} at {loop_hz} Hz, mocap {mocap_hz} Hz: {report}"
             );
         }
     }
