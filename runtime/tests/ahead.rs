@@ -90,12 +90,6 @@ impl Observer for CtrlC<'_> {
     }
 }
 
-/// Flies `path` with `seed`, the director ahead or not, Ctrl-C pressed `ctrl_c_s` into the
-/// shots if asked: what the flight recorded, and its report (or its error) in words.
-fn fly(path: &str, seed: u64, ahead: bool, ctrl_c_s: Option<f64>) -> (Recording, String) {
-    fly_at(path, seed, ahead, ctrl_c_s, Rates::default())
-}
-
 /// The loop's rate and the motion capture's.
 #[derive(Clone, Copy)]
 struct Rates {
@@ -112,7 +106,8 @@ impl Default for Rates {
     }
 }
 
-/// [`fly`] at other rates.
+/// Flies `path` at `rates` with `seed`, the director ahead or not, Ctrl-C pressed `ctrl_c_s`
+/// into the shots if asked: what the flight recorded, and its report (or its error) in words.
 fn fly_at(
     path: &str,
     seed: u64,
@@ -156,6 +151,7 @@ fn fly_at(
     (recording, format!("{report:?}"))
 }
 
+/// Flies `path` both ways and asserts the same flight; gives what it recorded and its report.
 fn same_flight(path: &str, seed: u64, ctrl_c_s: Option<f64>) -> (Recording, String) {
     same_flight_at(path, seed, ctrl_c_s, Rates::default())
 }
