@@ -8,11 +8,13 @@
 //! not the thread's, which is ahead), and on the random scenes that fly
 //! (`random_flights.rs` flies each both ways).
 
+mod common;
+
+use common::{load, parse};
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::script::DroneRef;
-use dronecine_grammar::Script;
 use dronecine_runtime::flight::{FlightSink, Observer, Progress};
 use dronecine_runtime::log::cdr;
 use dronecine_runtime::record::{ControllerSetup, Event, Phase, TickRecord};
@@ -27,31 +29,6 @@ const SHIPPED: &[&str] = &[
     "shots/two-heights.psl",
     "shots/scene.psl",
 ];
-
-fn load(path: &str) -> (String, Script) {
-    let full = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(path);
-    let text = std::fs::read_to_string(&full).unwrap();
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: full.parent(),
-    };
-    let checked = dronecine_grammar::check(&text, &opts);
-    assert!(!checked.has_errors(), "{path}: {:?}", checked.diagnostics);
-    (text, checked.script.expect("the shipped script is valid"))
-}
-
-/// A script written here (named `inline:` and its text in the tests).
-fn parse(text: &str) -> Script {
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let checked = dronecine_grammar::check(text, &opts);
-    assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
-    checked.script.expect("a valid script")
-}
 
 /// Every tick's CDR record and every event, as the flight gave them.
 #[derive(Default)]

@@ -4,6 +4,9 @@
 //! held; LQG against the PID baseline on identical seeded flights. Also the failsafes and
 //! faults of the flight loop, on a simulator wrapped to misbehave.
 
+mod common;
+
+use common::{load, parse};
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::script::DroneRef;
 use dronecine_grammar::Script;
@@ -12,31 +15,6 @@ use dronecine_runtime::record::{ControllerSetup, Event, Phase, TickRecord};
 use dronecine_runtime::report::FlightReport;
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::SimConfig;
-
-fn load(path: &str) -> (String, Script) {
-    let full = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(path);
-    let text = std::fs::read_to_string(&full).unwrap();
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: full.parent(),
-    };
-    let checked = dronecine_grammar::check(&text, &opts);
-    assert!(!checked.has_errors(), "{path}: {:?}", checked.diagnostics);
-    (text, checked.script.expect("the shipped script is valid"))
-}
-
-/// A script written in the test, checked: it must be valid.
-fn parse(text: &str) -> Script {
-    let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
-        base_dir: None,
-    };
-    let checked = dronecine_grammar::check(text, &opts);
-    assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
-    checked.script.expect("a valid script")
-}
 
 fn profile_of(script: &Script) -> Profile {
     match script.scene.as_ref().and_then(|s| s.drone.as_ref()) {
