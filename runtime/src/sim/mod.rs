@@ -11,7 +11,11 @@
 //! One [`Simulator`] owns the world; [`SimDrone`], [`SimMocap`] and [`SimClock`] are handles on
 //! it (`Rc<RefCell<_>>`, single-threaded). [`SimClock::sleep_until`] advances the physics; the
 //! mocap produces a frame every `1/mocap_rate_hz` of world time, whether or not anyone polls.
-//! Nothing allocates per tick. Same seed and same calls give bit-identical results.
+//! Nothing allocates per tick. Same seed and same calls give bit-identical results. The
+//! actors and the mocap's noise do not depend on the drone: [`SimMocap`] can hand out a copy
+//! of them that runs ahead of the world on another thread (`ActorWorld`, through
+//! `Mocap::actors_ahead`, when [`SimConfig::actors_ahead`] asks), on the same schedule
+//! (`next_event`) and with the same random draws.
 //!
 //! Modules: `config` (settings, defaults, validation), `plant` (physics, firmware, radio link),
 //! `actors`, `smooth` (smooth OU processes), `rng` (xoshiro256++ and the ziggurat).
