@@ -40,13 +40,21 @@ pub struct ActorPose {
 impl ActorPose {
     /// Whether `other` is the same pose, bit for bit (NaN and signed zeros included; `==`
     /// says a NaN differs from itself and `-0.0` equals `0.0`).
+    ///
+    /// Field by field, stopping at the first that differs: the director asks it of walking
+    /// actors many times a tick (its solve memo), and their x differs at once. (Comparing the
+    /// nine bit patterns as arrays cost the flight's loop 3 % more instructions.)
     pub fn same_bits(&self, other: &ActorPose) -> bool {
-        let bits = |p: &ActorPose| {
-            let [x, y, z] = p.position_m;
-            let [vx, vy, vz] = p.velocity_mps;
-            let (f, r, h) = (p.facing_rad, p.facing_rate_radps, p.height_m);
-            [x, y, z, vx, vy, vz, f, r, h].map(f64::to_bits)
-        };
-        bits(self) == bits(other)
+        let same = |x: f64, y: f64| x.to_bits() == y.to_bits();
+        let (a, b) = (self, other);
+        same(a.position_m[0], b.position_m[0])
+            && same(a.position_m[1], b.position_m[1])
+            && same(a.position_m[2], b.position_m[2])
+            && same(a.velocity_mps[0], b.velocity_mps[0])
+            && same(a.velocity_mps[1], b.velocity_mps[1])
+            && same(a.velocity_mps[2], b.velocity_mps[2])
+            && same(a.facing_rad, b.facing_rad)
+            && same(a.facing_rate_radps, b.facing_rate_radps)
+            && same(a.height_m, b.height_m)
     }
 }

@@ -59,13 +59,13 @@ pub(crate) struct DirectedTick {
     pub held: Option<Held>,
     /// What the director found this tick ([`Director::diagnostics_so_far`], the new ones).
     pub diagnostics: Vec<Diagnostic>,
-    /// The shot that ended this tick (the sample's shot is another one) and the monitor's
-    /// findings over it ([`Director::shot_findings`]).
-    pub over: Option<usize>,
+    /// When this tick's shot is another than the last tick's: the monitor's findings over
+    /// that one, now over ([`Director::shot_findings`]).
     pub over_findings: Vec<Diagnostic>,
     /// When the director finished this tick: the findings over the last shot.
     pub last_findings: Vec<Diagnostic>,
-    /// The tracked actors the director stepped with (the loop checks them against its own).
+    /// On the director's thread: the tracked actors it stepped with (the loop checks them
+    /// against its own). Empty on the loop's thread.
     pub actors: Vec<ActorPose>,
 }
 
@@ -101,12 +101,9 @@ pub(crate) fn direct(
         out.diagnostics.extend_from_slice(new);
     }
     state.told = found.len();
-    out.over = None;
     out.over_findings.clear();
     if state.current != Some(sample.shot) {
-        out.over = state.current;
-        state.current = Some(sample.shot);
-        if let Some(over) = out.over {
+        if let Some(over) = state.current.replace(sample.shot) {
             out.over_findings = director.shot_findings(over);
         }
     }
@@ -114,8 +111,6 @@ pub(crate) fn direct(
     if out.finished {
         out.last_findings = director.shot_findings(sample.shot);
     }
-    out.actors.clear();
-    out.actors.extend_from_slice(actors);
 }
 
 /// The director's side of a flight ahead: the actors' feed, the tracker, the director, and
@@ -152,6 +147,8 @@ impl Side {
             actors,
             out,
         );
+        out.actors.clear();
+        out.actors.extend_from_slice(actors);
     }
 }
 

@@ -1095,7 +1095,6 @@ impl<'s, 'b> Flight<'s, 'b> {
                 if current != Some(sample.shot) {
                     // The shot before is over: what the monitor found in it.
                     if let Some(over) = current {
-                        debug_assert_eq!(tick.over, Some(over));
                         self.tell_findings(t, &tick.over_findings, over);
                     }
                     current = Some(sample.shot);

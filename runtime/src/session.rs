@@ -184,8 +184,8 @@ impl std::error::Error for SessionError {}
 /// ([`SimConfig::actors_ahead`]): when the machine has a core for it besides the loop's and,
 /// with a flight log, the log's writer. Busy, the cores take turns and the flight takes
 /// longer, not less. Measured on the hour's flight (the `flight` bench) on two cores: without
-/// its log 0.466 → 0.332 s with the director ahead; with its log 0.505 → 0.594 s (its
-/// threads need 0.93 s of CPU, the loop alone 0.80 s). `shoot` asks it, with its log.
+/// its log 0.479 → 0.328 s with the director ahead; with its log 0.512 → 0.695 s (1.06 s of
+/// CPU on all threads against 0.84 s). `shoot` asks it, with its log.
 pub fn director_thread_pays(logging: bool) -> bool {
     let busy = if logging { 2 } else { 1 };
     std::thread::available_parallelism().is_ok_and(|n| n.get() > busy)

@@ -161,6 +161,22 @@ fn next_event(k: u64, h: f64, mocap: &MocapGen, t_s: f64) -> Event {
 }
 
 impl MocapGen {
+    /// The newest frame into `frame` if it is not `last_returned` (which it becomes): what a
+    /// poll returns, each frame once.
+    fn take_latest(&self, last_returned: &mut Option<u64>, frame: &mut MocapFrame) -> bool {
+        let latest = &self.latest;
+        if *last_returned == Some(latest.frame) {
+            return false;
+        }
+        *last_returned = Some(latest.frame);
+        frame.t_s = latest.t_s;
+        frame.received_s = latest.t_s;
+        frame.frame = latest.frame;
+        frame.drone = latest.drone;
+        frame.actors.clone_from(&latest.actors);
+        true
+    }
+
     /// Takes the frame at `t_s` into `latest`: the drone where `drone_at` says (asked only
     /// when it is tracked in this frame), every actor where they are, each with its noise and
     /// dropouts. The random draws do not depend on where the drone is, so an actors-only copy
@@ -511,18 +527,11 @@ pub struct SimMocap {
 
 impl Mocap for SimMocap {
     fn poll(&mut self, frame: &mut MocapFrame) -> Result<bool, BackendError> {
-        let w = self.world.borrow();
-        let latest = &w.mocap.latest;
-        if self.last_returned == Some(latest.frame) {
-            return Ok(false);
-        }
-        self.last_returned = Some(latest.frame);
-        frame.t_s = latest.t_s;
-        frame.received_s = latest.t_s;
-        frame.frame = latest.frame;
-        frame.drone = latest.drone;
-        frame.actors.clone_from(&latest.actors);
-        Ok(true)
+        Ok(self
+            .world
+            .borrow()
+            .mocap
+            .take_latest(&mut self.last_returned, frame))
     }
 
     fn action(&mut self, t_s: f64) {
@@ -577,17 +586,12 @@ impl ActorFeed for ActorWorld {
             }
             self.now_s = t_s;
         }
-        let latest = &self.mocap.latest;
-        if self.last_returned == Some(latest.frame) {
-            return false;
+        let taken = self.mocap.take_latest(&mut self.last_returned, frame);
+        if taken {
+            // The drone's place in it is nothing: the feed is the actors'.
+            frame.drone = None;
         }
-        self.last_returned = Some(latest.frame);
-        frame.t_s = latest.t_s;
-        frame.received_s = latest.t_s;
-        frame.frame = latest.frame;
-        frame.drone = None;
-        frame.actors.clone_from(&latest.actors);
-        true
+        taken
     }
 }
 
