@@ -6,6 +6,10 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use dronecine_compiler::camera::Lens;
+use dronecine_compiler::output::foxglove;
+use dronecine_compiler::output::mcap::{
+    actors_schema, decode_actors, decode_reference, reference_schema,
+};
 use dronecine_compiler::output::{CsvWriter, McapWriter, RunInfo, CSV_COLUMNS};
 use dronecine_compiler::reference::{ActorPose, Sample};
 use dronecine_grammar::script::Stage;
@@ -15,6 +19,29 @@ use sha2::{Digest, Sha256};
 const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 const RATE_HZ: f64 = 100.0;
 const SCRIPT: &str = "stage 8m x 6m x 3m\nactor A height 1.80m at (0, 0) facing 0deg\n";
+
+/// A `FrameTransforms` CDR message in the shape of Foxglove's JSON schema.
+fn tf_value(data: &[u8]) -> Value {
+    let transforms: Vec<Value> = foxglove::decode_frame_transforms(data)
+        .unwrap()
+        .into_iter()
+        .map(|t| {
+            let [x, y, z] = t.translation;
+            let [qx, qy, qz, qw] = t.rotation;
+            serde_json::json!({
+                "timestamp": {
+                    "sec": t.timestamp_ns / 1_000_000_000,
+                    "nsec": t.timestamp_ns % 1_000_000_000
+                },
+                "parent_frame_id": t.parent_frame_id,
+                "child_frame_id": t.child_frame_id,
+                "translation": { "x": x, "y": y, "z": z },
+                "rotation": { "x": qx, "y": qy, "z": qz, "w": qw }
+            })
+        })
+        .collect();
+    serde_json::json!({ "transforms": transforms })
+}
 
 fn names() -> Vec<String> {
     // A quote in a name exercises the JSON escaping.
@@ -90,11 +117,6 @@ fn write_mcap(path: &Path, reference: &[(Sample, Vec<ActorPose>)]) {
 
 fn ns(t_s: f64) -> u64 {
     (t_s * 1e9).round() as u64
-}
-
-fn vec3(v: &Value) -> [f64; 3] {
-    let a: Vec<f64> = serde_json::from_value(v.clone()).unwrap();
-    [a[0], a[1], a[2]]
 }
 
 /// The documented resolution of `/reference`, `/actors` and `/camera`.
@@ -190,9 +212,16 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
         })
         .collect();
     let n = reference.len() as u64;
+    // The per-sample topics in CDR with ros2msg schemas.
+    assert_eq!(
+        topics.get("/reference"),
+        Some(&("dronecine/msg/Reference", "ros2msg", "cdr", n))
+    );
+    assert_eq!(
+        topics.get("/actors"),
+        Some(&("dronecine/msg/Actors", "ros2msg", "cdr", n))
+    );
     let expected = [
-        ("/reference", "dronecine.Reference", n),
-        ("/actors", "dronecine.Actors", n),
         ("/camera", "dronecine.Camera", 1),
         ("/scene/stage", "foxglove.SceneUpdate", 1),
         ("/scene/drone", "foxglove.SceneUpdate", 1),
@@ -216,12 +245,12 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
     ];
     for topic in tf_topics {
         assert_eq!(
-            topics.get(topic).map(|t| t.0),
-            Some("foxglove.FrameTransforms"),
+            topics.get(topic).map(|t| (t.0, t.1, t.2)),
+            Some(("foxglove_msgs/msg/FrameTransforms", "ros2msg", "cdr")),
             "{topic} in {topics:?}"
         );
     }
-    assert_eq!(topics.len(), expected.len() + tf_topics.len());
+    assert_eq!(topics.len(), 2 + expected.len() + tf_topics.len());
 
     // Metadata record and attachment.
     assert_eq!(summary.metadata_indexes.len(), 1);
@@ -250,6 +279,35 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
     let mut by_topic: BTreeMap<String, Vec<(u64, Value)>> = BTreeMap::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
+        assert_eq!(m.log_time, m.publish_time);
+        let schema = &m.channel.schema.as_ref().unwrap().data;
+        match m.channel.topic.as_str() {
+            "/reference" => {
+                assert_eq!(std::str::from_utf8(schema).unwrap(), reference_schema());
+                reference_msgs.push((m.log_time, decode_reference(&m.data).unwrap()));
+                continue;
+            }
+            "/actors" => {
+                assert_eq!(std::str::from_utf8(schema).unwrap(), actors_schema());
+                actor_msgs.push((m.log_time, decode_actors(&m.data).unwrap()));
+                continue;
+            }
+            _ => {}
+        }
+        if m.channel.message_encoding == "cdr" {
+            // The transforms, in their ros2msg schema's field order (decoded, they take
+            // the JSON shape of the checks below).
+            assert_eq!(
+                std::str::from_utf8(schema).unwrap(),
+                foxglove::frame_transforms_schema()
+            );
+            let value = tf_value(&m.data);
+            by_topic
+                .entry(m.channel.topic.clone())
+                .or_default()
+                .push((m.log_time, value));
+            continue;
+        }
         let value: Value = serde_json::from_slice(&m.data).unwrap_or_else(|e| {
             panic!(
                 "{}: {e}: {}",
@@ -260,63 +318,52 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
         let schema: Value =
             serde_json::from_slice(&m.channel.schema.as_ref().unwrap().data).unwrap();
         check_keys(&value, &schema, &m.channel.topic);
-        assert_eq!(m.log_time, m.publish_time);
-        match m.channel.topic.as_str() {
-            "/reference" | "/actors" | "/camera" => {
-                assert_at_most_six_decimals(
-                    std::str::from_utf8(&m.data).unwrap(),
-                    &m.channel.topic,
-                );
-                // Our own schemas: the keys are exactly the properties.
-                let keys: BTreeSet<&String> = value.as_object().unwrap().keys().collect();
-                let props: BTreeSet<&String> =
-                    schema["properties"].as_object().unwrap().keys().collect();
-                assert_eq!(keys, props, "{}", m.channel.topic);
-            }
-            _ => {}
+        if m.channel.topic == "/camera" {
+            assert_at_most_six_decimals(std::str::from_utf8(&m.data).unwrap(), &m.channel.topic);
+            // Our own schema: the keys are exactly the properties.
+            let keys: BTreeSet<&String> = value.as_object().unwrap().keys().collect();
+            let props: BTreeSet<&String> =
+                schema["properties"].as_object().unwrap().keys().collect();
+            assert_eq!(keys, props, "{}", m.channel.topic);
         }
-        match m.channel.topic.as_str() {
-            "/reference" => reference_msgs.push((m.log_time, value)),
-            "/actors" => actor_msgs.push((m.log_time, value)),
-            topic => by_topic
-                .entry(topic.to_string())
-                .or_default()
-                .push((m.log_time, value)),
-        }
+        by_topic
+            .entry(m.channel.topic.clone())
+            .or_default()
+            .push((m.log_time, value));
     }
 
-    // The samples, each number rounded to the resolution (the times, exactly).
+    // The samples and the actors, every number exact (CDR keeps the bits).
     assert_eq!(reference_msgs.len(), reference.len());
-    let close3 = |v: &Value, x: [f64; 3]| (0..3).all(|i| quantised(vec3(v)[i], x[i]));
-    for ((log_time, v), (s, _)) in reference_msgs.iter().zip(&reference) {
+    assert_eq!(actor_msgs.len(), reference.len());
+    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    for ((log_time, read), (s, _)) in reference_msgs.iter().zip(&reference) {
         assert_eq!(*log_time, ns(s.t_s));
-        assert_eq!(v["t_s"].as_f64().unwrap(), s.t_s);
-        assert!(close3(&v["position_m"], s.position_m), "{v}");
-        assert!(close3(&v["velocity_mps"], s.velocity_mps), "{v}");
-        assert!(close3(&v["acceleration_mps2"], s.acceleration_mps2), "{v}");
-        for (key, x) in [
-            ("heading_rad", s.heading_rad),
-            ("heading_rate_radps", s.heading_rate_radps),
-            ("camera_pitch_rad", s.camera_pitch_rad),
-        ] {
-            assert!(quantised(v[key].as_f64().unwrap(), x), "{key}: {v}");
-        }
-        assert_eq!(v["shot"].as_u64().unwrap() as usize, s.shot);
+        assert_eq!(read, s);
+        assert_eq!(bits(&read.position_m), bits(&s.position_m));
     }
     let names = names();
-    for ((log_time, v), (s, actors)) in actor_msgs.iter().zip(&reference) {
+    for ((log_time, (t_s, read)), (s, actors)) in actor_msgs.iter().zip(&reference) {
         assert_eq!(*log_time, ns(s.t_s));
-        assert_eq!(v["t_s"].as_f64().unwrap(), s.t_s);
-        let list = v["actors"].as_array().unwrap();
-        assert_eq!(list.len(), actors.len());
-        for ((a, pose), name) in list.iter().zip(actors).zip(&names) {
-            assert_eq!(a["name"].as_str().unwrap(), name);
-            assert!(close3(&a["position_m"], pose.position_m), "{a}");
-            assert!(quantised(
-                a["facing_rad"].as_f64().unwrap(),
-                pose.facing_rad
-            ));
-            assert!(quantised(a["height_m"].as_f64().unwrap(), pose.height_m));
+        assert_eq!(t_s.to_bits(), s.t_s.to_bits());
+        assert_eq!(read.len(), actors.len());
+        for ((a, pose), name) in read.iter().zip(actors).zip(&names) {
+            assert_eq!(&a.name, name);
+            assert_eq!(
+                bits(&[
+                    a.position_m[0],
+                    a.position_m[1],
+                    a.position_m[2],
+                    a.facing_rad,
+                    a.height_m
+                ]),
+                bits(&[
+                    pose.position_m[0],
+                    pose.position_m[1],
+                    pose.position_m[2],
+                    pose.facing_rad,
+                    pose.height_m
+                ])
+            );
         }
     }
 
@@ -515,7 +562,7 @@ fn a_wrong_number_of_actors_is_an_error() {
 }
 
 #[test]
-fn non_finite_values_stay_valid_json() {
+fn non_finite_values_are_kept_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.mcap");
     let mut reference = reference();
@@ -524,16 +571,51 @@ fn non_finite_values_stay_valid_json() {
     reference[5].1[0].facing_rad = f64::NEG_INFINITY;
     write_mcap(&path, &reference);
     let bytes = std::fs::read(&path).unwrap();
-    let mut nulls = 0;
+    let (mut samples, mut actors) = (Vec::new(), Vec::new());
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
-        // Every message, /tf included, still parses.
-        let v: Value = serde_json::from_slice(&m.data).unwrap();
-        if m.channel.topic == "/reference" || m.channel.topic == "/actors" {
-            nulls += v.to_string().matches("null").count();
+        // Every message, /tf included, still reads.
+        match m.channel.topic.as_str() {
+            "/reference" => samples.push(decode_reference(&m.data).unwrap()),
+            "/actors" => actors.push(decode_actors(&m.data).unwrap().1),
+            _ if m.channel.message_encoding == "cdr" => {
+                foxglove::decode_frame_transforms(&m.data).unwrap();
+            }
+            _ => {
+                serde_json::from_slice::<Value>(&m.data).unwrap();
+            }
         }
     }
-    assert_eq!(nulls, 3);
+    assert_eq!(
+        samples[3].velocity_mps[1].to_bits(),
+        f64::NAN.to_bits(),
+        "the NaN's own bits"
+    );
+    assert_eq!(samples[4].heading_rad, f64::INFINITY);
+    assert_eq!(actors[5][0].facing_rad, f64::NEG_INFINITY);
+    let non_finite = samples
+        .iter()
+        .flat_map(|s| {
+            [
+                s.t_s,
+                s.heading_rad,
+                s.heading_rate_radps,
+                s.camera_pitch_rad,
+            ]
+            .into_iter()
+            .chain(s.position_m)
+            .chain(s.velocity_mps)
+            .chain(s.acceleration_mps2)
+        })
+        .chain(
+            actors
+                .iter()
+                .flatten()
+                .flat_map(|a| [a.facing_rad, a.height_m].into_iter().chain(a.position_m)),
+        )
+        .filter(|x| !x.is_finite())
+        .count();
+    assert_eq!(non_finite, 3);
 }
 
 #[test]

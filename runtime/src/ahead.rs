@@ -152,11 +152,14 @@ impl Side {
     }
 }
 
-/// std's channels give a thread a waiter the first time it blocks on one, an allocation
-/// (once per thread). The loop blocks when it catches up with the director: it does so here
-/// once, for 20 µs, at "action!", so that its first wait mid-flight allocates nothing.
-fn warm_waiter() {
-    let (_tx, rx) = mpsc::sync_channel::<()>(1);
+/// std's channels allocate the first time a thread blocks on one (the thread's waiter, once
+/// per thread) and the first time a receiver waits on a given channel (its list of waiting
+/// receivers). The loop blocks when it catches up with the director, which happens only on
+/// a loaded machine: it blocks here once, for 20 µs, on the channel it will read, before the
+/// thread that fills it exists (nothing can arrive), so that its first wait mid-flight
+/// allocates nothing. (Warming the waiter on another channel left the list's allocation to
+/// the first wait: the alloc test failed once under the whole suite's load.)
+fn warm_waiter<T>(rx: &Receiver<T>) {
     let _ = rx.recv_timeout(Duration::from_micros(20));
 }
 
@@ -207,8 +210,8 @@ impl Ahead {
             action_s: start.action_s,
             period_s: start.period_s,
         };
-        warm_waiter();
         let (full_tx, full_rx) = mpsc::sync_channel::<Vec<DirectedTick>>(BATCHES);
+        warm_waiter(&full_rx);
         let (empty_tx, empty_rx) = mpsc::sync_channel::<Vec<DirectedTick>>(BATCHES + 1);
         for _ in 0..BATCHES {
             let _ = empty_tx.send(Vec::with_capacity(BATCH_TICKS));

@@ -7,7 +7,8 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use dronecine_compiler::camera::Lens;
-use dronecine_compiler::output::{McapWriter, RunInfo};
+use dronecine_compiler::output::mcap as compiled;
+use dronecine_compiler::output::{foxglove, McapWriter, RunInfo};
 use dronecine_grammar::script::Stage;
 use dronecine_runtime::backend::{BodyPose, FlightState, MocapFrame};
 use dronecine_runtime::control::{
@@ -15,7 +16,7 @@ use dronecine_runtime::control::{
 };
 use dronecine_runtime::frames::{ActorPose, Command, Sample};
 use dronecine_runtime::log::{
-    cdr, FlightLog, FlightLogWriter, LogError, LogScene, LogThread, LoggedTick,
+    cdr, plots, FlightLog, FlightLogWriter, LogError, LogScene, LogThread, LoggedTick,
 };
 use dronecine_runtime::record::{
     ControllerSetup, Event, FlightHeader, FramingRecord, Phase, TickRecord,
@@ -508,6 +509,27 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
             assert_eq!(&schema.data[..], cdr::SCHEMA.as_bytes());
             continue;
         }
+        // The other per-tick topics: CDR too, compile's schemas or the log's own.
+        let cdr_schema = match c.topic.as_str() {
+            "/reference" => Some(("dronecine/msg/Reference", compiled::reference_schema())),
+            "/actors" => Some(("dronecine/msg/Actors", compiled::actors_schema())),
+            "/estimate" => Some(("dronecine/msg/Estimate", plots::estimate_schema())),
+            "/measurement" => Some(("dronecine/msg/Measurement", plots::measurement_schema())),
+            "/command" => Some(("dronecine/msg/Command", plots::command_schema())),
+            "/framing" => Some(("dronecine/msg/Framing", plots::framing_schema())),
+            topic if topic.starts_with("/tf/") => Some((
+                "foxglove_msgs/msg/FrameTransforms",
+                foxglove::frame_transforms_schema(),
+            )),
+            _ => None,
+        };
+        if let Some((name, definition)) = cdr_schema {
+            assert_eq!(schema.name, name, "{}", c.topic);
+            assert_eq!(schema.encoding, "ros2msg", "{}", c.topic);
+            assert_eq!(c.message_encoding, "cdr", "{}", c.topic);
+            assert_eq!(schema.data, definition.as_bytes(), "{}", c.topic);
+            continue;
+        }
         assert_eq!(schema.encoding, "jsonschema", "{}", c.topic);
         assert_eq!(c.message_encoding, "json", "{}", c.topic);
         let s: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
@@ -522,6 +544,34 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
     }
     for (topic, msgs) in &by_topic {
         if topic == "/servo/tick" {
+            continue;
+        }
+        // Each per-tick message reads back whole, its time its log time.
+        for (ns, data) in msgs {
+            let t_s = match topic.as_str() {
+                "/reference" => compiled::decode_reference(data).unwrap().t_s,
+                "/actors" => compiled::decode_actors(data).unwrap().0,
+                "/estimate" => plots::decode_estimate(data).unwrap().0,
+                "/command" => plots::decode_command(data).unwrap().t_s,
+                "/framing" => plots::decode_framing(data).unwrap().t_s,
+                "/measurement" => {
+                    // Stamped with the tick that took the frame, after its capture.
+                    let m = plots::decode_measurement(data).unwrap();
+                    assert!(m.t_s <= *ns as f64 / 1e9 + 1e-9, "{topic}");
+                    continue;
+                }
+                t if t.starts_with("/tf/") => {
+                    let transforms = foxglove::decode_frame_transforms(data).unwrap();
+                    transforms.last().unwrap().timestamp_ns as f64 / 1e9
+                }
+                _ => f64::NAN,
+            };
+            if t_s.is_finite() {
+                assert_eq!((t_s * 1e9).round() as u64, *ns, "{topic}");
+                continue;
+            }
+        }
+        if topic != "/events" && !topic.starts_with("/scene/") && !topic.starts_with("/camera") {
             continue;
         }
         for (_, data) in msgs {
@@ -560,9 +610,8 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
         ("/tf/actor/Ann", "actor/Ann"),
         ("/tf/reference", "reference"),
     ] {
-        let v: serde_json::Value = serde_json::from_slice(&by_topic[topic][0].1).unwrap();
-        let last = v["transforms"].as_array().unwrap().last().unwrap().clone();
-        assert_eq!(last["child_frame_id"], child, "{topic}");
+        let transforms = foxglove::decode_frame_transforms(&by_topic[topic][0].1).unwrap();
+        assert_eq!(transforms.last().unwrap().child_frame_id, child, "{topic}");
     }
     // The failsafe flag: set exactly on the faulted ticks (their sent command is HOVER),
     // every one of which is written, with the tick after it.
@@ -578,8 +627,25 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
             assert!(data.is_some(), "tick {k}: no /command");
         }
         if let Some(data) = data {
-            let v: serde_json::Value = serde_json::from_slice(data).unwrap();
-            assert_eq!(v["failsafe"], t.output.is_err(), "tick {k}");
+            let c = plots::decode_command(data).unwrap();
+            assert_eq!(c.failsafe, t.output.is_err(), "tick {k}");
+            let sent = [
+                c.command.roll_rad,
+                c.command.pitch_rad,
+                c.command.yaw_rate_radps,
+                c.command.vz_mps,
+            ];
+            let expected = [
+                t.command_sent.roll_rad,
+                t.command_sent.pitch_rad,
+                t.command_sent.yaw_rate_radps,
+                t.command_sent.vz_mps,
+            ];
+            assert_eq!(
+                sent.map(f64::to_bits),
+                expected.map(f64::to_bits),
+                "tick {k}"
+            );
         }
     }
     // The metadata record: every header field, as JSON.

@@ -1,5 +1,8 @@
-//! Foxglove's well-known schemas, JSON-encoded, so that the MCAP file plays in Foxglove's 3D
-//! panel: the JSON schemas themselves and the messages the writer publishes.
+//! Foxglove's well-known schemas, so that the MCAP file plays in Foxglove's 3D panel: the
+//! schemas themselves and the messages the writer publishes. The transforms are CDR with
+//! their `ros2msg` schema (`foxglove_msgs/msg/FrameTransforms`: the topics with the most
+//! messages, so the encoding that costs least to write and to store); the scene, written
+//! once, and the calibration are JSON.
 //!
 //! Frames: `world` (the stage: origin at the centre of the floor, z up); `drone` (at the
 //! reference position, turned by the heading: x forward, y left, z up); `camera` (the
@@ -10,7 +13,7 @@
 //!
 //! Topics (each topic's latest message is self-contained, so seeking in Foxglove, which
 //! back-fills the latest message of every topic, shows the whole scene):
-//! `/tf/drone`, `/tf/camera`, `/tf/actor/NAME` (`foxglove.FrameTransforms`, one topic per
+//! `/tf/drone`, `/tf/camera`, `/tf/actor/NAME` (`foxglove_msgs/msg/FrameTransforms`, one topic per
 //! frame, published when the frame's transform changes: see [`FrameTopic`]), `/scene/stage`,
 //! `/scene/drone`, `/scene/actors`, `/scene/path` (`foxglove.SceneUpdate`) and
 //! `/camera_calibration` (`foxglove.CameraCalibration`).
@@ -18,12 +21,15 @@
 use crate::math;
 use serde_json::{json, Value};
 
-use super::json;
+use super::cdr;
 use crate::camera::Lens;
 use dronecine_grammar::script::Stage;
 
 pub const SCENE_UPDATE: &str = "foxglove.SceneUpdate";
-pub const FRAME_TRANSFORMS: &str = "foxglove.FrameTransforms";
+/// In CDR with a `ros2msg` schema ([`frame_transforms_schema`]): the topics with the most
+/// messages (one per moving frame, 30 a second) cost a third of the bytes and none of the
+/// float formatting of JSON.
+pub const FRAME_TRANSFORMS: &str = "foxglove_msgs/msg/FrameTransforms";
 pub const CAMERA_CALIBRATION: &str = "foxglove.CameraCalibration";
 
 pub const WORLD: &str = "world";
@@ -273,29 +279,37 @@ pub fn scene_update_schema() -> String {
     schema.to_string()
 }
 
-fn frame_transform() -> Value {
-    object(
-        "foxglove.FrameTransform",
-        "Pose of a child frame in its parent frame",
-        json!({
-            "timestamp": time("time", "Timestamp of the transform"),
-            "parent_frame_id": string("Parent frame"),
-            "child_frame_id": string("Child frame"),
-            "translation": vector3("Child origin in the parent frame"),
-            "rotation": quaternion("Child orientation in the parent frame")
-        }),
-    )
-}
-
-/// The JSON schema of `foxglove.FrameTransforms`.
+/// The `ros2msg` definition of `foxglove_msgs/msg/FrameTransforms` (Foxglove's own
+/// schema in its ROS 2 form, with the definitions it uses, as ROS 2's recorders write them).
 pub fn frame_transforms_schema() -> String {
-    let mut schema = object(
-        FRAME_TRANSFORMS,
-        "A list of frame transforms",
-        json!({ "transforms": array(frame_transform(), "Transforms") }),
-    );
-    schema["$schema"] = json!("https://json-schema.org/draft/2020-12/schema");
-    schema.to_string()
+    let sep = cdr::SEPARATOR;
+    format!(
+        "\
+# A list of frame transforms (Foxglove's FrameTransforms)
+foxglove_msgs/FrameTransform[] transforms
+{sep}
+MSG: foxglove_msgs/FrameTransform
+# The pose of a child frame in its parent frame
+builtin_interfaces/Time timestamp
+string parent_frame_id
+string child_frame_id
+geometry_msgs/Vector3 translation
+geometry_msgs/Quaternion rotation
+{sep}
+{time}{sep}
+MSG: geometry_msgs/Vector3
+float64 x
+float64 y
+float64 z
+{sep}
+MSG: geometry_msgs/Quaternion
+float64 x 0
+float64 y 0
+float64 z 0
+float64 w 1
+",
+        time = cdr::TIME_DEFINITION
+    )
 }
 
 /// The JSON schema of `foxglove.CameraCalibration`.
@@ -361,10 +375,9 @@ pub fn camera_in_drone(pitch_rad: f64) -> Quat {
 // ---------------------------------------------------------------------------------------
 
 /// Millimetres are plenty for the 3D view.
-const POS_DECIMALS: u32 = 3;
 const POS_SCALE: f64 = 1e3;
 /// Quaternion components to 1e-6 (≈ 2e-6 rad).
-const ROT_DECIMALS: u32 = 6;
+const ROT_SCALE: f64 = 1e6;
 
 fn time_value(ns: u64) -> Value {
     json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
@@ -603,35 +616,46 @@ pub fn camera_calibration(ns: u64, lens: &Lens) -> Vec<u8> {
 
 /// One frame's transform topic: publishes the transform when it changes.
 ///
-/// Each tick, [`FrameTopic::message`] formats the transform (millimetres, quaternion
-/// components to 1e-6) and compares the text with the last one published: unchanged, nothing
-/// is written. Changed after one or more silent ticks, the message holds two transforms: the
-/// unchanged value stamped at the previous tick, then the new one, so that Foxglove (which
-/// interpolates between a frame's stamped transforms) keeps the frame still until it moves
-/// instead of sliding it over the silent stretch. The topic's latest message is always the
-/// frame's current transform, which keeps seeking (Foxglove back-fills the latest message of
-/// each topic) exact; a frame that never moves is published once, at the first tick.
+/// Each tick, [`FrameTopic::message`] rounds the transform (translation to the millimetre,
+/// quaternion components to 1e-6) and compares it, bit for bit, with the last one published:
+/// unchanged, nothing is written. Changed after one or more silent ticks, the message holds
+/// two transforms: the unchanged value stamped at the previous tick, then the new one, so
+/// that Foxglove (which interpolates between a frame's stamped transforms) keeps the frame
+/// still until it moves instead of sliding it over the silent stretch. The topic's latest
+/// message is always the frame's current transform, which keeps seeking (Foxglove back-fills
+/// the latest message of each topic) exact; a frame that never moves is published once, at
+/// the first tick. Messages are `foxglove_msgs/msg/FrameTransforms` in CDR.
 pub struct FrameTopic {
-    /// `"parent_frame_id":"…","child_frame_id":"…"` (quoted).
-    names: Vec<u8>,
-    /// `"translation":{…},"rotation":{…}` last published (empty: never).
-    last: Vec<u8>,
+    parent: String,
+    child: String,
+    /// The rounded transform last published (`None`: never).
+    last: Option<[f64; 7]>,
     /// Time of the last publication.
     last_ns: u64,
-    scratch: Vec<u8>,
+}
+
+/// A transform rounded for the 3D view: translation, then rotation `[x, y, z, w]`.
+fn rounded(t: [f64; 3], q: Quat) -> [f64; 7] {
+    let pos = |x: f64| (x * POS_SCALE).round() / POS_SCALE;
+    let rot = |x: f64| (x * ROT_SCALE).round() / ROT_SCALE;
+    [
+        pos(t[0]),
+        pos(t[1]),
+        pos(t[2]),
+        rot(q[0]),
+        rot(q[1]),
+        rot(q[2]),
+        rot(q[3]),
+    ]
 }
 
 impl FrameTopic {
     pub fn new(parent: &str, child: &str) -> Self {
-        let mut names = b"\"parent_frame_id\":".to_vec();
-        json::string(&mut names, parent);
-        names.extend_from_slice(b",\"child_frame_id\":");
-        json::string(&mut names, child);
         Self {
-            names,
-            last: Vec::new(),
+            parent: parent.to_string(),
+            child: child.to_string(),
+            last: None,
             last_ns: 0,
-            scratch: Vec::with_capacity(128),
         }
     }
 
@@ -645,58 +669,64 @@ impl FrameTopic {
         t: [f64; 3],
         q: Quat,
     ) -> bool {
-        self.scratch.clear();
-        body(&mut self.scratch, t, q);
-        if !self.last.is_empty() && self.scratch == self.last {
-            return false;
-        }
+        let now = rounded(t, q);
+        let held = match self.last {
+            Some(last) if last.map(f64::to_bits) == now.map(f64::to_bits) => return false,
+            Some(last) => match prev_ns {
+                Some(prev) if prev > self.last_ns && prev < ns => Some((prev, last)),
+                _ => None,
+            },
+            None => None,
+        };
         out.clear();
-        out.extend_from_slice(b"{\"transforms\":[");
-        match prev_ns {
-            Some(prev) if !self.last.is_empty() && prev > self.last_ns && prev < ns => {
-                transform(out, prev, &self.names, &self.last);
-                out.push(b',');
-            }
-            _ => {}
+        let mut m = cdr::Cdr::new(out);
+        m.count(1 + usize::from(held.is_some()));
+        if let Some((prev, last)) = held {
+            self.transform(&mut m, prev, &last);
         }
-        transform(out, ns, &self.names, &self.scratch);
-        out.extend_from_slice(b"]}");
-        std::mem::swap(&mut self.last, &mut self.scratch);
+        self.transform(&mut m, ns, &now);
+        self.last = Some(now);
         self.last_ns = ns;
         true
     }
+
+    fn transform(&self, m: &mut cdr::Cdr, ns: u64, pose: &[f64; 7]) {
+        m.time(ns)
+            .string(&self.parent)
+            .string(&self.child)
+            .f64s(pose);
+    }
 }
 
-/// `"translation":{"x":…,"y":…,"z":…},"rotation":{"x":…,"y":…,"z":…,"w":…}`.
-fn body(out: &mut Vec<u8>, t: [f64; 3], q: Quat) {
-    out.extend_from_slice(b"\"translation\":{\"x\":");
-    json::fixed(out, t[0], POS_DECIMALS);
-    out.extend_from_slice(b",\"y\":");
-    json::fixed(out, t[1], POS_DECIMALS);
-    out.extend_from_slice(b",\"z\":");
-    json::fixed(out, t[2], POS_DECIMALS);
-    out.extend_from_slice(b"},\"rotation\":{\"x\":");
-    json::fixed(out, q[0], ROT_DECIMALS);
-    out.extend_from_slice(b",\"y\":");
-    json::fixed(out, q[1], ROT_DECIMALS);
-    out.extend_from_slice(b",\"z\":");
-    json::fixed(out, q[2], ROT_DECIMALS);
-    out.extend_from_slice(b",\"w\":");
-    json::fixed(out, q[3], ROT_DECIMALS);
-    out.push(b'}');
+/// One transform of a `FrameTransforms` message, as read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameTransform {
+    pub timestamp_ns: u64,
+    pub parent_frame_id: String,
+    pub child_frame_id: String,
+    pub translation: [f64; 3],
+    /// `[x, y, z, w]`.
+    pub rotation: Quat,
 }
 
-/// Appends one `FrameTransform` object stamped at `ns`.
-fn transform(out: &mut Vec<u8>, ns: u64, names: &[u8], body: &[u8]) {
-    out.extend_from_slice(b"{\"timestamp\":{\"sec\":");
-    json::u64(out, ns / 1_000_000_000);
-    out.extend_from_slice(b",\"nsec\":");
-    json::u64(out, ns % 1_000_000_000);
-    out.extend_from_slice(b"},");
-    out.extend_from_slice(names);
-    out.push(b',');
-    out.extend_from_slice(body);
-    out.push(b'}');
+/// Reads a `foxglove_msgs/msg/FrameTransforms` CDR message (tests and tools; a damaged
+/// message is an error naming the field).
+pub fn decode_frame_transforms(data: &[u8]) -> Result<Vec<FrameTransform>, String> {
+    let mut r = cdr::CdrReader::new(data)?;
+    // Each transform at least: a time, two empty strings, seven floats.
+    let n = r.count("transforms", 8 + 2 * 5 + 7 * 8)?;
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..n {
+        out.push(FrameTransform {
+            timestamp_ns: r.time("timestamp")?,
+            parent_frame_id: r.string("parent_frame_id")?.to_string(),
+            child_frame_id: r.string("child_frame_id")?.to_string(),
+            translation: r.f64s("translation")?,
+            rotation: r.f64s("rotation")?,
+        });
+    }
+    r.finish("FrameTransforms")?;
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -726,6 +756,73 @@ mod tests {
             assert!((z - pose.forward()).norm() < 1e-12, "optical z is forward");
             assert!((x - pose.right()).norm() < 1e-12, "optical x is right");
             assert!((y + pose.up()).norm() < 1e-12, "optical y is down");
+        }
+    }
+
+    #[test]
+    fn a_transform_message_has_the_schemas_layout() {
+        let mut topic = FrameTopic::new(WORLD, DRONE);
+        let mut out = Vec::new();
+        let q = yaw(0.5);
+        assert!(topic.message(&mut out, None, 3_250_000_000, [1.23456, -2.0, 0.4], q));
+        // After the header: the count, the stamp (4 and 8), "world" at 12 (its length, the
+        // bytes and the NUL), two bytes of padding, "drone" at 24, the floats 8-aligned at 40.
+        let body = &out[4..];
+        assert_eq!(&out[..4], &cdr::HEADER);
+        assert_eq!(&body[0..4], &1u32.to_le_bytes());
+        assert_eq!(&body[4..8], &3i32.to_le_bytes());
+        assert_eq!(&body[8..12], &250_000_000u32.to_le_bytes());
+        assert_eq!(&body[12..16], &6u32.to_le_bytes());
+        assert_eq!(&body[16..22], b"world\0");
+        assert_eq!(&body[24..28], &6u32.to_le_bytes());
+        assert_eq!(&body[28..34], b"drone\0");
+        assert_eq!(&body[40..48], &1.235f64.to_le_bytes(), "to the millimetre");
+        assert_eq!(&body[88..96], &((q[3] * 1e6).round() / 1e6).to_le_bytes());
+        assert_eq!(body.len(), 96);
+
+        let read = decode_frame_transforms(&out).unwrap();
+        assert_eq!(read.len(), 1);
+        assert_eq!(read[0].timestamp_ns, 3_250_000_000);
+        assert_eq!(
+            (
+                read[0].parent_frame_id.as_str(),
+                read[0].child_frame_id.as_str()
+            ),
+            (WORLD, DRONE)
+        );
+        assert_eq!(read[0].translation, [1.235, -2.0, 0.4]);
+
+        // Less than the rounding: nothing. Moved after a silent tick: the held transform at
+        // the previous tick, then the new one.
+        assert!(!topic.message(
+            &mut out,
+            Some(3_250_000_000),
+            3_260_000_000,
+            [1.2351, -2.0, 0.4],
+            q
+        ));
+        assert!(topic.message(
+            &mut out,
+            Some(3_260_000_000),
+            3_270_000_000,
+            [1.3, -2.0, 0.4],
+            q
+        ));
+        let read = decode_frame_transforms(&out).unwrap();
+        assert_eq!(read.len(), 2);
+        assert_eq!(
+            (read[0].timestamp_ns, read[0].translation[0]),
+            (3_260_000_000, 1.235)
+        );
+        assert_eq!(
+            (read[1].timestamp_ns, read[1].translation[0]),
+            (3_270_000_000, 1.3)
+        );
+        for cut in 0..out.len() - 1 {
+            assert!(
+                decode_frame_transforms(&out[..cut]).is_err(),
+                "cut at {cut}"
+            );
         }
     }
 

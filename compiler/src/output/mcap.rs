@@ -1,25 +1,26 @@
 //! The MCAP writer: the reference and the actors at the full rate, the camera, Foxglove's
 //! 3D scene (decimated), a metadata record and the script as an attachment.
 //!
-//! Channels (all JSON messages with JSON schemas, `log_time = publish_time = t_s` in ns):
+//! Channels (`log_time = publish_time = t_s` in ns). The per-sample topics are CDR with
+//! `ros2msg` schemas (every float exact, 8 bytes: smaller than its text and nothing to
+//! format; readers: [`decode_reference`], [`decode_actors`],
+//! [`foxglove::decode_frame_transforms`]); those written once are JSON with JSON schemas.
 //!
 //! | topic | schema | rate |
 //! |---|---|---|
-//! | `/reference` | `dronecine.Reference` | every sample |
-//! | `/actors` | `dronecine.Actors` | every sample |
+//! | `/reference` | `dronecine/msg/Reference` (CDR) | every sample |
+//! | `/actors` | `dronecine/msg/Actors` (CDR) | every sample |
 //! | `/camera` | `dronecine.Camera` | once, at the first sample |
-//! | `/tf/drone`, `/tf/camera`, `/tf/actor/NAME` | `foxglove.FrameTransforms` | when it changes, at most [`McapOptions::foxglove_hz`] |
+//! | `/tf/drone`, `/tf/camera`, `/tf/actor/NAME` | `foxglove_msgs/msg/FrameTransforms` (CDR) | when it changes, at most [`McapOptions::foxglove_hz`] |
 //! | `/scene/stage`, `/scene/drone` | `foxglove.SceneUpdate` | once |
 //! | `/scene/actors` | `foxglove.SceneUpdate` | once, again when a height changes |
 //! | `/scene/path` | `foxglove.SceneUpdate` | once, written by `finish()` |
 //! | `/camera_calibration` | `foxglove.CameraCalibration` | once |
 //!
-//! The numbers of `/reference`, `/actors` and `/camera` are quantised to 1e-6 (six decimals,
-//! rounded half away from zero, trailing zeros trimmed): positions to the micrometre, speeds,
-//! accelerations, angles and rates to 1e-6 of their SI unit, and times at 100 Hz (or any rate
-//! whose period has at most six decimals) exactly. That is three orders of magnitude below
-//! what a drone's tracking resolves and halves the file compared with shortest round-trip
-//! doubles; the CSV keeps the exact values.
+//! The numbers of `/camera` are quantised to 1e-6 (six decimals, rounded half away from
+//! zero, trailing zeros trimmed); Foxglove's scene to the millimetre, the transforms to the
+//! millimetre and quaternion components to 1e-6; the CSV, `/reference` and `/actors` keep
+//! the exact values.
 //!
 //! Each frame's transform has its own topic, published at the first sample and afterwards
 //! at the `/tf` ticks ([`McapOptions::foxglove_hz`]) where it changed (see
@@ -43,6 +44,7 @@ use ::mcap::{Attachment, McapError, WriteOptions, Writer};
 use serde_json::json;
 use sha2::{Digest, Sha256};
 
+use super::cdr::{self, Cdr, CdrReader};
 use super::foxglove::{self, FrameTopic};
 use super::{annotate, json, ns_from_s, AtomicFile, RunInfo};
 use crate::reference::{ActorPose, Sample};
@@ -98,71 +100,52 @@ impl McapOptions {
     }
 }
 
-/// The JSON schema of `/reference` messages.
-pub const REFERENCE_SCHEMA: &str = "dronecine.Reference";
-/// The JSON schema of `/actors` messages.
-pub const ACTORS_SCHEMA: &str = "dronecine.Actors";
+/// The `ros2msg` schema of `/reference` messages (CDR: [`reference_schema`]).
+pub const REFERENCE_SCHEMA: &str = "dronecine/msg/Reference";
+/// The `ros2msg` schema of `/actors` messages (CDR: [`actors_schema`]).
+pub const ACTORS_SCHEMA: &str = "dronecine/msg/Actors";
 /// The JSON schema of `/camera` messages.
 pub const CAMERA_SCHEMA: &str = "dronecine.Camera";
 
-/// Every number of our own topics is quantised to 1e-6 ([`json::micro`]).
+/// The numbers of `/camera` are quantised to 1e-6 ([`json::micro`]).
 const QUANTISED: &str = "; quantised to 1e-6";
 
-pub fn vec3_schema(description: &str) -> serde_json::Value {
-    json!({ "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": format!("{description}{QUANTISED}") })
-}
-
-pub fn number_schema(description: &str) -> serde_json::Value {
+fn number_schema(description: &str) -> serde_json::Value {
     json!({ "type": "number", "description": format!("{description}{QUANTISED}") })
 }
 
+/// The `ros2msg` definition of `/reference`: every float exact (CDR keeps the bits).
 pub fn reference_schema() -> String {
-    json!({
-        "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "title": REFERENCE_SCHEMA,
-        "description": "One sample of the 6D camera reference (SI units, world z up)",
-        "type": "object",
-        "properties": {
-            "t_s": number_schema("Time on the script's clock (s)"),
-            "position_m": vec3_schema("Camera position (m)"),
-            "velocity_mps": vec3_schema("Velocity (m/s)"),
-            "acceleration_mps2": vec3_schema("Acceleration (m/s²)"),
-            "heading_rad": number_schema("Heading, counter-clockwise from +x, in (−π, π]"),
-            "heading_rate_radps": number_schema("Heading rate (rad/s)"),
-            "camera_pitch_rad": number_schema("Camera pitch, up positive (rad)"),
-            "shot": { "type": "integer", "minimum": 0, "description": "Index of the shot in the timeline" }
-        },
-        "required": ["t_s", "position_m", "velocity_mps", "acceleration_mps2", "heading_rad",
-                     "heading_rate_radps", "camera_pitch_rad", "shot"]
-    })
+    "\
+# One sample of the 6D camera reference (SI units, world frame, z up)
+float64 t_s                      # time on the script's clock
+float64[3] position_m            # camera position
+float64[3] velocity_mps
+float64[3] acceleration_mps2
+float64 heading_rad              # counter-clockwise from +x, in (-pi, pi]
+float64 heading_rate_radps
+float64 camera_pitch_rad         # up positive
+uint32 shot                      # index of the shot in the timeline
+"
     .to_string()
 }
 
+/// The `ros2msg` definition of `/actors`.
 pub fn actors_schema() -> String {
-    json!({
-        "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "title": ACTORS_SCHEMA,
-        "description": "The actors as the compiler assumed them",
-        "type": "object",
-        "properties": {
-            "t_s": number_schema("Time on the script's clock (s)"),
-            "actors": {
-                "type": "array",
-                "items": {
-                    "type": "object",
-                    "properties": {
-                        "name": { "type": "string" },
-                        "position_m": vec3_schema("Feet on the floor (m)"),
-                        "facing_rad": number_schema("Facing, counter-clockwise from +x, in (−π, π]"),
-                        "height_m": number_schema("Height (m)")
-                    },
-                    "required": ["name", "position_m", "facing_rad", "height_m"]
-                }
-            }
-        },
-        "required": ["t_s", "actors"]
-    })
-    .to_string()
+    format!(
+        "\
+# The actors at one instant, in the script's order
+float64 t_s                      # time on the script's clock
+dronecine/NamedActor[] actors
+{}
+MSG: dronecine/NamedActor
+string name
+float64[3] position_m            # feet on the floor
+float64 facing_rad               # counter-clockwise from +x, in (-pi, pi]
+float64 height_m
+",
+        cdr::SEPARATOR
+    )
 }
 
 pub fn camera_schema() -> String {
@@ -253,8 +236,6 @@ pub struct McapWriter {
     options: McapOptions,
     /// Reusable message buffer.
     buf: Vec<u8>,
-    /// Each actor's name as a JSON string literal with its key: `{"name":"Ann","position_m":`.
-    actor_prefixes: Vec<Vec<u8>>,
     /// Time of the first sample (the static topics' time), once a sample was written.
     first_ns: Option<u64>,
     next_tf_s: f64,
@@ -302,8 +283,14 @@ impl McapWriter {
 
         let no_meta = BTreeMap::new();
         let mut channel = |schema_name: &str, schema: String, topic: &str| {
-            let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes())?;
-            let id = writer.add_channel(schema_id, topic, "json", &no_meta)?;
+            // The per-sample topics in CDR, the others JSON.
+            let (schema_encoding, message_encoding) = if schema_name.starts_with("dronecine/") {
+                (cdr::SCHEMA_ENCODING, cdr::MESSAGE_ENCODING)
+            } else {
+                ("jsonschema", "json")
+            };
+            let schema_id = writer.add_schema(schema_name, schema_encoding, schema.as_bytes())?;
+            let id = writer.add_channel(schema_id, topic, message_encoding, &no_meta)?;
             Ok::<_, McapError>(Channel::new(id))
         };
         let scene = foxglove::scene_update_schema();
@@ -354,7 +341,6 @@ impl McapWriter {
             })
             .map_err(err)?;
 
-        let actor_prefixes = info.actor_names.iter().map(|n| actor_prefix(n)).collect();
         Ok(Self {
             writer: Some(writer),
             file,
@@ -368,7 +354,6 @@ impl McapWriter {
             },
             options,
             buf: Vec::with_capacity(1024),
-            actor_prefixes,
             first_ns: None,
             next_tf_s: f64::NEG_INFINITY,
             next_path_s: f64::NEG_INFINITY,
@@ -422,14 +407,14 @@ impl McapWriter {
     /// Writes one sample and the actors at that instant (in the order of
     /// `RunInfo::actor_names`; a different count is an `InvalidInput` error).
     pub fn write(&mut self, sample: &Sample, actors: &[ActorPose]) -> io::Result<()> {
-        if actors.len() != self.actor_prefixes.len() {
+        if actors.len() != self.info.actor_names.len() {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
                 format!(
                     "cannot write {}: {} actor poses for {} actors",
                     self.file.dest().display(),
                     actors.len(),
-                    self.actor_prefixes.len()
+                    self.info.actor_names.len()
                 ),
             ));
         }
@@ -445,7 +430,7 @@ impl McapWriter {
         let result = self.put(|c| &mut c.reference, ns, &buf);
         if result.is_ok() {
             buf.clear();
-            write_actors(&mut buf, sample.t_s, &self.actor_prefixes, actors);
+            write_actors(&mut buf, sample.t_s, &self.info.actor_names, actors);
         }
         let result = result.and_then(|()| self.put(|c| &mut c.actors, ns, &buf));
         self.buf = buf;
@@ -582,16 +567,16 @@ pub fn frame_topics<W: std::io::Write + std::io::Seek>(
 ) -> Result<(Vec<FrameTopic>, Vec<Channel>), McapError> {
     let schema = writer.add_schema(
         foxglove::FRAME_TRANSFORMS,
-        "jsonschema",
+        cdr::SCHEMA_ENCODING,
         foxglove::frame_transforms_schema().as_bytes(),
     )?;
     frame_topics_with(actor_names, extra, |topic| {
-        writer.add_channel(schema, topic, "json", &BTreeMap::new())
+        writer.add_channel(schema, topic, cdr::MESSAGE_ENCODING, &BTreeMap::new())
     })
 }
 
-/// [`frame_topics`] on any MCAP writer: `add_channel` registers a JSON channel with the
-/// `foxglove.FrameTransforms` schema on the topic it is given and returns its id (the
+/// [`frame_topics`] on any MCAP writer: `add_channel` registers a CDR channel with the
+/// `foxglove_msgs/msg/FrameTransforms` schema on the topic it is given and returns its id (the
 /// runtime's flight log has a writer of its own).
 pub fn frame_topics_with<E>(
     actor_names: &[String],
@@ -617,14 +602,6 @@ pub fn frame_topics_with<E>(
     Ok((topics, channels))
 }
 
-/// `{"name":NAME,"position_m":`, the start of an actor's entry in `/actors`.
-pub fn actor_prefix(name: &str) -> Vec<u8> {
-    let mut p = b"{\"name\":".to_vec();
-    json::string(&mut p, name);
-    p.extend_from_slice(b",\"position_m\":");
-    p
-}
-
 /// The `/camera` message.
 pub fn camera_message(lens: &crate::camera::Lens) -> Vec<u8> {
     let mut camera = b"{\"fov_x_rad\":".to_vec();
@@ -635,44 +612,129 @@ pub fn camera_message(lens: &crate::camera::Lens) -> Vec<u8> {
     camera
 }
 
-/// An `/actors` message; `prefixes[i]` is `{"name":NAME,"position_m":` for actor `i`
-/// ([`actor_prefix`]).
-pub fn write_actors(buf: &mut Vec<u8>, t_s: f64, prefixes: &[Vec<u8>], actors: &[ActorPose]) {
-    buf.extend_from_slice(b"{\"t_s\":");
-    json::micro(buf, t_s);
-    buf.extend_from_slice(b",\"actors\":[");
-    for (i, (prefix, a)) in prefixes.iter().zip(actors).enumerate() {
-        if i > 0 {
-            buf.push(b',');
-        }
-        buf.extend_from_slice(prefix);
-        json::vec3_micro(buf, &a.position_m);
-        buf.extend_from_slice(b",\"facing_rad\":");
-        json::micro(buf, a.facing_rad);
-        buf.extend_from_slice(b",\"height_m\":");
-        json::micro(buf, a.height_m);
-        buf.push(b'}');
+/// An `/actors` message (CDR): `names[i]` is actor `i`'s.
+pub fn write_actors(buf: &mut Vec<u8>, t_s: f64, names: &[String], actors: &[ActorPose]) {
+    let mut m = Cdr::new(buf);
+    m.f64(t_s).count(names.len().min(actors.len()));
+    for (name, a) in names.iter().zip(actors) {
+        m.string(name)
+            .f64s(&a.position_m)
+            .f64(a.facing_rad)
+            .f64(a.height_m);
     }
-    buf.extend_from_slice(b"]}");
 }
 
-/// A `/reference` message.
+/// A `/reference` message (CDR).
 pub fn write_reference(buf: &mut Vec<u8>, s: &Sample) {
-    buf.extend_from_slice(b"{\"t_s\":");
-    json::micro(buf, s.t_s);
-    buf.extend_from_slice(b",\"position_m\":");
-    json::vec3_micro(buf, &s.position_m);
-    buf.extend_from_slice(b",\"velocity_mps\":");
-    json::vec3_micro(buf, &s.velocity_mps);
-    buf.extend_from_slice(b",\"acceleration_mps2\":");
-    json::vec3_micro(buf, &s.acceleration_mps2);
-    buf.extend_from_slice(b",\"heading_rad\":");
-    json::micro(buf, s.heading_rad);
-    buf.extend_from_slice(b",\"heading_rate_radps\":");
-    json::micro(buf, s.heading_rate_radps);
-    buf.extend_from_slice(b",\"camera_pitch_rad\":");
-    json::micro(buf, s.camera_pitch_rad);
-    buf.extend_from_slice(b",\"shot\":");
-    json::u64(buf, s.shot as u64);
-    buf.push(b'}');
+    Cdr::new(buf)
+        .f64(s.t_s)
+        .f64s(&s.position_m)
+        .f64s(&s.velocity_mps)
+        .f64s(&s.acceleration_mps2)
+        .f64(s.heading_rad)
+        .f64(s.heading_rate_radps)
+        .f64(s.camera_pitch_rad)
+        .u32(u32::try_from(s.shot).unwrap_or(u32::MAX));
+}
+
+/// Reads a `/reference` message back (tests and tools; a damaged message is an error).
+pub fn decode_reference(data: &[u8]) -> Result<Sample, String> {
+    let mut r = CdrReader::new(data)?;
+    let s = Sample {
+        t_s: r.f64("t_s")?,
+        position_m: r.f64s("position_m")?,
+        velocity_mps: r.f64s("velocity_mps")?,
+        acceleration_mps2: r.f64s("acceleration_mps2")?,
+        heading_rad: r.f64("heading_rad")?,
+        heading_rate_radps: r.f64("heading_rate_radps")?,
+        camera_pitch_rad: r.f64("camera_pitch_rad")?,
+        shot: r.u32("shot")? as usize,
+    };
+    r.finish("Reference")?;
+    Ok(s)
+}
+
+/// One actor of an `/actors` message, as read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedActor {
+    pub name: String,
+    pub position_m: [f64; 3],
+    pub facing_rad: f64,
+    pub height_m: f64,
+}
+
+/// Reads an `/actors` message back: the time and the actors.
+pub fn decode_actors(data: &[u8]) -> Result<(f64, Vec<NamedActor>), String> {
+    let mut r = CdrReader::new(data)?;
+    let t_s = r.f64("t_s")?;
+    // Each actor at least: an empty name and five floats.
+    let n = r.count("actors", 5 + 5 * 8)?;
+    let mut actors = Vec::with_capacity(n);
+    for _ in 0..n {
+        actors.push(NamedActor {
+            name: r.string("name")?.to_string(),
+            position_m: r.f64s("position_m")?,
+            facing_rad: r.f64("facing_rad")?,
+            height_m: r.f64("height_m")?,
+        });
+    }
+    r.finish("Actors")?;
+    Ok((t_s, actors))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reference_message_has_the_schemas_layout() {
+        let s = Sample {
+            t_s: 1.5,
+            position_m: [1.0, 2.0, 3.0],
+            velocity_mps: [4.0, 5.0, 6.0],
+            acceleration_mps2: [7.0, 8.0, 9.0],
+            heading_rad: 10.0,
+            heading_rate_radps: 11.0,
+            camera_pitch_rad: -0.0,
+            shot: 7,
+        };
+        let mut buf = Vec::new();
+        write_reference(&mut buf, &s);
+        // Thirteen floats at 0..104 (t_s, the three vectors, heading, rate, pitch), then
+        // the shot.
+        let body = &buf[4..];
+        assert_eq!(body.len(), 108);
+        for i in 1..=11 {
+            let x = i as f64;
+            assert_eq!(&body[8 * i..8 * i + 8], &x.to_le_bytes(), "float {i}");
+        }
+        assert_eq!(&body[0..8], &1.5f64.to_le_bytes());
+        assert_eq!(&body[96..104], &(-0.0f64).to_le_bytes());
+        assert_eq!(&body[104..108], &7u32.to_le_bytes());
+        assert_eq!(decode_reference(&buf).unwrap(), s);
+        assert!(decode_reference(&buf[..buf.len() - 1]).is_err());
+    }
+
+    #[test]
+    fn an_actors_message_reads_back() {
+        let names = ["Ann".to_string(), "Bo \"B\"".to_string()];
+        let pose = |x: f64| ActorPose {
+            position_m: [x, -x, 0.0],
+            velocity_mps: [9.0; 3],
+            facing_rad: x / 10.0,
+            facing_rate_radps: 9.0,
+            height_m: 1.7,
+        };
+        let mut buf = Vec::new();
+        write_actors(&mut buf, 2.0, &names, &[pose(1.0), pose(2.0)]);
+        let (t_s, read) = decode_actors(&buf).unwrap();
+        assert_eq!(t_s, 2.0);
+        assert_eq!(read.len(), 2);
+        assert_eq!(read[1].name, names[1]);
+        assert_eq!(read[1].position_m, [2.0, -2.0, 0.0]);
+        assert_eq!((read[1].facing_rad, read[1].height_m), (0.2, 1.7));
+        // A count far beyond the bytes is an error, not an allocation.
+        buf[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(decode_actors(&buf).unwrap_err().contains("counts"));
+    }
 }

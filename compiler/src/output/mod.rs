@@ -12,15 +12,16 @@
 //! `finish()` may lose the file, never leave a truncated one that claims to be whole (an MCAP
 //! file without its summary and closing magic is recognisably incomplete).
 //!
-//! The MCAP's own topics (`/reference`, `/actors`, `/camera`) write their numbers quantised
-//! to 1e-6 ([`json::micro`]: micrometres, micro-radians, 1e-6 m/s…, times at 100 Hz exact);
-//! Foxglove's visual topics to the millimetre (orientations to 1e-6); the CSV keeps every
-//! number exact (shortest round-trip).
+//! The MCAP's per-sample topics (`/reference`, `/actors`) are CDR ([`cdr`]), every number
+//! exact; `/camera` (JSON) is quantised to 1e-6 ([`json::micro`]); Foxglove's visual topics
+//! to the millimetre (orientations to 1e-6); the CSV keeps every number exact (shortest
+//! round-trip).
 //!
 //! Errors are `std::io::Error`s whose message names the destination path, so that the CLI
 //! can show them as they are. Non-finite numbers are written as `null` in JSON (valid JSON;
 //! the runtime's flight logs may contain them) and as `NaN`/`inf` in CSV.
 
+pub mod cdr;
 mod csv;
 pub mod foxglove;
 pub mod mcap;
@@ -156,61 +157,9 @@ pub mod json {
         }
     }
 
-    /// A number rounded to `decimals` decimal places (for the visual topics, where
-    /// millimetres are plenty and short numbers keep the file small): fixed-point, integer
-    /// arithmetic, trailing zeros trimmed (`1.5`, `-0.002`, `3`; never `-0`), `null` if not
-    /// finite. Values whose scaled magnitude reaches 9·10¹⁵ (no longer exact integers) are
-    /// written in their shortest round-trip form.
-    ///
-    /// As [`micro`]: the text is built in a stack buffer and appended with one fixed-size
-    /// copy, then cut to length. A flight log writes about 6.6 million of these an hour
-    /// (`/tf`); formatting through `itoa`, with its copies, took twice the instructions.
-    /// Always inlined: a constant `decimals` folds the divisions into multiplications.
-    #[inline(always)]
-    pub fn fixed(out: &mut Vec<u8>, x: f64, decimals: u32) {
-        const POW10: [u64; 10] = [
-            1,
-            10,
-            100,
-            1_000,
-            10_000,
-            100_000,
-            1_000_000,
-            10_000_000,
-            100_000_000,
-            1_000_000_000,
-        ];
-        let d = decimals.min(9) as usize;
-        let scaled = x * POW10[d] as f64;
-        // Beyond 2^53 the scaled value is no longer an exact integer: print it as it is.
-        // Also false for NaN.
-        if !(scaled.abs() < 9.0e15) {
-            f64(out, x);
-            return;
-        }
-        // Sign, up to 16 integer digits, the point and up to 9 decimals.
-        let mut buf = [0u8; 32];
-        let (mut len, mut frac) =
-            sign_and_integer(&mut buf, super::round_half_away(scaled), POW10[d], 16);
-        if frac != 0 {
-            buf[len] = b'.';
-            for i in (len + 1..=len + d).rev() {
-                buf[i] = b'0' + (frac % 10) as u8;
-                frac /= 10;
-            }
-            len += 1 + d;
-            while buf[len - 1] == b'0' {
-                len -= 1;
-            }
-        }
-        let start = out.len();
-        out.extend_from_slice(&buf);
-        out.truncate(start + len);
-    }
-
     /// Writes the sign of `n` (when negative) and the integer part of `|n| / scale` (at most
     /// `max_digits` digits) from the start of `buf`; returns the length written and the
-    /// remainder `|n| % scale`, the decimals still to write. [`fixed`] and [`micro`] share it.
+    /// remainder `|n| % scale`, the decimals still to write (for [`micro`]).
     #[inline(always)]
     fn sign_and_integer(buf: &mut [u8; 32], n: i64, scale: u64, max_digits: usize) -> (usize, u64) {
         let mut len = 0;
@@ -245,9 +194,8 @@ pub mod json {
     /// not finite. Magnitudes beyond 9·10⁹ (no longer exact at this resolution) are written
     /// in their shortest round-trip form.
     ///
-    /// This is most of the compile's output cost (some twenty numbers a sample): the text is
-    /// built in a stack buffer and appended with one fixed-size copy, then cut to length, so
-    /// that no call (`round`, `memcpy` of a variable length) is left in it.
+    /// The text is built in a stack buffer and appended with one fixed-size copy, then cut to
+    /// length, so that no call (`round`, `memcpy` of a variable length) is left in it.
     #[inline]
     pub fn micro(out: &mut Vec<u8>, x: f64) {
         let scaled = x * 1e6;
@@ -279,18 +227,6 @@ pub mod json {
         let start = out.len();
         out.extend_from_slice(&buf);
         out.truncate(start + len);
-    }
-
-    /// `[x,y,z]`, each quantised by [`micro`].
-    #[inline]
-    pub fn vec3_micro(out: &mut Vec<u8>, v: &[f64; 3]) {
-        out.push(b'[');
-        micro(out, v[0]);
-        out.push(b',');
-        micro(out, v[1]);
-        out.push(b',');
-        micro(out, v[2]);
-        out.push(b']');
     }
 
     #[inline]
@@ -335,93 +271,6 @@ mod tests {
     }
 
     #[test]
-    fn fixed_point_numbers_are_short_json_within_half_a_unit() {
-        let cases = [
-            (1.5, 3, "1.5"),
-            (-0.0021, 3, "-0.002"),
-            (3.0, 3, "3"),
-            (-0.0004, 3, "0"),
-            (0.6180339887, 6, "0.618034"),
-            (-12.3456789, 4, "-12.3457"),
-        ];
-        for (x, d, text) in cases {
-            let mut out = Vec::new();
-            json::fixed(&mut out, x, d);
-            assert_eq!(std::str::from_utf8(&out).unwrap(), text, "{x} to {d}");
-        }
-        for i in -2000..2000 {
-            let x = i as f64 * 0.01234567;
-            let mut out = Vec::new();
-            json::fixed(&mut out, x, 3);
-            let back: f64 = serde_json::from_slice(&out).unwrap();
-            assert!((back - x).abs() <= 0.0005 + 1e-12, "{x} → {back}");
-        }
-        let mut out = Vec::new();
-        json::fixed(&mut out, f64::NAN, 3);
-        assert_eq!(out, b"null");
-    }
-
-    #[test]
-    fn fixed_writes_the_rounded_integer_and_its_decimals() {
-        // An independent formulation: the value scaled and rounded half away from zero
-        // (as `f64::round`), its integer part and zero-padded decimals by `format!`, the
-        // decimals' trailing zeros trimmed.
-        let reference = |x: f64, d: u32| -> String {
-            let scale = 10u64.pow(d);
-            let scaled = x * scale as f64;
-            if !(scaled.abs() < 9.0e15) {
-                let mut out = Vec::new();
-                json::f64(&mut out, x);
-                return String::from_utf8(out).unwrap();
-            }
-            let n = scaled.round() as i64;
-            let (int, frac) = (n.unsigned_abs() / scale, n.unsigned_abs() % scale);
-            let sign = if n < 0 { "-" } else { "" };
-            if frac == 0 {
-                format!("{sign}{int}")
-            } else {
-                let decimals = format!("{frac:0width$}", width = d as usize);
-                format!("{sign}{int}.{}", decimals.trim_end_matches('0'))
-            }
-        };
-        let mut x = 0.377f64;
-        let mut cases = vec![
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            0.0005,
-            -0.0005,
-            1e9,
-            8.9e15,
-            9.1e15,
-            -8_999_999_999.999_999,
-            f64::MIN_POSITIVE,
-            f64::MAX,
-            f64::NAN,
-            f64::INFINITY,
-        ];
-        for _ in 0..50_000 {
-            // Magnitudes from about 1e-10 to 1e14, both signs.
-            x = (x * 1.618_033_988_749_895).fract();
-            let e = (x * 24.0) as i32 - 9;
-            let v = x * 10f64.powi(e);
-            cases.extend([v, -v, v.trunc()]);
-        }
-        for d in 0..=9 {
-            for &x in &cases {
-                let mut out = Vec::new();
-                json::fixed(&mut out, x, d);
-                assert_eq!(
-                    std::str::from_utf8(&out).unwrap(),
-                    reference(x, d),
-                    "{x:e} to {d}"
-                );
-            }
-        }
-    }
-
-    #[test]
     fn micro_numbers_are_the_value_rounded_to_six_decimals() {
         let text = |x: f64| {
             let mut out = Vec::new();
@@ -447,13 +296,10 @@ mod tests {
         for (x, expected) in cases {
             assert_eq!(text(x), expected, "{x}");
         }
-        // Agrees with `fixed` at six decimals, within half a unit of the value.
+        // Within half a unit of the value, at most six decimals, no trailing zero.
         for i in -20_000..20_000 {
             let x = i as f64 * 0.012345678901 + 1e-9 * i as f64;
             let t = text(x);
-            let mut f = Vec::new();
-            json::fixed(&mut f, x, 6);
-            assert_eq!(t.as_bytes(), &f[..], "{x}");
             let back: f64 = t.parse().unwrap();
             assert!((back - x).abs() <= 0.5e-6 + 1e-12, "{x} → {t}");
             assert!(t

@@ -8,42 +8,46 @@
 //! JSON text (`"script_name"` → `"\"orbit.psl\""`, `"seed"` → `"42"` or `"null"`,
 //! `"sim_effects_off"` → `["wind","battery"]`, `[]` or `"null"` (absent from logs written
 //! before it was recorded), `"controller"` → `{"kind":"lqg",…}`). Attachment: the script
-//! text (`text/plain`, named after the script). Every channel but `/servo/tick` carries
-//! JSON messages with JSON schemas; `/servo/tick` is CDR with a `ros2msg` schema ([`cdr`]).
-//! `log_time = publish_time =` the tick's `input.t_s` in nanoseconds (negative or non-finite
-//! times: 0).
+//! text (`text/plain`, named after the script). The per-tick topics are CDR with `ros2msg`
+//! schemas (`/servo/tick`: [`cdr`]; the plot topics: [`plots`], and compile's writers for
+//! `/reference`, `/actors` and `/tf`); `/events` and the topics written once are JSON with
+//! JSON schemas. `log_time = publish_time =` the tick's `input.t_s` in nanoseconds (negative
+//! or non-finite times: 0).
 //!
 //! | topic | schema | when | fields |
 //! |---|---|---|---|
-//! | `/reference` | `dronecine.Reference` | 10 Hz | exactly as `dronecine compile` writes it (the tick's [`Sample`](crate::frames::Sample)) |
-//! | `/actors` | `dronecine.Actors` | 10 Hz | exactly as compile: `t_s`, `actors[] {name, position_m, facing_rad, height_m}` |
+//! | `/reference` | `dronecine/msg/Reference` (CDR) | 10 Hz | exactly as `dronecine compile` writes it (the tick's [`Sample`](crate::frames::Sample)) |
+//! | `/actors` | `dronecine/msg/Actors` (CDR) | 10 Hz | exactly as compile: `t_s`, `actors[] {name, position_m, facing_rad, height_m}` |
 //! | `/camera` | `dronecine.Camera` | once (t = 0) | `fov_x_rad`, `aspect` |
-//! | `/estimate` | `dronecine.Estimate` | 10 Hz: ticks whose controller answered | `t_s`, `position_m`, `velocity_mps`, `heading_rad` |
-//! | `/measurement` | `dronecine.Measurement` | 30 Hz: ticks with a new mocap frame | `t_s` (capture), `frame`, `drone {position_m, heading_rad}` or null, `actors[]` (same, or null) |
-//! | `/command` | `dronecine.Command` | 10 Hz, and every tick whose `failsafe` is set (and the first after) | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
-//! | `/framing` | `dronecine.Framing` | 10 Hz: ticks with framing records | `t_s`, `shot`, `actors[] {actor, name, screen, requested}` (`[x, y]` or null) |
+//! | `/estimate` | `dronecine/msg/Estimate` (CDR) | 10 Hz: ticks whose controller answered | `t_s`, `position_m`, `velocity_mps`, `heading_rad` |
+//! | `/measurement` | `dronecine/msg/Measurement` (CDR) | 30 Hz: ticks with a new mocap frame | `t_s` (capture), `frame`, `drone {position_m, heading_rad, tracked}`, `actors[]` (same) |
+//! | `/command` | `dronecine/msg/Command` (CDR) | 10 Hz, and every tick whose `failsafe` is set (and the first after) | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
+//! | `/framing` | `dronecine/msg/Framing` (CDR) | 10 Hz: ticks with framing records | `t_s`, `shot` (−1: none), `actors[] {name, actor, screen, requested, has_screen, has_requested}` |
 //! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message`; a finding of the director's also `line` (the script's, 1-based) and `help` (its fix, as compile says it) |
 //! | `/servo/tick` | `dronecine/msg/ServoTick` (CDR, [`cdr::SCHEMA`]) | every tick | the phase, the shot, the [`TickInput`](crate::control::TickInput), the [`TickOutput`](crate::control::TickOutput) or the fault, the command sent, the drone's state, the latency, the actors as the director saw them, the framing records: 514 bytes with two actors framed |
-//! | `/tf` | `foxglove.FrameTransforms` | 30 Hz (a frame when it moved) | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
+//! | `/tf/drone`, `/tf/camera`, `/tf/actor/NAME`, `/tf/reference` | `foxglove_msgs/msg/FrameTransforms` (CDR) | 30 Hz (a frame when it moved) | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
 //! | `/scene/stage`, `/scene/drone`, `/scene/actors` | `foxglove.SceneUpdate` | once (actors again when a height changes) | as compile |
 //! | `/camera_calibration` | `foxglove.CameraCalibration` | once | as compile |
 //!
-//! The JSON topics (rates in [`LogOptions`]) are for Foxglove's plots and 3D view: every
+//! The plot topics (rates in [`LogOptions`]) are for Foxglove's plots and 3D view: every
 //! tick's exact reference, estimate, drone measurement, commands, actors (as the director saw
 //! them) and framing are on `/servo/tick` (which Foxglove plots as well, field by field), and
 //! that (with `/events`) is all replay reads; the actors' raw measured poses are kept at
 //! 30 Hz only, on `/measurement`. A topic is written on the first tick that has one when it is
 //! due. The plot topics went from 30 to 10 Hz when a flight log's JSON turned out to cost
 //! the writer thread more than the simulated flight it logs (an hour: 0.75 s of the writer's
-//! CPU at 30 Hz, 0.51 s at 10 Hz, against 0.62 s for the flight).
+//! CPU at 30 Hz, 0.51 s at 10 Hz, against 0.62 s for the flight), and from JSON to CDR when
+//! formatting their floats still cost more than the rest of the log: an hour's log went from
+//! 383 to 288 MB (`benches/README.md`).
 //!
 //! # Numbers
 //!
-//! `/servo/tick` holds each float's IEEE 754 bits (NaN payloads included). The JSON topics
-//! write every float in its shortest round-trip form, so that parsing it gives back the same
-//! bits (`-0.0` stays `-0.0`, subnormals and `f64::MAX` survive); non-finite values are
-//! written on `/events` as the strings `"NaN"`, `"inf"` and `"-inf"` (a NaN's payload and sign
-//! are not kept) and on the other topics as `null` (as compile does).
+//! The CDR topics hold each float's IEEE 754 bits (NaN payloads and `-0.0` included) but
+//! `/tf`, rounded for the 3D view (millimetres, quaternion components to 1e-6). `/events`
+//! writes its time in its shortest round-trip form, so that parsing it gives back the same
+//! bits; a non-finite time is the string `"NaN"`, `"inf"` or `"-inf"` (a NaN's payload and
+//! sign are not kept). An absent value on a CDR topic (an untracked body, an actor behind the
+//! camera) is zero with its flag clear.
 //!
 //! # Crash safety
 //!
@@ -59,9 +63,9 @@
 
 pub mod cdr;
 mod mcap_file;
+pub mod plots;
 mod reader;
 mod schema;
-mod text;
 mod thread;
 mod writer;
 
@@ -176,7 +180,7 @@ impl std::error::Error for LogError {
     }
 }
 
-/// Exact floats for `/servo/tick` and `/events`.
+/// Exact floats for `/events` (JSON).
 mod exact {
     use dronecine_compiler::output::json;
     use serde::de::{self, Deserializer, Visitor};

@@ -611,7 +611,9 @@ impl ReadState {
                     }
                     topic::SERVO_TICK => Some(Wanted::Tick),
                     topic::EVENTS => Some(Wanted::Event),
-                    topic::FRAMING => Some(Wanted::Framing),
+                    // JSON framing at every tick: a log written before the framing moved
+                    // to `/servo/tick` (a newer log's `/framing` is CDR, for plots only).
+                    topic::FRAMING if channel.message_encoding == "json" => Some(Wanted::Framing),
                     _ => None,
                 };
                 if let Some(w) = wanted {

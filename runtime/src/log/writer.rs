@@ -1,13 +1,12 @@
 //! [`FlightLogWriter`]: streams the flight's ticks and events into the MCAP log (contents and
 //! crash behaviour in the module doc of `log`).
 //!
-//! Per tick the writer encodes `/servo/tick` (CDR, `cdr.rs`) and, at the plot and `/tf`
-//! rates, formats JSON (`text.rs`, the compiler's hand-written JSON helpers behind a cache of
-//! float texts), each into one reused buffer handed to the MCAP writer,
-//! whose in-memory chunk buffer is reused from chunk to chunk ([`McapFile`], written for this
-//! path: each message copied once and each chunk hashed once); chunks carry no message indexes
-//! (readers scan the ≤ 1 s chunks). The only allocation on the per-tick path is the
-//! compiler's `foxglove::Frames::message` (a 40-byte time stamp, on `/tf` ticks, 30 Hz).
+//! Per tick the writer encodes `/servo/tick` (`cdr.rs`) and, at the plot and `/tf` rates,
+//! the plot topics (`plots.rs`, and the compiler's writers for `/reference`, `/actors` and
+//! `/tf`), all CDR, each into one reused buffer handed to the MCAP writer, whose in-memory
+//! chunk buffer is reused from chunk to chunk ([`McapFile`], written for this path: each
+//! message copied once and each chunk hashed once); chunks carry no message indexes (readers
+//! scan the ≤ 1 s chunks). Nothing on the per-tick path allocates. Only `/events` is JSON.
 
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -17,15 +16,14 @@ use std::path::{Path, PathBuf};
 use dronecine_compiler::camera::Lens;
 use dronecine_compiler::output::foxglove::{self, FrameTopic};
 use dronecine_compiler::output::mcap::{
-    actor_prefix, actors_schema, advance, camera_message, camera_schema, frame_topics_with,
-    reference_schema, write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA,
-    REFERENCE_SCHEMA,
+    actors_schema, advance, camera_message, camera_schema, frame_topics_with, reference_schema,
+    write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA, REFERENCE_SCHEMA,
 };
-use dronecine_compiler::output::{json, ns_from_s};
+use dronecine_compiler::output::{self, json, ns_from_s};
 
 use super::mcap_file::{ChunkCompression, McapFile};
-use super::text::{same_command, Text};
-use super::{cdr, schema, topic, LogScene, HEADER_METADATA};
+use super::plots::{self, same_command};
+use super::{cdr, exact, schema, topic, LogScene, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, TickRecord};
 
 /// The frame of the reference pose on `/tf/reference`.
@@ -120,15 +118,11 @@ pub struct FlightLogWriter {
     frames: Vec<FrameTopic>,
     /// Time of the last `/tf` tick.
     last_tf_ns: Option<u64>,
-    /// `{"name":"Ann","position_m":` per actor (`/actors`).
-    actor_prefixes: Vec<Vec<u8>>,
-    /// `,"name":"Ann","screen":` per actor (`/framing`).
-    framing_names: Vec<Vec<u8>>,
     actor_names: Vec<String>,
     /// Heights last published on `/scene/actors`.
     heights_m: Vec<f64>,
-    /// The reused message buffer and float texts.
-    text: Text,
+    /// The reused message buffer.
+    buf: Vec<u8>,
     next_tf_s: f64,
     /// When the plot topics are next due (`plot_hz`; `/measurement` at `measurement_hz`):
     /// `/reference` with `/actors`, `/estimate`, `/measurement`, `/command`, `/framing`.
@@ -238,8 +232,14 @@ impl FlightLogWriter {
             Channel::new(id)
         };
         let mut channel = |schema_name: &str, schema: String, topic: &str| {
-            let schema_id = writer.add_schema(schema_name, "jsonschema", schema.as_bytes())?;
-            let id = writer.add_channel(schema_id, topic, "json")?;
+            // The per-tick topics in CDR (`dronecine/msg/…`), the others JSON.
+            let (schema_encoding, message_encoding) = if schema_name.starts_with("dronecine/") {
+                (output::cdr::SCHEMA_ENCODING, output::cdr::MESSAGE_ENCODING)
+            } else {
+                ("jsonschema", "json")
+            };
+            let schema_id = writer.add_schema(schema_name, schema_encoding, schema.as_bytes())?;
+            let id = writer.add_channel(schema_id, topic, message_encoding)?;
             Ok::<_, io::Error>(Channel::new(id))
         };
         let scene_schema = foxglove::scene_update_schema();
@@ -248,16 +248,18 @@ impl FlightLogWriter {
                 .map_err(err)?,
             actors: channel(ACTORS_SCHEMA, actors_schema(), topic::ACTORS).map_err(err)?,
             camera: channel(CAMERA_SCHEMA, camera_schema(), topic::CAMERA).map_err(err)?,
-            estimate: channel(schema::ESTIMATE, schema::estimate(), topic::ESTIMATE)
+            estimate: channel(plots::ESTIMATE, plots::estimate_schema(), topic::ESTIMATE)
                 .map_err(err)?,
             measurement: channel(
-                schema::MEASUREMENT,
-                schema::measurement(),
+                plots::MEASUREMENT,
+                plots::measurement_schema(),
                 topic::MEASUREMENT,
             )
             .map_err(err)?,
-            command: channel(schema::COMMAND, schema::command(), topic::COMMAND).map_err(err)?,
-            framing: channel(schema::FRAMING, schema::framing(), topic::FRAMING).map_err(err)?,
+            command: channel(plots::COMMAND, plots::command_schema(), topic::COMMAND)
+                .map_err(err)?,
+            framing: channel(plots::FRAMING, plots::framing_schema(), topic::FRAMING)
+                .map_err(err)?,
             events: channel(schema::EVENT, schema::event(), topic::EVENTS).map_err(err)?,
             servo_tick,
             tf: Vec::new(),
@@ -300,17 +302,6 @@ impl FlightLogWriter {
             )
             .map_err(err)?;
 
-        let actor_prefixes = scene.actor_names.iter().map(|n| actor_prefix(n)).collect();
-        let framing_names = scene
-            .actor_names
-            .iter()
-            .map(|name| {
-                let mut p = b",\"name\":".to_vec();
-                json::string(&mut p, name);
-                p.extend_from_slice(b",\"screen\":");
-                p
-            })
-            .collect();
         let rate_hz = if header.rate_hz.is_finite() && header.rate_hz > 0.0 {
             header.rate_hz
         } else {
@@ -321,14 +312,14 @@ impl FlightLogWriter {
         let tf_schema = writer
             .add_schema(
                 foxglove::FRAME_TRANSFORMS,
-                "jsonschema",
+                output::cdr::SCHEMA_ENCODING,
                 foxglove::frame_transforms_schema().as_bytes(),
             )
             .map_err(err)?;
         let (frames, tf) = frame_topics_with(
             scene.actor_names,
             &[(foxglove::WORLD, REFERENCE_FRAME)],
-            |topic| writer.add_channel(tf_schema, topic, "json"),
+            |topic| writer.add_channel(tf_schema, topic, output::cdr::MESSAGE_ENCODING),
         )
         .map_err(err)?;
         channels.tf = tf;
@@ -340,11 +331,9 @@ impl FlightLogWriter {
             options,
             frames,
             last_tf_ns: None,
-            actor_prefixes,
-            framing_names,
             actor_names: scene.actor_names.to_vec(),
             heights_m: Vec::new(),
-            text: Text::new(),
+            buf: Vec::with_capacity(4096),
             next_tf_s: f64::NEG_INFINITY,
             next_reference_s: f64::NEG_INFINITY,
             next_estimate_s: f64::NEG_INFINITY,
@@ -379,15 +368,15 @@ impl FlightLogWriter {
             .map_err(|e| annotate(path, e))
     }
 
-    /// Puts the text buffer on a channel.
-    fn put_text(&mut self, channel: fn(&mut Channels) -> &mut Channel, ns: u64) -> io::Result<()> {
+    /// Puts the message buffer on a channel.
+    fn put_buf(&mut self, channel: fn(&mut Channels) -> &mut Channel, ns: u64) -> io::Result<()> {
         let header = channel(&mut self.channels).header(ns);
         let path = &self.path;
         let writer = self.writer.as_mut().ok_or_else(|| {
             io::Error::other(format!("cannot write {}: log finished", path.display()))
         })?;
         writer
-            .write_message(&header, &self.text.buf)
+            .write_message(&header, &self.buf)
             .map_err(|e| annotate(path, e))
     }
 
@@ -443,18 +432,19 @@ impl FlightLogWriter {
         // /reference and /actors, exactly as compile writes them.
         if due(self.next_reference_s) {
             self.next_reference_s = advance(self.next_reference_s, t_s, hz);
-            self.text.buf.clear();
-            write_reference(&mut self.text.buf, tick.sample);
-            self.put_text(|c| &mut c.reference, ns)?;
-            self.text.buf.clear();
-            write_actors(&mut self.text.buf, t_s, &self.actor_prefixes, tick.actors);
-            self.put_text(|c| &mut c.actors, ns)?;
+            self.buf.clear();
+            write_reference(&mut self.buf, tick.sample);
+            self.put_buf(|c| &mut c.reference, ns)?;
+            self.buf.clear();
+            write_actors(&mut self.buf, t_s, &self.actor_names, tick.actors);
+            self.put_buf(|c| &mut c.actors, ns)?;
         }
         if let Some(out) = output {
             if due(self.next_estimate_s) {
                 self.next_estimate_s = advance(self.next_estimate_s, t_s, hz);
-                self.text.estimate(t_s, &out.estimate);
-                self.put_text(|c| &mut c.estimate, ns)?;
+                self.buf.clear();
+                plots::estimate(&mut self.buf, t_s, &out.estimate);
+                self.put_buf(|c| &mut c.estimate, ns)?;
             }
             self.last_estimate = Some((out.estimate.position_m, out.estimate.heading_rad));
         }
@@ -463,8 +453,9 @@ impl FlightLogWriter {
             if due(self.next_measurement_s) {
                 self.next_measurement_s =
                     advance(self.next_measurement_s, t_s, self.options.measurement_hz);
-                self.text.measurement(frame);
-                self.put_text(|c| &mut c.measurement, ns)?;
+                self.buf.clear();
+                plots::measurement(&mut self.buf, frame);
+                self.put_buf(|c| &mut c.measurement, ns)?;
             }
         }
 
@@ -472,20 +463,27 @@ impl FlightLogWriter {
         if due(self.next_command_s) || failsafe || self.command_failsafe {
             self.next_command_s = advance(self.next_command_s, t_s, hz);
             self.command_failsafe = failsafe;
-            self.text.command(t_s, output, &tick.command_sent, failsafe);
-            self.put_text(|c| &mut c.command, ns)?;
+            self.buf.clear();
+            plots::command(&mut self.buf, t_s, output, &tick.command_sent, failsafe);
+            self.put_buf(|c| &mut c.command, ns)?;
         }
 
         if !tick.framing.is_empty() && due(self.next_framing_s) {
             self.next_framing_s = advance(self.next_framing_s, t_s, hz);
-            self.text
-                .framing(t_s, tick.shot, &self.framing_names, tick.framing);
-            self.put_text(|c| &mut c.framing, ns)?;
+            self.buf.clear();
+            plots::framing(
+                &mut self.buf,
+                t_s,
+                tick.shot,
+                &self.actor_names,
+                tick.framing,
+            );
+            self.put_buf(|c| &mut c.framing, ns)?;
         }
 
-        self.text.buf.clear();
-        cdr::encode(&mut self.text.buf, tick);
-        self.put_text(|c| &mut c.servo_tick, ns)?;
+        self.buf.clear();
+        cdr::encode(&mut self.buf, tick);
+        self.put_buf(|c| &mut c.servo_tick, ns)?;
 
         if t_s >= self.next_tf_s || !t_s.is_finite() {
             self.next_tf_s = advance(self.next_tf_s, t_s, self.options.tf_hz);
@@ -539,15 +537,14 @@ impl FlightLogWriter {
             (s.position_m, foxglove::yaw(s.heading_rad)),
         )));
         for (i, (t, q)) in poses {
-            let buf = &mut self.text.buf;
-            if self.frames[i].message(buf, prev_ns, ns, t, q) {
+            if self.frames[i].message(&mut self.buf, prev_ns, ns, t, q) {
                 let header = self.channels.tf[i].header(ns);
                 let path = &self.path;
                 let writer = self.writer.as_mut().ok_or_else(|| {
                     io::Error::other(format!("cannot write {}: log finished", path.display()))
                 })?;
                 writer
-                    .write_message(&header, &self.text.buf)
+                    .write_message(&header, &self.buf)
                     .map_err(|e| annotate(path, e))?;
             }
         }
@@ -556,26 +553,26 @@ impl FlightLogWriter {
 
     /// Writes an event on `/events` (its time exact, as on `/servo/tick`).
     pub fn write_event(&mut self, event: &Event) -> io::Result<()> {
-        let text = &mut self.text;
-        text.buf.clear();
-        text.raw(b"{\"t_s\":");
-        text.exact(event.t_s);
-        text.raw(b",\"level\":");
-        json::string(&mut text.buf, &event.level);
-        text.raw(b",\"kind\":");
-        json::string(&mut text.buf, &event.kind);
-        text.raw(b",\"message\":");
-        json::string(&mut text.buf, &event.message);
+        let buf = &mut self.buf;
+        buf.clear();
+        buf.extend_from_slice(b"{\"t_s\":");
+        exact::f64(buf, event.t_s);
+        buf.extend_from_slice(b",\"level\":");
+        json::string(buf, &event.level);
+        buf.extend_from_slice(b",\"kind\":");
+        json::string(buf, &event.kind);
+        buf.extend_from_slice(b",\"message\":");
+        json::string(buf, &event.message);
         if let Some(line) = event.line {
-            text.raw(b",\"line\":");
-            text.raw(itoa::Buffer::new().format(line).as_bytes());
+            buf.extend_from_slice(b",\"line\":");
+            json::u64(buf, line as u64);
         }
         if let Some(help) = &event.help {
-            text.raw(b",\"help\":");
-            json::string(&mut text.buf, help);
+            buf.extend_from_slice(b",\"help\":");
+            json::string(buf, help);
         }
-        text.raw(b"}");
-        self.put_text(|c| &mut c.events, ns_from_s(event.t_s))
+        buf.push(b'}');
+        self.put_buf(|c| &mut c.events, ns_from_s(event.t_s))
     }
 
     /// Closes the last chunk and writes the summary and the closing magic.
