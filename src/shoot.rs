@@ -327,7 +327,7 @@ pub fn run(a: &Args) -> ExitCode {
             sim.effects = effects;
             // As fast as it can: the director on a thread of its own if there is a core for
             // it (the same flight either way). Paced, the loop waits anyway.
-            sim.actors_ahead = !a.realtime && session::director_thread_pays(true);
+            sim.actors_ahead = !a.realtime && session::director_thread_pays();
             let flight = SimFlight {
                 script,
                 source: &r.text,

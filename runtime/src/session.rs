@@ -181,14 +181,14 @@ impl std::fmt::Display for SessionError {
 impl std::error::Error for SessionError {}
 
 /// Whether a simulated flight gains by stepping its director on a thread of its own
-/// ([`SimConfig::actors_ahead`]): when the machine has a core for it besides the loop's and,
-/// with a flight log, the log's writer. Busy, the cores take turns and the flight takes
-/// longer, not less. Measured on the hour's flight (the `flight` bench) on two cores: without
-/// its log 0.479 → 0.328 s with the director ahead; with its log 0.512 → 0.695 s (1.06 s of
-/// CPU on all threads against 0.84 s). `shoot` asks it, with its log.
-pub fn director_thread_pays(logging: bool) -> bool {
-    let busy = if logging { 2 } else { 1 };
-    std::thread::available_parallelism().is_ok_and(|n| n.get() > busy)
+/// ([`SimConfig::actors_ahead`]): when the machine has a second core. Measured on the hour's
+/// flight (the `flight` bench) on two cores, 2026-11-27: without its log 0.480 → 0.356 s
+/// with the director ahead; with its log 0.578 → 0.521 s (0.85 → 0.88 s of CPU on all
+/// threads). Before the log's plot topics were CDR (JSON text then), the log's writer needed
+/// the second core to itself and the director ahead made the flight with its log slower
+/// (0.512 → 0.695 s). On one core the threads only take turns. `shoot` asks it.
+pub fn director_thread_pays() -> bool {
+    std::thread::available_parallelism().is_ok_and(|n| n.get() >= 2)
 }
 
 /// The servo a flight runs, or why it cannot.

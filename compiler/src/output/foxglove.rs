@@ -634,10 +634,24 @@ pub struct FrameTopic {
     last_ns: u64,
 }
 
+/// `x` rounded to a multiple of `1 / scale`, half away from zero (as `f64::round`, without
+/// its library call: this is most of the writer's `/tf` arithmetic), never `-0` (a frame
+/// hovering about zero is not a change); values too large to be rounded exactly,
+/// infinities and NaN as they are.
+#[inline]
+fn round_to(x: f64, scale: f64) -> f64 {
+    let y = x * scale;
+    if y.abs() < 9.0e15 {
+        super::round_half_away(y) as f64 / scale
+    } else {
+        x
+    }
+}
+
 /// A transform rounded for the 3D view: translation, then rotation `[x, y, z, w]`.
 fn rounded(t: [f64; 3], q: Quat) -> [f64; 7] {
-    let pos = |x: f64| (x * POS_SCALE).round() / POS_SCALE;
-    let rot = |x: f64| (x * ROT_SCALE).round() / ROT_SCALE;
+    let pos = |x: f64| round_to(x, POS_SCALE);
+    let rot = |x: f64| round_to(x, ROT_SCALE);
     [
         pos(t[0]),
         pos(t[1]),
@@ -757,6 +771,32 @@ mod tests {
             assert!((x - pose.right()).norm() < 1e-12, "optical x is right");
             assert!((y + pose.up()).norm() < 1e-12, "optical y is down");
         }
+    }
+
+    #[test]
+    fn transforms_round_as_f64_round() {
+        let mut x = 0.377f64;
+        for _ in 0..100_000 {
+            x = (x * 1.618_033_988_749_895).fract();
+            for v in [
+                x * 20.0 - 10.0,
+                x - 0.5,
+                (x * 2000.0).trunc() / 1000.0 + 0.0005,
+            ] {
+                for scale in [POS_SCALE, ROT_SCALE] {
+                    // `+ 0.0`: never -0 (a frame that hovers about zero does not flicker).
+                    let expected = (v * scale).round() / scale + 0.0;
+                    assert_eq!(
+                        round_to(v, scale).to_bits(),
+                        expected.to_bits(),
+                        "{v} {scale}"
+                    );
+                }
+            }
+        }
+        assert!(round_to(f64::NAN, POS_SCALE).is_nan());
+        assert_eq!(round_to(f64::INFINITY, POS_SCALE), f64::INFINITY);
+        assert_eq!(round_to(1e300, POS_SCALE), 1e300);
     }
 
     #[test]

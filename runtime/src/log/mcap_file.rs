@@ -119,6 +119,11 @@ fn too_long(what: &str) -> io::Error {
     )
 }
 
+/// Bytes of an uncompressed Chunk record before its records: the opcode, the length, the
+/// start and end times, the uncompressed size and CRC, the compression's (empty) name with
+/// its length, the records' length.
+const CHUNK_PREFIX: usize = 1 + 8 + 8 + 8 + 8 + 4 + 4 + 8;
+
 /// A schema as registered: its id is its index + 1.
 struct Schema {
     name: String,
@@ -133,7 +138,8 @@ pub struct McapFile {
     /// Bytes handed to `out` so far: the file offset of the next record.
     pos: u64,
     compression: ChunkCompression,
-    /// The open chunk's records.
+    /// Room for the Chunk record's header ([`CHUNK_PREFIX`] bytes), then the open chunk's
+    /// records: an uncompressed chunk is filled in and written with one system call.
     chunk: Vec<u8>,
     /// The open chunk's least and greatest message log time.
     chunk_times: Option<(u64, u64)>,
@@ -168,7 +174,11 @@ impl McapFile {
             out: BufWriter::with_capacity(1 << 16, file),
             pos: 0,
             compression,
-            chunk: Vec::with_capacity(1 << 18),
+            chunk: {
+                let mut c = Vec::with_capacity(1 << 18);
+                c.resize(CHUNK_PREFIX, 0);
+                c
+            },
             chunk_times: None,
             compressed: Vec::new(),
             schemas: Vec::new(),
@@ -301,25 +311,26 @@ impl McapFile {
         let Some((start_ns, end_ns)) = self.chunk_times.take() else {
             return Ok(());
         };
-        let uncompressed_crc = crc32fast::hash(&self.chunk);
-        let uncompressed_size = self.chunk.len() as u64;
+        let uncompressed = &self.chunk[CHUNK_PREFIX..];
+        let uncompressed_crc = crc32fast::hash(uncompressed);
+        let uncompressed_size = uncompressed.len() as u64;
         if self.compression == ChunkCompression::Lz4 {
             self.compressed.clear();
             let mut enc = lz4::EncoderBuilder::new()
                 .block_checksum(lz4::liblz4::BlockChecksum::NoBlockChecksum)
                 .build(std::mem::take(&mut self.compressed))?;
-            enc.write_all(&self.chunk)?;
+            enc.write_all(uncompressed)?;
             let (frame, result) = enc.finish();
             self.compressed = frame;
             result?;
         }
         let compression = self.compression;
-        let records: &[u8] = match compression {
-            ChunkCompression::None => &self.chunk,
-            ChunkCompression::Lz4 => &self.compressed,
+        let records_len = match compression {
+            ChunkCompression::None => uncompressed_size,
+            ChunkCompression::Lz4 => self.compressed.len() as u64,
         };
         let name = compression.name();
-        let content_len = 8 + 8 + 8 + 4 + 4 + name.len() as u64 + 8 + records.len() as u64;
+        let content_len = 8 + 8 + 8 + 4 + 4 + name.len() as u64 + 8 + records_len;
         let chunk_start = self.pos;
         self.scratch.clear();
         self.scratch.push(op::CHUNK);
@@ -329,20 +340,27 @@ impl McapFile {
         put_u64(&mut self.scratch, uncompressed_size);
         put_u32(&mut self.scratch, uncompressed_crc);
         put_str(&mut self.scratch, name);
-        put_u64(&mut self.scratch, records.len() as u64);
-        let written = self
-            .out
-            .write_all(&self.scratch)
-            .and_then(|()| self.out.write_all(records));
-        let chunk_len = self.scratch.len() as u64 + records.len() as u64;
+        put_u64(&mut self.scratch, records_len);
+        let written = match compression {
+            // The header in the room before the records: one write.
+            ChunkCompression::None => {
+                self.chunk[..CHUNK_PREFIX].copy_from_slice(&self.scratch);
+                self.out.write_all(&self.chunk)
+            }
+            ChunkCompression::Lz4 => self
+                .out
+                .write_all(&self.scratch)
+                .and_then(|()| self.out.write_all(&self.compressed)),
+        };
+        let chunk_len = self.scratch.len() as u64 + records_len;
         self.scratch.clear();
         if let Err(e) = written {
             // The file is as far as it got; the next chunk starts afresh.
-            self.chunk.clear();
+            self.chunk.truncate(CHUNK_PREFIX);
             return Err(e);
         }
         self.pos += chunk_len;
-        let compressed_size = records.len() as u64;
+        let compressed_size = records_len;
         record(&mut self.chunk_indexes, op::CHUNK_INDEX, |b| {
             put_u64(b, start_ns);
             put_u64(b, end_ns);
@@ -354,7 +372,7 @@ impl McapFile {
             put_u64(b, compressed_size);
             put_u64(b, uncompressed_size);
         });
-        self.chunk.clear();
+        self.chunk.truncate(CHUNK_PREFIX);
         self.chunk_count += 1;
         self.message_times = Some(match self.message_times {
             None => (start_ns, end_ns),
