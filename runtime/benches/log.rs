@@ -1,6 +1,6 @@
 //! The flight log's cost: writing ticks (per tick, and one hour = 360,000 ticks at 100 Hz with
 //! two actors), with and without LZ4 chunks, and reading the hour back; and what each group of
-//! JSON topics adds to the hour (`log_hour_without`: the hour with that group's rate set to
+//! plot topics (`/tf`, `/measurement`, the 10 Hz plots; CDR) adds to the hour (`log_hour_without`: the hour with that group's rate set to
 //! nothing, so the difference with `log_hour/write_none` is the group's cost).
 //!
 //! Run: `cargo bench -p dronecine-runtime --bench log`.
@@ -272,7 +272,7 @@ fn bench(c: &mut Criterion) {
     });
     group.finish();
 
-    // What each group of JSON topics costs: the hour with that group off (a rate of one
+    // What each group of plot topics costs: the hour with that group off (a rate of one
     // message in a thousand hours: the first tick's only).
     let mut group = c.benchmark_group("log_hour_without");
     group.sample_size(10);
@@ -302,7 +302,7 @@ fn bench(c: &mut Criterion) {
             },
         ),
         (
-            "all_json",
+            "all_plots",
             LogOptions {
                 tf_hz: NEVER_HZ,
                 measurement_hz: NEVER_HZ,
