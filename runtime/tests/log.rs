@@ -1211,3 +1211,52 @@ fn the_log_threads_yield_to_the_loop() {
     );
     sink.finish().unwrap();
 }
+
+/// The log reserves its disk space ahead of its writes (Linux: `fallocate`, the size kept)
+/// and a finished log gives back what it did not use: its size is its data, and it holds
+/// no more disk than that. A log cut by a crash keeps its size too (it reads whole), with
+/// at most the reservation step allocated beyond it.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_log_holds_the_disk_it_uses_once_finished() {
+    use std::os::unix::fs::MetadataExt;
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let ticks: Vec<Tick> = (0..18_000).map(flight_tick).collect();
+    let allocated = |path: &Path| std::fs::metadata(path).unwrap().blocks() * 512;
+    let size = |path: &Path| std::fs::metadata(path).unwrap().len();
+
+    let cut = dir.path().join("cut.mcap");
+    let mut w = FlightLogWriter::create(&cut, &header(), &scene_of(&names)).unwrap();
+    for t in &ticks {
+        w.write_tick(&t.record()).unwrap();
+    }
+    // Nothing past the data is readable: the size is what was written.
+    let written = size(&cut);
+    assert!(
+        written > 8 << 20,
+        "{written} bytes: more than one reservation step"
+    );
+    let reserved = allocated(&cut);
+    std::mem::forget(w); // a crash
+    assert!(
+        reserved <= written + (8 << 20) + (1 << 20),
+        "{reserved} for {written}"
+    );
+    let log = FlightLog::open(&cut).unwrap();
+    assert!(log.truncated);
+    assert!(log.ticks.len() >= ticks.len() - 100, "{}", log.ticks.len());
+
+    let whole = dir.path().join("whole.mcap");
+    let mut w = FlightLogWriter::create(&whole, &header(), &scene_of(&names)).unwrap();
+    for t in &ticks[..2_000] {
+        w.write_tick(&t.record()).unwrap();
+    }
+    w.finish().unwrap();
+    let (len, blocks) = (size(&whole), allocated(&whole));
+    assert!(
+        blocks <= len.next_multiple_of(64 << 10),
+        "a finished log of {len} bytes holds {blocks} bytes of disk"
+    );
+    assert!(!FlightLog::open(&whole).unwrap().truncated);
+}

@@ -3,7 +3,17 @@
 //! The flight log writes every tick's messages into a chunk held in memory and writes the chunk
 //! whole when a flush is due (see the `log` module doc). This writer does exactly that and no
 //! more: each message is copied once, into the chunk buffer; the chunk is hashed once (its
-//! `uncompressed_crc`), and written to the file with its header in two writes.
+//! `uncompressed_crc`), and written to the file with its header in one write (uncompressed:
+//! the header is filled into room kept before the records).
+//!
+//! On Linux the file's disk space is reserved ahead of the writes, [`RESERVE_STEP`] at a time
+//! (`fallocate` keeping the size, best effort): the kernel then copies each chunk into blocks
+//! already allocated instead of reserving them chunk by chunk. [`McapFile::finish`] truncates
+//! the file to its data, which frees what was reserved and not written; a file cut by a crash
+//! keeps its size (its data) and up to [`RESERVE_STEP`] of reserved space after it, freed when
+//! the file is truncated or copied. Measured on the hour's flight with its log (10
+//! interleaved runs each, 2 cores, ext4): median 0.500 → 0.478 s; a Python check on the same
+//! disk, 288 MB in 80 kB writes: 0.086 → 0.064 s of system time.
 //!
 //! Why not the `mcap` crate's writer, which `compile` uses: for an uncompressed chunk (0.26)
 //! it copies every byte into two hashing buffers and the chunk buffer and hashes it twice (the
@@ -119,6 +129,9 @@ fn too_long(what: &str) -> io::Error {
     )
 }
 
+/// Disk space reserved ahead of the writes at a time (see the module doc).
+pub const RESERVE_STEP: u64 = 8 << 20;
+
 /// Bytes of an uncompressed Chunk record before its records: the opcode, the length, the
 /// start and end times, the uncompressed size and CRC, the compression's (empty) name with
 /// its length, the records' length.
@@ -160,6 +173,9 @@ pub struct McapFile {
     /// Scratch for records written outside chunks.
     scratch: Vec<u8>,
     finished: bool,
+    /// The file's disk space reserved so far (from 0); `None` once the file system said it
+    /// cannot reserve (no more tries).
+    reserved: Option<u64>,
 }
 
 impl McapFile {
@@ -193,6 +209,7 @@ impl McapFile {
             metadata_count: 0,
             scratch: Vec::new(),
             finished: false,
+            reserved: Some(0),
         };
         f.scratch.extend_from_slice(MAGIC);
         record(&mut f.scratch, op::HEADER, |b| {
@@ -341,6 +358,7 @@ impl McapFile {
         put_u32(&mut self.scratch, uncompressed_crc);
         put_str(&mut self.scratch, name);
         put_u64(&mut self.scratch, records_len);
+        self.reserve(self.pos + self.scratch.len() as u64 + records_len);
         let written = match compression {
             // The header in the room before the records: one write.
             ChunkCompression::None => {
@@ -379,6 +397,19 @@ impl McapFile {
             Some((lo, hi)) => (lo.min(start_ns), hi.max(end_ns)),
         });
         Ok(())
+    }
+
+    /// Reserves the file's disk space up to at least `end` (see the module doc); best effort.
+    fn reserve(&mut self, end: u64) {
+        let Some(reserved) = self.reserved else {
+            return;
+        };
+        if end <= reserved {
+            return;
+        }
+        let step = (end - reserved).div_ceil(RESERVE_STEP) * RESERVE_STEP;
+        self.reserved =
+            reserve_space(self.out.get_ref(), reserved, step).then_some(reserved + step);
     }
 
     /// Closes the open chunk and hands everything written to the OS (no `fsync`).
@@ -522,6 +553,10 @@ impl McapFile {
         self.scratch = summary;
         self.put_scratch()?;
         self.out.flush()?;
+        if self.reserved.is_some_and(|r| r > self.pos) {
+            // Frees the space reserved after the data (the size does not change).
+            self.out.get_ref().set_len(self.pos)?;
+        }
         self.finished = true;
         Ok(())
     }
@@ -530,6 +565,24 @@ impl McapFile {
     pub fn into_file(self) -> io::Result<File> {
         self.out.into_inner().map_err(|e| e.into_error())
     }
+}
+
+/// Reserves `len` bytes of disk space for `file` from `offset`, its size unchanged; whether
+/// the file system did (elsewhere than Linux: never).
+#[cfg(target_os = "linux")]
+fn reserve_space(file: &File, offset: u64, len: u64) -> bool {
+    use std::os::fd::AsRawFd;
+    let (Ok(offset), Ok(len)) = (libc::off_t::try_from(offset), libc::off_t::try_from(len)) else {
+        return false;
+    };
+    // SAFETY: `fallocate` on a descriptor this `File` owns and keeps open for the call; it
+    // reads and writes no memory of the program.
+    unsafe { libc::fallocate(file.as_raw_fd(), libc::FALLOC_FL_KEEP_SIZE, offset, len) == 0 }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn reserve_space(_file: &File, _offset: u64, _len: u64) -> bool {
+    false
 }
 
 fn write_schema(buf: &mut Vec<u8>, id: u16, s: &Schema) {

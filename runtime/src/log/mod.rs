@@ -57,7 +57,10 @@
 //! ([`LogOptions`]). `shoot` writes through [`LogThread`], which hands the ticks to a writer
 //! thread every quarter second (taken up within 20 ms) and closes chunks every 0.73 s, so a
 //! crash of the process loses at most the last second; [`FlightLog::open`] reads every complete
-//! chunk before the cut and sets [`FlightLog::truncated`]. Damage inside the file (a bad
+//! chunk before the cut and sets [`FlightLog::truncated`]. (The writer reserves the file's
+//! disk space 8 MB ahead, its size unchanged, and gives back what it did not use when it
+//! finishes; a crash-cut log keeps up to 8 MB reserved after its data, freed when the file is
+//! truncated or copied.) Damage inside the file (a bad
 //! sector, a corrupt copy) costs the chunks it touches: the reader skips to the next intact
 //! chunk and reads on. A power cut may lose what the OS had not yet written.
 
