@@ -3,10 +3,11 @@
 //!
 //! Per tick the writer encodes `/servo/tick` (`cdr.rs`) and, at the plot and `/tf` rates,
 //! the plot topics (`plots.rs`, and the compiler's writers for `/reference`, `/actors` and
-//! `/tf`), all CDR, each into one reused buffer handed to the MCAP writer, whose in-memory
-//! chunk buffer is reused from chunk to chunk ([`McapFile`], written for this path: each
-//! message copied once and each chunk hashed once); chunks carry no message indexes (readers
-//! scan the ≤ 1 s chunks). Nothing on the per-tick path allocates. Only `/events` is JSON.
+//! `/tf`), all CDR, each straight into the MCAP writer's in-memory chunk (`/tf` and
+//! `/events` through one reused buffer), which is reused from chunk to chunk ([`McapFile`],
+//! written for this path: each chunk hashed once and written with one system call); chunks
+//! carry no message indexes (readers scan the ≤ 1 s chunks). Nothing on the per-tick path
+//! allocates. Only `/events` is JSON.
 
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -432,19 +433,22 @@ impl FlightLogWriter {
         // /reference and /actors, exactly as compile writes them.
         if due(self.next_reference_s) {
             self.next_reference_s = advance(self.next_reference_s, t_s, hz);
-            self.buf.clear();
-            write_reference(&mut self.buf, tick.sample);
-            self.put_buf(|c| &mut c.reference, ns)?;
-            self.buf.clear();
-            write_actors(&mut self.buf, t_s, &self.actor_names, tick.actors);
-            self.put_buf(|c| &mut c.actors, ns)?;
+            let (w, path, channels) = (&mut self.writer, &self.path, &mut self.channels);
+            put_with(w, path, &mut channels.reference, ns, |b| {
+                write_reference(b, tick.sample)
+            })?;
+            put_with(w, path, &mut channels.actors, ns, |b| {
+                write_actors(b, t_s, &self.actor_names, tick.actors)
+            })?;
         }
         if let Some(out) = output {
             if due(self.next_estimate_s) {
                 self.next_estimate_s = advance(self.next_estimate_s, t_s, hz);
-                self.buf.clear();
-                plots::estimate(&mut self.buf, t_s, &out.estimate);
-                self.put_buf(|c| &mut c.estimate, ns)?;
+                let (w, path, channel) =
+                    (&mut self.writer, &self.path, &mut self.channels.estimate);
+                put_with(w, path, channel, ns, |b| {
+                    plots::estimate(b, t_s, &out.estimate)
+                })?;
             }
             self.last_estimate = Some((out.estimate.position_m, out.estimate.heading_rad));
         }
@@ -453,9 +457,9 @@ impl FlightLogWriter {
             if due(self.next_measurement_s) {
                 self.next_measurement_s =
                     advance(self.next_measurement_s, t_s, self.options.measurement_hz);
-                self.buf.clear();
-                plots::measurement(&mut self.buf, frame);
-                self.put_buf(|c| &mut c.measurement, ns)?;
+                let (w, path) = (&mut self.writer, &self.path);
+                let channel = &mut self.channels.measurement;
+                put_with(w, path, channel, ns, |b| plots::measurement(b, frame))?;
             }
         }
 
@@ -463,27 +467,22 @@ impl FlightLogWriter {
         if due(self.next_command_s) || failsafe || self.command_failsafe {
             self.next_command_s = advance(self.next_command_s, t_s, hz);
             self.command_failsafe = failsafe;
-            self.buf.clear();
-            plots::command(&mut self.buf, t_s, output, &tick.command_sent, failsafe);
-            self.put_buf(|c| &mut c.command, ns)?;
+            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.command);
+            put_with(w, path, channel, ns, |b| {
+                plots::command(b, t_s, output, &tick.command_sent, failsafe)
+            })?;
         }
 
         if !tick.framing.is_empty() && due(self.next_framing_s) {
             self.next_framing_s = advance(self.next_framing_s, t_s, hz);
-            self.buf.clear();
-            plots::framing(
-                &mut self.buf,
-                t_s,
-                tick.shot,
-                &self.actor_names,
-                tick.framing,
-            );
-            self.put_buf(|c| &mut c.framing, ns)?;
+            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.framing);
+            put_with(w, path, channel, ns, |b| {
+                plots::framing(b, t_s, tick.shot, &self.actor_names, tick.framing)
+            })?;
         }
 
-        self.buf.clear();
-        cdr::encode(&mut self.buf, tick);
-        self.put_buf(|c| &mut c.servo_tick, ns)?;
+        let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.servo_tick);
+        put_with(w, path, channel, ns, |b| cdr::encode(b, tick))?;
 
         if t_s >= self.next_tf_s || !t_s.is_finite() {
             self.next_tf_s = advance(self.next_tf_s, t_s, self.options.tf_hz);
@@ -611,6 +610,24 @@ impl Drop for FlightLogWriter {
             let _ = writer.finish();
         }
     }
+}
+
+/// Puts a message on a channel, encoded by `encode` straight into the open chunk (a free
+/// function, so that `encode` may borrow the writer's other fields).
+fn put_with(
+    writer: &mut Option<McapFile>,
+    path: &Path,
+    channel: &mut Channel,
+    ns: u64,
+    encode: impl FnOnce(&mut Vec<u8>),
+) -> io::Result<()> {
+    let header = channel.header(ns);
+    let writer = writer.as_mut().ok_or_else(|| {
+        io::Error::other(format!("cannot write {}: log finished", path.display()))
+    })?;
+    writer
+        .write_message_with(&header, encode)
+        .map_err(|e| annotate(path, e))
 }
 
 /// The metadata map: each field of the header under its name, its value the field's JSON.
