@@ -102,10 +102,35 @@ impl<'a> Cdr<'a> {
         self
     }
 
+    /// Strings encoded once ([`Strings`]), appended again.
+    pub fn strings(&mut self, pre: &Strings) -> &mut Self {
+        self.align(4);
+        self.buf.extend_from_slice(&pre.0);
+        self
+    }
+
     /// `builtin_interfaces/Time` of a time in nanoseconds.
     pub fn time(&mut self, ns: u64) -> &mut Self {
         let sec = i32::try_from(ns / 1_000_000_000).unwrap_or(i32::MAX);
         self.i32(sec).u32((ns % 1_000_000_000) as u32)
+    }
+}
+
+/// Consecutive `string` fields encoded once, for messages that repeat them ([`Cdr::strings`]).
+/// A string is 4-aligned (its length) and then bytes, so a run of strings encoded from a
+/// 4-aligned start has the same bytes, padding included, at any 4-aligned position.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Strings(Vec<u8>);
+
+impl Strings {
+    pub fn new(strings: &[&str]) -> Strings {
+        let mut buf = Vec::new();
+        let mut m = Cdr::new(&mut buf);
+        for s in strings {
+            m.string(s);
+        }
+        buf.drain(..HEADER.len());
+        Strings(buf)
     }
 }
 
@@ -296,6 +321,25 @@ mod tests {
         let mut no_nul = buf.clone();
         no_nul[8 + 5] = b'!';
         assert!(CdrReader::new(&no_nul).unwrap().string("s").is_err());
+    }
+
+    #[test]
+    fn strings_encoded_once_are_the_strings_at_any_aligned_place() {
+        let pre = Strings::new(&["world", "actor/Bo"]);
+        for lead in 0..8u8 {
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            let mut m = Cdr::new(&mut a);
+            (0..lead).for_each(|_| {
+                m.u8(7);
+            });
+            m.strings(&pre).f64(1.0);
+            let mut m = Cdr::new(&mut b);
+            (0..lead).for_each(|_| {
+                m.u8(7);
+            });
+            m.string("world").string("actor/Bo").f64(1.0);
+            assert_eq!(a, b, "after {lead} bytes");
+        }
     }
 
     #[test]

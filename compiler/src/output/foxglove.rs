@@ -626,8 +626,8 @@ pub fn camera_calibration(ns: u64, lens: &Lens) -> Vec<u8> {
 /// the latest message of each topic) exact; a frame that never moves is published once, at
 /// the first tick. Messages are `foxglove_msgs/msg/FrameTransforms` in CDR.
 pub struct FrameTopic {
-    parent: String,
-    child: String,
+    /// `parent_frame_id` and `child_frame_id`, encoded once.
+    names: cdr::Strings,
     /// The rounded transform last published (`None`: never).
     last: Option<[f64; 7]>,
     /// Time of the last publication.
@@ -666,8 +666,7 @@ fn rounded(t: [f64; 3], q: Quat) -> [f64; 7] {
 impl FrameTopic {
     pub fn new(parent: &str, child: &str) -> Self {
         Self {
-            parent: parent.to_string(),
-            child: child.to_string(),
+            names: cdr::Strings::new(&[parent, child]),
             last: None,
             last_ns: 0,
         }
@@ -705,10 +704,7 @@ impl FrameTopic {
     }
 
     fn transform(&self, m: &mut cdr::Cdr, ns: u64, pose: &[f64; 7]) {
-        m.time(ns)
-            .string(&self.parent)
-            .string(&self.child)
-            .f64s(pose);
+        m.time(ns).strings(&self.names).f64s(pose);
     }
 }
 
