@@ -20,29 +20,6 @@ const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 const RATE_HZ: f64 = 100.0;
 const SCRIPT: &str = "stage 8m x 6m x 3m\nactor A height 1.80m at (0, 0) facing 0deg\n";
 
-/// A `FrameTransforms` CDR message in the shape of Foxglove's JSON schema.
-fn tf_value(data: &[u8]) -> Value {
-    let transforms: Vec<Value> = foxglove::decode_frame_transforms(data)
-        .unwrap()
-        .into_iter()
-        .map(|t| {
-            let [x, y, z] = t.translation;
-            let [qx, qy, qz, qw] = t.rotation;
-            serde_json::json!({
-                "timestamp": {
-                    "sec": t.timestamp_ns / 1_000_000_000,
-                    "nsec": t.timestamp_ns % 1_000_000_000
-                },
-                "parent_frame_id": t.parent_frame_id,
-                "child_frame_id": t.child_frame_id,
-                "translation": { "x": x, "y": y, "z": z },
-                "rotation": { "x": qx, "y": qy, "z": qz, "w": qw }
-            })
-        })
-        .collect();
-    serde_json::json!({ "transforms": transforms })
-}
-
 fn names() -> Vec<String> {
     // A quote in a name exercises the JSON escaping.
     vec!["A".to_string(), "Bo \"B\"".to_string()]
@@ -277,6 +254,8 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
     let mut reference_msgs = Vec::new();
     let mut actor_msgs = Vec::new();
     let mut by_topic: BTreeMap<String, Vec<(u64, Value)>> = BTreeMap::new();
+    let mut tf_by_topic: BTreeMap<String, Vec<(u64, Vec<foxglove::FrameTransform>)>> =
+        BTreeMap::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
         assert_eq!(m.log_time, m.publish_time);
@@ -295,17 +274,16 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
             _ => {}
         }
         if m.channel.message_encoding == "cdr" {
-            // The transforms, in their ros2msg schema's field order (decoded, they take
-            // the JSON shape of the checks below).
+            // The transforms.
             assert_eq!(
                 std::str::from_utf8(schema).unwrap(),
                 foxglove::frame_transforms_schema()
             );
-            let value = tf_value(&m.data);
-            by_topic
+            let transforms = foxglove::decode_frame_transforms(&m.data).unwrap();
+            tf_by_topic
                 .entry(m.channel.topic.clone())
                 .or_default()
-                .push((m.log_time, value));
+                .push((m.log_time, transforms));
             continue;
         }
         let value: Value = serde_json::from_slice(&m.data).unwrap_or_else(|e| {
@@ -385,26 +363,16 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
             .find(|(s, _)| ns(s.t_s) == ns_)
             .unwrap_or_else(|| panic!("no sample at {ns_} ns"))
     };
-    let stamp = |t: &Value| {
-        t["timestamp"]["sec"].as_u64().unwrap() * 1_000_000_000
-            + t["timestamp"]["nsec"].as_u64().unwrap()
-    };
-    let translation = |t: &Value| {
-        [
-            t["translation"]["x"].as_f64().unwrap(),
-            t["translation"]["y"].as_f64().unwrap(),
-            t["translation"]["z"].as_f64().unwrap(),
-        ]
-    };
     let mm = |a: [f64; 3], b: [f64; 3]| (0..3).all(|i| (a[i] - b[i]).abs() <= 5e-4);
-    let ticks: Vec<u64> = by_topic["/tf/drone"].iter().map(|(t, _)| *t).collect();
+    let ticks: Vec<u64> = tf_by_topic["/tf/drone"].iter().map(|(t, _)| *t).collect();
     assert!((74..=76).contains(&ticks.len()), "{} ticks", ticks.len());
     assert!(ticks.windows(2).all(|w| {
         let dt = (w[1] - w[0]) as f64 / 1e9;
         (0.03..=0.04).contains(&dt)
     }));
     assert_eq!(ticks[0], 0);
-    let log_times = |topic: &str| -> Vec<u64> { by_topic[topic].iter().map(|(t, _)| *t).collect() };
+    let log_times =
+        |topic: &str| -> Vec<u64> { tf_by_topic[topic].iter().map(|(t, _)| *t).collect() };
     assert_eq!(log_times("/tf/actor/A"), ticks);
     assert_eq!(log_times("/tf/camera"), [ticks[0]]);
     let b_ticks: Vec<u64> = std::iter::once(ticks[0])
@@ -422,28 +390,29 @@ fn mcap_holds_the_reference_actors_scene_metadata_and_script() {
         ("/tf/actor/A", "world", "actor/A", Some(0)),
         ("/tf/actor/Bo \"B\"", "world", "actor/Bo \"B\"", Some(1)),
     ] {
-        for (log_time, tf) in &by_topic[topic] {
-            let transforms = tf["transforms"].as_array().unwrap();
+        for (log_time, transforms) in &tf_by_topic[topic] {
             let (s, actors) = sample_at(*log_time);
             let last = transforms.last().unwrap();
-            assert_eq!(stamp(last), *log_time);
+            assert_eq!(last.timestamp_ns, *log_time);
             let expected = match index {
                 None if child == "drone" => s.position_m,
                 None => [0.0; 3],
                 Some(i) => actors[i].position_m,
             };
-            assert!(mm(translation(last), expected), "{topic} at {log_time}");
+            assert!(mm(last.translation, expected), "{topic} at {log_time}");
             for t in transforms {
-                assert_eq!(t["parent_frame_id"], parent);
-                assert_eq!(t["child_frame_id"], child);
+                assert_eq!(
+                    (t.parent_frame_id.as_str(), t.child_frame_id.as_str()),
+                    (parent, child)
+                );
             }
             // B's first step: held still at the previous tick, then where it is.
             let held = *log_time == b_ticks[1] && index == Some(1);
             assert_eq!(transforms.len(), if held { 2 } else { 1 }, "{topic}");
             if held {
                 let previous = ticks[ticks.iter().position(|t| t == log_time).unwrap() - 1];
-                assert_eq!(stamp(&transforms[0]), previous);
-                assert!(mm(translation(&transforms[0]), [2.5, 0.0, 0.0]));
+                assert_eq!(transforms[0].timestamp_ns, previous);
+                assert!(mm(transforms[0].translation, [2.5, 0.0, 0.0]));
             }
         }
     }

@@ -182,8 +182,8 @@ impl std::error::Error for SessionError {}
 
 /// Whether a simulated flight gains by stepping its director on a thread of its own
 /// ([`SimConfig::actors_ahead`]): when the machine has a second core. Measured on the hour's
-/// flight (the `flight` bench) on two cores, 2026-11-27: without its log 0.480 → 0.356 s
-/// with the director ahead; with its log 0.578 → 0.521 s (0.85 → 0.88 s of CPU on all
+/// flight (the `flight` bench) on two cores, 2026-11-27: without its log 0.453 → 0.337 s
+/// with the director ahead; with its log 0.483 → 0.446 s (0.68 → 0.75 s of CPU on all
 /// threads). Before the log's plot topics were CDR (JSON text then), the log's writer needed
 /// the second core to itself and the director ahead made the flight with its log slower
 /// (0.512 → 0.695 s). On one core the threads only take turns. `shoot` asks it.

@@ -57,28 +57,27 @@ impl<'a> Cdr<'a> {
         self.u8(u8::from(x))
     }
 
-    pub fn u32(&mut self, x: u32) -> &mut Self {
-        self.align(4);
-        self.buf.extend_from_slice(&x.to_le_bytes());
+    /// A primitive's little-endian bytes, aligned to its size.
+    fn put<const N: usize>(&mut self, bytes: [u8; N]) -> &mut Self {
+        self.align(N);
+        self.buf.extend_from_slice(&bytes);
         self
+    }
+
+    pub fn u32(&mut self, x: u32) -> &mut Self {
+        self.put(x.to_le_bytes())
     }
 
     pub fn i32(&mut self, x: i32) -> &mut Self {
-        self.align(4);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-        self
+        self.put(x.to_le_bytes())
     }
 
     pub fn u64(&mut self, x: u64) -> &mut Self {
-        self.align(8);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-        self
+        self.put(x.to_le_bytes())
     }
 
     pub fn f64(&mut self, x: f64) -> &mut Self {
-        self.align(8);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-        self
+        self.put(x.to_le_bytes())
     }
 
     /// Consecutive `float64`s (a fixed array, or fields in a row).
@@ -184,27 +183,27 @@ impl<'a> CdrReader<'a> {
         }
     }
 
+    /// A primitive's bytes, aligned to its size.
+    fn get<const N: usize>(&mut self, what: &str) -> Result<[u8; N], String> {
+        let mut bytes = [0u8; N];
+        bytes.copy_from_slice(self.take(N, N, what)?);
+        Ok(bytes)
+    }
+
     pub fn u32(&mut self, what: &str) -> Result<u32, String> {
-        let b = self.take(4, 4, what)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        self.get(what).map(u32::from_le_bytes)
     }
 
     pub fn i32(&mut self, what: &str) -> Result<i32, String> {
-        Ok(self.u32(what)? as i32)
+        self.get(what).map(i32::from_le_bytes)
     }
 
     pub fn u64(&mut self, what: &str) -> Result<u64, String> {
-        let b = self.take(8, 8, what)?;
-        let mut a = [0u8; 8];
-        a.copy_from_slice(b);
-        Ok(u64::from_le_bytes(a))
+        self.get(what).map(u64::from_le_bytes)
     }
 
     pub fn f64(&mut self, what: &str) -> Result<f64, String> {
-        let b = self.take(8, 8, what)?;
-        let mut a = [0u8; 8];
-        a.copy_from_slice(b);
-        Ok(f64::from_le_bytes(a))
+        self.get(what).map(f64::from_le_bytes)
     }
 
     pub fn f64s<const N: usize>(&mut self, what: &str) -> Result<[f64; N], String> {
@@ -253,7 +252,8 @@ impl<'a> CdrReader<'a> {
         Ok(sec as u64 * 1_000_000_000 + u64::from(nsec))
     }
 
-    /// Whether every byte was read (trailing padding of less than 8 bytes allowed).
+    /// An error if more than padding is left unread: at most 7 bytes may follow the last
+    /// field (a writer may pad a message's end to its alignment).
     pub fn finish(&self, what: &str) -> Result<(), String> {
         let left = self.data.len() - self.at;
         if left >= 8 {

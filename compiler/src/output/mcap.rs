@@ -171,6 +171,32 @@ fn mcap_err(dest: &Path, e: McapError) -> io::Error {
     }
 }
 
+/// How a channel's messages are encoded: CDR with a `ros2msg` schema (the topics written
+/// every sample or tick) or JSON with a JSON schema (those written once, and events).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    Cdr,
+    Json,
+}
+
+impl Encoding {
+    /// The MCAP schema encoding.
+    pub fn schema(self) -> &'static str {
+        match self {
+            Encoding::Cdr => cdr::SCHEMA_ENCODING,
+            Encoding::Json => "jsonschema",
+        }
+    }
+
+    /// The MCAP message encoding.
+    pub fn message(self) -> &'static str {
+        match self {
+            Encoding::Cdr => cdr::MESSAGE_ENCODING,
+            Encoding::Json => "json",
+        }
+    }
+}
+
 /// A channel and its message sequence counter.
 /// An MCAP channel being written: its id and the sequence number of its last message
 /// (shared with the runtime's flight log).
@@ -282,32 +308,31 @@ impl McapWriter {
             .map_err(err)?;
 
         let no_meta = BTreeMap::new();
-        let mut channel = |schema_name: &str, schema: String, topic: &str| {
-            // The per-sample topics in CDR, the others JSON.
-            let (schema_encoding, message_encoding) = if schema_name.starts_with("dronecine/") {
-                (cdr::SCHEMA_ENCODING, cdr::MESSAGE_ENCODING)
-            } else {
-                ("jsonschema", "json")
-            };
-            let schema_id = writer.add_schema(schema_name, schema_encoding, schema.as_bytes())?;
-            let id = writer.add_channel(schema_id, topic, message_encoding, &no_meta)?;
+        let mut channel = |schema_name: &str, schema: String, topic: &str, enc: Encoding| {
+            let schema_id = writer.add_schema(schema_name, enc.schema(), schema.as_bytes())?;
+            let id = writer.add_channel(schema_id, topic, enc.message(), &no_meta)?;
             Ok::<_, McapError>(Channel::new(id))
         };
+        let (c, j) = (Encoding::Cdr, Encoding::Json);
         let scene = foxglove::scene_update_schema();
         let mut channels = Channels {
-            reference: channel(REFERENCE_SCHEMA, reference_schema(), "/reference").map_err(err)?,
-            actors: channel(ACTORS_SCHEMA, actors_schema(), "/actors").map_err(err)?,
-            camera: channel(CAMERA_SCHEMA, camera_schema(), "/camera").map_err(err)?,
-            tf: Vec::new(),
-            stage: channel(foxglove::SCENE_UPDATE, scene.clone(), "/scene/stage").map_err(err)?,
-            drone: channel(foxglove::SCENE_UPDATE, scene.clone(), "/scene/drone").map_err(err)?,
-            actor_scene: channel(foxglove::SCENE_UPDATE, scene.clone(), "/scene/actors")
+            reference: channel(REFERENCE_SCHEMA, reference_schema(), "/reference", c)
                 .map_err(err)?,
-            path: channel(foxglove::SCENE_UPDATE, scene, "/scene/path").map_err(err)?,
+            actors: channel(ACTORS_SCHEMA, actors_schema(), "/actors", c).map_err(err)?,
+            camera: channel(CAMERA_SCHEMA, camera_schema(), "/camera", j).map_err(err)?,
+            tf: Vec::new(),
+            stage: channel(foxglove::SCENE_UPDATE, scene.clone(), "/scene/stage", j)
+                .map_err(err)?,
+            drone: channel(foxglove::SCENE_UPDATE, scene.clone(), "/scene/drone", j)
+                .map_err(err)?,
+            actor_scene: channel(foxglove::SCENE_UPDATE, scene.clone(), "/scene/actors", j)
+                .map_err(err)?,
+            path: channel(foxglove::SCENE_UPDATE, scene, "/scene/path", j).map_err(err)?,
             calibration: channel(
                 foxglove::CAMERA_CALIBRATION,
                 foxglove::camera_calibration_schema(),
                 "/camera_calibration",
+                j,
             )
             .map_err(err)?,
         };
@@ -567,11 +592,11 @@ pub fn frame_topics<W: std::io::Write + std::io::Seek>(
 ) -> Result<(Vec<FrameTopic>, Vec<Channel>), McapError> {
     let schema = writer.add_schema(
         foxglove::FRAME_TRANSFORMS,
-        cdr::SCHEMA_ENCODING,
+        Encoding::Cdr.schema(),
         foxglove::frame_transforms_schema().as_bytes(),
     )?;
     frame_topics_with(actor_names, extra, |topic| {
-        writer.add_channel(schema, topic, cdr::MESSAGE_ENCODING, &BTreeMap::new())
+        writer.add_channel(schema, topic, Encoding::Cdr.message(), &BTreeMap::new())
     })
 }
 

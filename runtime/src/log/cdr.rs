@@ -22,11 +22,12 @@ use crate::frames::{ActorPose, Command};
 use crate::record::{FramingRecord, Phase, TickRecord};
 
 use super::LoggedTick;
+// The encapsulation header and the MCAP encodings: one source, the compiler's CDR writer.
+use dronecine_compiler::output::cdr::HEADER;
+pub use dronecine_compiler::output::cdr::{MESSAGE_ENCODING, SCHEMA_ENCODING};
 
 /// The schema's name (ROS 2 style, as Foxglove expects for `ros2msg`).
 pub const SCHEMA_NAME: &str = "dronecine/msg/ServoTick";
-pub const SCHEMA_ENCODING: &str = "ros2msg";
-pub const MESSAGE_ENCODING: &str = "cdr";
 
 /// The `ros2msg` definition; the comments give each field's byte offset after the header.
 pub const SCHEMA: &str = "\
@@ -100,7 +101,6 @@ const ACTOR_LEN: usize = 72;
 /// Bytes from one framing element to the next (the last one is 2 shorter).
 const FRAMED_STRIDE: usize = 40;
 const FRAMED_LEN: usize = 38;
-const HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Appends the CDR message of `tick` to `buf`.
 pub fn encode(buf: &mut Vec<u8>, tick: &TickRecord) {

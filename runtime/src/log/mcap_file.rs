@@ -294,15 +294,25 @@ impl McapFile {
         Ok(id)
     }
 
-    /// Appends a message to the open chunk, its data written by `encode` straight into the
-    /// chunk (appending to the buffer it is given; no copy through a message buffer), its
-    /// length filled in after. Otherwise as [`write_message`](Self::write_message).
+    /// Appends a message to the open chunk (nothing reaches the file before the next
+    /// [`flush`](Self::flush)), its data written by `encode` straight into the chunk
+    /// (appending to the buffer it is given; no copy through a message buffer), its length
+    /// filled in after. `header.channel_id` must be a registered channel.
     pub fn write_message_with(
         &mut self,
         header: &MessageHeader,
         encode: impl FnOnce(&mut Vec<u8>),
     ) -> io::Result<()> {
-        self.count_message(header)?;
+        let count = self
+            .channel_messages
+            .get_mut(usize::from(header.channel_id))
+            .ok_or_else(|| {
+                io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!("no channel {} in this MCAP file", header.channel_id),
+                )
+            })?;
+        *count += 1;
         let c = &mut self.chunk;
         let start = c.len();
         c.push(op::MESSAGE);
@@ -315,48 +325,18 @@ impl McapFile {
         encode(c);
         let len = MESSAGE_HEADER_LEN + (c.len() - data_start) as u64;
         c[start + 1..start + 9].copy_from_slice(&len.to_le_bytes());
-        self.note_time(header.log_time);
-        Ok(())
-    }
-
-    /// Counts a message on its channel (an unregistered channel is an error).
-    fn count_message(&mut self, header: &MessageHeader) -> io::Result<()> {
-        let count = self
-            .channel_messages
-            .get_mut(usize::from(header.channel_id))
-            .ok_or_else(|| {
-                io::Error::new(
-                    io::ErrorKind::InvalidInput,
-                    format!("no channel {} in this MCAP file", header.channel_id),
-                )
-            })?;
-        *count += 1;
-        Ok(())
-    }
-
-    /// Widens the open chunk's time range to `t`.
-    fn note_time(&mut self, t: u64) {
+        let t = header.log_time;
         self.chunk_times = Some(match self.chunk_times {
             None => (t, t),
             Some((lo, hi)) => (lo.min(t), hi.max(t)),
         });
+        Ok(())
     }
 
-    /// Appends a message to the open chunk (nothing reaches the file before the next
-    /// [`flush`](Self::flush)). `header.channel_id` must be a registered channel.
-    pub fn write_message(&mut self, header: &MessageHeader, data: &[u8]) -> io::Result<()> {
-        self.count_message(header)?;
-        let c = &mut self.chunk;
-        c.reserve(9 + MESSAGE_HEADER_LEN as usize + data.len());
-        c.push(op::MESSAGE);
-        c.extend_from_slice(&(MESSAGE_HEADER_LEN + data.len() as u64).to_le_bytes());
-        c.extend_from_slice(&header.channel_id.to_le_bytes());
-        c.extend_from_slice(&header.sequence.to_le_bytes());
-        c.extend_from_slice(&header.log_time.to_le_bytes());
-        c.extend_from_slice(&header.publish_time.to_le_bytes());
-        c.extend_from_slice(data);
-        self.note_time(header.log_time);
-        Ok(())
+    /// [`write_message_with`](Self::write_message_with) of bytes already encoded.
+    #[cfg(test)]
+    fn write_message(&mut self, header: &MessageHeader, data: &[u8]) -> io::Result<()> {
+        self.write_message_with(header, |c| c.extend_from_slice(data))
     }
 
     /// Writes the open chunk (if it holds anything) to the file's buffer.

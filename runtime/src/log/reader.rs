@@ -18,6 +18,7 @@ use std::fs::File;
 use std::io::{self, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
+use dronecine_compiler::output::mcap::Encoding;
 use mcap::records::Record;
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::McapError;
@@ -613,7 +614,9 @@ impl ReadState {
                     topic::EVENTS => Some(Wanted::Event),
                     // JSON framing at every tick: a log written before the framing moved
                     // to `/servo/tick` (a newer log's `/framing` is CDR, for plots only).
-                    topic::FRAMING if channel.message_encoding == "json" => Some(Wanted::Framing),
+                    topic::FRAMING if channel.message_encoding == Encoding::Json.message() => {
+                        Some(Wanted::Framing)
+                    }
                     _ => None,
                 };
                 if let Some(w) = wanted {

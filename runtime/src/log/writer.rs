@@ -3,8 +3,9 @@
 //!
 //! Per tick the writer encodes `/servo/tick` (`cdr.rs`) and, at the plot and `/tf` rates,
 //! the plot topics (`plots.rs`, and the compiler's writers for `/reference`, `/actors` and
-//! `/tf`), all CDR, each straight into the MCAP writer's in-memory chunk (`/tf` and
-//! `/events` through one reused buffer), which is reused from chunk to chunk ([`McapFile`],
+//! `/tf`), all CDR, each straight into the MCAP writer's in-memory chunk (`/tf` through one
+//! reused buffer: a frame's message exists only once it is known to have moved), which is
+//! reused from chunk to chunk ([`McapFile`],
 //! written for this path: each chunk hashed once and written with one system call); chunks
 //! carry no message indexes (readers scan the ≤ 1 s chunks). Nothing on the per-tick path
 //! allocates. Only `/events` is JSON.
@@ -18,9 +19,10 @@ use dronecine_compiler::camera::Lens;
 use dronecine_compiler::output::foxglove::{self, FrameTopic};
 use dronecine_compiler::output::mcap::{
     actors_schema, advance, camera_message, camera_schema, frame_topics_with, reference_schema,
-    write_actors, write_reference, Channel, ACTORS_SCHEMA, CAMERA_SCHEMA, REFERENCE_SCHEMA,
+    write_actors, write_reference, Channel, Encoding, ACTORS_SCHEMA, CAMERA_SCHEMA,
+    REFERENCE_SCHEMA,
 };
-use dronecine_compiler::output::{self, json, ns_from_s};
+use dronecine_compiler::output::{json, ns_from_s};
 
 use super::mcap_file::{ChunkCompression, McapFile};
 use super::plots::{self, same_command};
@@ -122,7 +124,7 @@ pub struct FlightLogWriter {
     actor_names: Vec<String>,
     /// Heights last published on `/scene/actors`.
     heights_m: Vec<f64>,
-    /// The reused message buffer.
+    /// The reused buffer of `/tf` messages ([`FrameTopic::message`] fills it).
     buf: Vec<u8>,
     next_tf_s: f64,
     /// When the plot topics are next due (`plot_hz`; `/measurement` at `measurement_hz`):
@@ -218,70 +220,59 @@ impl FlightLogWriter {
         )
         .map_err(err)?;
 
-        // `/servo/tick` in CDR with a ros2msg schema (see `cdr`); the others JSON.
-        let servo_tick = {
-            let schema_id = writer
-                .add_schema(
-                    cdr::SCHEMA_NAME,
-                    cdr::SCHEMA_ENCODING,
-                    cdr::SCHEMA.as_bytes(),
-                )
-                .map_err(err)?;
-            let id = writer
-                .add_channel(schema_id, topic::SERVO_TICK, cdr::MESSAGE_ENCODING)
-                .map_err(err)?;
-            Channel::new(id)
-        };
-        let mut channel = |schema_name: &str, schema: String, topic: &str| {
-            // The per-tick topics in CDR (`dronecine/msg/…`), the others JSON.
-            let (schema_encoding, message_encoding) = if schema_name.starts_with("dronecine/") {
-                (output::cdr::SCHEMA_ENCODING, output::cdr::MESSAGE_ENCODING)
-            } else {
-                ("jsonschema", "json")
-            };
-            let schema_id = writer.add_schema(schema_name, schema_encoding, schema.as_bytes())?;
-            let id = writer.add_channel(schema_id, topic, message_encoding)?;
+        // The per-tick topics in CDR with ros2msg schemas; events and the static ones JSON.
+        let mut channel = |schema_name: &str, schema: &str, topic: &str, enc: Encoding| {
+            let schema_id = writer.add_schema(schema_name, enc.schema(), schema.as_bytes())?;
+            let id = writer.add_channel(schema_id, topic, enc.message())?;
             Ok::<_, io::Error>(Channel::new(id))
         };
+        let (c, j) = (Encoding::Cdr, Encoding::Json);
+        // `/servo/tick` first (its schema and channel ids are 1).
+        let servo_tick =
+            channel(cdr::SCHEMA_NAME, cdr::SCHEMA, topic::SERVO_TICK, c).map_err(err)?;
         let scene_schema = foxglove::scene_update_schema();
         let channels = Channels {
-            reference: channel(REFERENCE_SCHEMA, reference_schema(), topic::REFERENCE)
+            reference: channel(REFERENCE_SCHEMA, &reference_schema(), topic::REFERENCE, c)
                 .map_err(err)?,
-            actors: channel(ACTORS_SCHEMA, actors_schema(), topic::ACTORS).map_err(err)?,
-            camera: channel(CAMERA_SCHEMA, camera_schema(), topic::CAMERA).map_err(err)?,
-            estimate: channel(plots::ESTIMATE, plots::estimate_schema(), topic::ESTIMATE)
-                .map_err(err)?,
+            actors: channel(ACTORS_SCHEMA, &actors_schema(), topic::ACTORS, c).map_err(err)?,
+            camera: channel(CAMERA_SCHEMA, &camera_schema(), topic::CAMERA, j).map_err(err)?,
+            estimate: channel(
+                plots::ESTIMATE,
+                &plots::estimate_schema(),
+                topic::ESTIMATE,
+                c,
+            )
+            .map_err(err)?,
             measurement: channel(
                 plots::MEASUREMENT,
-                plots::measurement_schema(),
+                &plots::measurement_schema(),
                 topic::MEASUREMENT,
+                c,
             )
             .map_err(err)?,
-            command: channel(plots::COMMAND, plots::command_schema(), topic::COMMAND)
+            command: channel(plots::COMMAND, &plots::command_schema(), topic::COMMAND, c)
                 .map_err(err)?,
-            framing: channel(plots::FRAMING, plots::framing_schema(), topic::FRAMING)
+            framing: channel(plots::FRAMING, &plots::framing_schema(), topic::FRAMING, c)
                 .map_err(err)?,
-            events: channel(schema::EVENT, schema::event(), topic::EVENTS).map_err(err)?,
+            events: channel(schema::EVENT, &schema::event(), topic::EVENTS, j).map_err(err)?,
             servo_tick,
             tf: Vec::new(),
-            stage: channel(
-                foxglove::SCENE_UPDATE,
-                scene_schema.clone(),
-                topic::SCENE_STAGE,
-            )
-            .map_err(err)?,
-            drone: channel(
-                foxglove::SCENE_UPDATE,
-                scene_schema.clone(),
-                topic::SCENE_DRONE,
-            )
-            .map_err(err)?,
-            actor_scene: channel(foxglove::SCENE_UPDATE, scene_schema, topic::SCENE_ACTORS)
+            stage: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_STAGE, j)
                 .map_err(err)?,
+            drone: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_DRONE, j)
+                .map_err(err)?,
+            actor_scene: channel(
+                foxglove::SCENE_UPDATE,
+                &scene_schema,
+                topic::SCENE_ACTORS,
+                j,
+            )
+            .map_err(err)?,
             calibration: channel(
                 foxglove::CAMERA_CALIBRATION,
-                foxglove::camera_calibration_schema(),
+                &foxglove::camera_calibration_schema(),
                 topic::CAMERA_CALIBRATION,
+                j,
             )
             .map_err(err)?,
         };
@@ -313,14 +304,14 @@ impl FlightLogWriter {
         let tf_schema = writer
             .add_schema(
                 foxglove::FRAME_TRANSFORMS,
-                output::cdr::SCHEMA_ENCODING,
+                Encoding::Cdr.schema(),
                 foxglove::frame_transforms_schema().as_bytes(),
             )
             .map_err(err)?;
         let (frames, tf) = frame_topics_with(
             scene.actor_names,
             &[(foxglove::WORLD, REFERENCE_FRAME)],
-            |topic| writer.add_channel(tf_schema, topic, output::cdr::MESSAGE_ENCODING),
+            |topic| writer.add_channel(tf_schema, topic, Encoding::Cdr.message()),
         )
         .map_err(err)?;
         channels.tf = tf;
@@ -353,32 +344,17 @@ impl FlightLogWriter {
         Ok(log)
     }
 
+    /// Puts a message already encoded on a channel.
     fn put(
         &mut self,
         channel: fn(&mut Channels) -> &mut Channel,
         ns: u64,
         data: &[u8],
     ) -> io::Result<()> {
-        let header = channel(&mut self.channels).header(ns);
-        let path = &self.path;
-        let writer = self.writer.as_mut().ok_or_else(|| {
-            io::Error::other(format!("cannot write {}: log finished", path.display()))
-        })?;
-        writer
-            .write_message(&header, data)
-            .map_err(|e| annotate(path, e))
-    }
-
-    /// Puts the message buffer on a channel.
-    fn put_buf(&mut self, channel: fn(&mut Channels) -> &mut Channel, ns: u64) -> io::Result<()> {
-        let header = channel(&mut self.channels).header(ns);
-        let path = &self.path;
-        let writer = self.writer.as_mut().ok_or_else(|| {
-            io::Error::other(format!("cannot write {}: log finished", path.display()))
-        })?;
-        writer
-            .write_message(&header, &self.buf)
-            .map_err(|e| annotate(path, e))
+        let channel = channel(&mut self.channels);
+        put_with(&mut self.writer, &self.path, channel, ns, |b| {
+            b.extend_from_slice(data)
+        })
     }
 
     /// The topics published once, at time 0.
@@ -537,14 +513,10 @@ impl FlightLogWriter {
         )));
         for (i, (t, q)) in poses {
             if self.frames[i].message(&mut self.buf, prev_ns, ns, t, q) {
-                let header = self.channels.tf[i].header(ns);
-                let path = &self.path;
-                let writer = self.writer.as_mut().ok_or_else(|| {
-                    io::Error::other(format!("cannot write {}: log finished", path.display()))
+                let (w, path, buf) = (&mut self.writer, &self.path, &self.buf);
+                put_with(w, path, &mut self.channels.tf[i], ns, |b| {
+                    b.extend_from_slice(buf)
                 })?;
-                writer
-                    .write_message(&header, &self.buf)
-                    .map_err(|e| annotate(path, e))?;
             }
         }
         Ok(())
@@ -552,26 +524,32 @@ impl FlightLogWriter {
 
     /// Writes an event on `/events` (its time exact, as on `/servo/tick`).
     pub fn write_event(&mut self, event: &Event) -> io::Result<()> {
-        let buf = &mut self.buf;
-        buf.clear();
-        buf.extend_from_slice(b"{\"t_s\":");
-        exact::f64(buf, event.t_s);
-        buf.extend_from_slice(b",\"level\":");
-        json::string(buf, &event.level);
-        buf.extend_from_slice(b",\"kind\":");
-        json::string(buf, &event.kind);
-        buf.extend_from_slice(b",\"message\":");
-        json::string(buf, &event.message);
-        if let Some(line) = event.line {
-            buf.extend_from_slice(b",\"line\":");
-            json::u64(buf, line as u64);
-        }
-        if let Some(help) = &event.help {
-            buf.extend_from_slice(b",\"help\":");
-            json::string(buf, help);
-        }
-        buf.push(b'}');
-        self.put_buf(|c| &mut c.events, ns_from_s(event.t_s))
+        let channel = &mut self.channels.events;
+        put_with(
+            &mut self.writer,
+            &self.path,
+            channel,
+            ns_from_s(event.t_s),
+            |buf| {
+                buf.extend_from_slice(b"{\"t_s\":");
+                exact::f64(buf, event.t_s);
+                buf.extend_from_slice(b",\"level\":");
+                json::string(buf, &event.level);
+                buf.extend_from_slice(b",\"kind\":");
+                json::string(buf, &event.kind);
+                buf.extend_from_slice(b",\"message\":");
+                json::string(buf, &event.message);
+                if let Some(line) = event.line {
+                    buf.extend_from_slice(b",\"line\":");
+                    json::u64(buf, line as u64);
+                }
+                if let Some(help) = &event.help {
+                    buf.extend_from_slice(b",\"help\":");
+                    json::string(buf, help);
+                }
+                buf.push(b'}');
+            },
+        )
     }
 
     /// Closes the last chunk and writes the summary and the closing magic.
