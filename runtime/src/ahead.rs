@@ -15,9 +15,11 @@
 //! ways and compares every tick's record and every event, `tests/random_flights.rs` the
 //! logs of the random scenes that fly, byte for byte.
 //!
-//! The loop checks each tick against its own: the director's tick time and the tracked poses
-//! it stepped with must be the loop's, bit for bit, or the loop lands the drone (a failsafe
-//! that says so; it would be a bug). A flight cut short mid-shot (a failsafe) tells that
+//! The loop takes the actors of each tick's frame from the director's tick ([`FeedFrame`]: the
+//! feed's frames are the mocap's, so the simulator need not compute its actors a second time;
+//! `Mocap::actors_from_feed`) and checks each tick against its own: the frame polled, the
+//! director's tick time and the tracked poses it stepped with must be the loop's, bit for
+//! bit, or the loop lands the drone (a failsafe that says so; it would be a bug). A flight cut short mid-shot (a failsafe) tells that
 //! shot's findings as the director had them at that tick, not as the thread, ticks ahead,
 //! has them: [`Ahead::rewound`] steps a copy taken at "action!" to that tick, on the loop's
 //! thread (once per flight, only when it is cut short).
@@ -36,7 +38,7 @@ use dronecine_compiler::director::{Director, Held};
 use dronecine_compiler::reference::Sample;
 use dronecine_grammar::Diagnostic;
 
-use crate::backend::{ActorFeed, MocapFrame};
+use crate::backend::{ActorFeed, BodyPose, MocapFrame};
 use crate::flight::{take_newer, ActorTracker};
 use crate::frames::ActorPose;
 
@@ -67,6 +69,37 @@ pub(crate) struct DirectedTick {
     /// On the director's thread: the tracked actors it stepped with (the loop checks them
     /// against its own). Empty on the loop's thread.
     pub actors: Vec<ActorPose>,
+    /// On the director's thread: the frame the feed gave at this tick, if any (the loop
+    /// takes its actors from it: [`Mocap::actors_from_feed`](crate::backend::Mocap)).
+    pub feed: FeedFrame,
+}
+
+/// The actors' part of the frame the feed gave at a tick, as the loop takes it.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FeedFrame {
+    /// Whether the feed gave a frame at this tick (then the rest is that frame's).
+    pub polled: bool,
+    pub frame: u64,
+    pub t_s: f64,
+    pub actors: Vec<Option<BodyPose>>,
+}
+
+impl FeedFrame {
+    /// Puts this tick's actors into the frame the loop `polled` (if it did): true when the
+    /// loop's poll and the feed's agree (both gave the same frame, or neither a frame).
+    pub(crate) fn fill(&self, polled: bool, frame: &mut MocapFrame) -> bool {
+        if polled != self.polled {
+            return false;
+        }
+        if !polled {
+            return true;
+        }
+        if frame.frame != self.frame || frame.t_s.to_bits() != self.t_s.to_bits() {
+            return false;
+        }
+        frame.actors.clone_from(&self.actors);
+        true
+    }
 }
 
 /// What [`direct`] keeps from tick to tick besides the director.
@@ -134,8 +167,15 @@ impl Side {
     fn tick(&mut self, feed: &mut dyn ActorFeed, out: &mut DirectedTick) {
         self.t_s += self.period_s;
         let t = self.t_s;
-        if feed.poll_at(t, &mut self.frame) && take_newer(&mut self.last_frame_t_s, &self.frame) {
-            self.tracker.update(&self.frame);
+        let polled = feed.poll_at(t, &mut self.frame);
+        out.feed.polled = polled;
+        if polled {
+            out.feed.frame = self.frame.frame;
+            out.feed.t_s = self.frame.t_s;
+            out.feed.actors.clone_from(&self.frame.actors);
+            if take_newer(&mut self.last_frame_t_s, &self.frame) {
+                self.tracker.update(&self.frame);
+            }
         }
         let script_t = t - self.action_s;
         let actors = &self.tracker.poses;

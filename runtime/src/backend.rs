@@ -87,6 +87,13 @@ pub trait Mocap {
     fn actors_ahead(&self) -> Option<Box<dyn ActorFeed>> {
         None
     }
+
+    /// The flight tells the mocap that it takes the actors' part of each frame from a feed
+    /// taken with [`Mocap::actors_ahead`] (`true`: the feed's frame of the same tick is the
+    /// same frame, by that method's contract, and the flight checks that it is), or that it
+    /// no longer does (`false`). A simulation then leaves the actors out of its own frames
+    /// (`None`) instead of computing them a second time. Real backends ignore it.
+    fn actors_from_feed(&mut self, _on: bool) {}
 }
 
 /// The actors' part of a motion capture's frames, read ahead of the flight

@@ -37,7 +37,7 @@ use dronecine_grammar::script::{Scene, Script};
 use dronecine_grammar::{Code, Diagnostic, LineIndex};
 use serde::Serialize;
 
-use crate::ahead::{direct, Ahead, AheadStart, DirectedTick, Directing};
+use crate::ahead::{direct, Ahead, AheadStart, DirectedTick, Directing, FeedFrame};
 use crate::backend::{BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame};
 use crate::control::{Controller, Measurement, Reference, TickInput};
 use crate::frames::{wrap_angle_rad, ActorPose, Command, Sample};
@@ -720,6 +720,18 @@ impl<'s, 'b> Flight<'s, 'b> {
 
     /// Waits for the next tick and reads the mocap.
     fn wait_tick(&mut self, t_next_s: f64) -> Result<f64, FlightError> {
+        self.wait_tick_fed(t_next_s, None).map(|(now, _)| now)
+    }
+
+    /// [`Flight::wait_tick`], with the actors of the frame polled taken from `feed`: the frame
+    /// the director's thread, ahead, had from the mocap's feed at this tick
+    /// ([`Mocap::actors_from_feed`]). Also says whether the two polls agreed (the same frame,
+    /// or no frame); when they do not, the frame's actors are as the mocap gave them.
+    fn wait_tick_fed(
+        &mut self,
+        t_next_s: f64,
+        feed: Option<&FeedFrame>,
+    ) -> Result<(f64, bool), FlightError> {
         self.clock.sleep_until(t_next_s);
         let now = self.clock.now_s();
         if now > t_next_s + 0.5 * self.period_s {
@@ -735,6 +747,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             );
         }
         self.fresh = self.mocap.poll(&mut self.frame)?;
+        let agreed = feed.is_none_or(|f| f.fill(self.fresh, &mut self.frame));
         if self.fresh {
             if !take_newer(&mut self.last_frame_t_s, &self.frame) {
                 // Out of order or replayed: its measurement is not used.
@@ -779,7 +792,7 @@ impl<'s, 'b> Flight<'s, 'b> {
         if !self.fresh {
             self.measured = None;
         }
-        Ok(now)
+        Ok((now, agreed))
     }
 
     fn run(mut self) -> Result<FlightReport, FlightError> {
@@ -1051,7 +1064,11 @@ impl<'s, 'b> Flight<'s, 'b> {
                         period_s: self.period_s,
                     };
                     match Ahead::spawn(start, feed, rewind_feed) {
-                        Ok(ahead) => Stepper::Ahead(ahead),
+                        Ok(ahead) => {
+                            // Its frames' actors are the loop's: computed once, there.
+                            self.mocap.actors_from_feed(true);
+                            Stepper::Ahead(ahead)
+                        }
                         Err(director) => Stepper::here(*director),
                     }
                 }
@@ -1061,28 +1078,39 @@ impl<'s, 'b> Flight<'s, 'b> {
             // The last shot's findings, when the director finished.
             let mut last_findings = Vec::new();
             loop {
-                t = self.wait_tick(t + self.period_s)?;
-                let script_t = t - action_s;
+                let t_next = t + self.period_s;
                 let tick: &DirectedTick = match &mut stepper {
                     Stepper::Here(director, state, tick) => {
-                        direct(director, state, t, script_t, &self.actors.poses, tick);
+                        t = self.wait_tick(t_next)?;
+                        direct(director, state, t, t - action_s, &self.actors.poses, tick);
                         tick
                     }
-                    Stepper::Ahead(ahead) => match ahead.next() {
-                        Some(tick)
-                            if tick.t_s == t && same_poses(&tick.actors, &self.actors.poses) =>
-                        {
-                            tick
+                    Stepper::Ahead(ahead) => {
+                        // The director's tick first: the frame's actors come from it.
+                        let next = ahead.next();
+                        if next.is_none() {
+                            self.mocap.actors_from_feed(false);
                         }
-                        _ => {
-                            self.failsafe(
-                                t,
-                                "the director, stepped ahead of the loop, saw other actors than \
-                                 the loop (an internal error): landing",
-                            );
-                            break;
+                        let agreed;
+                        (t, agreed) = self.wait_tick_fed(t_next, next.map(|k| &k.feed))?;
+                        match next {
+                            Some(tick)
+                                if agreed
+                                    && tick.t_s == t
+                                    && same_poses(&tick.actors, &self.actors.poses) =>
+                            {
+                                tick
+                            }
+                            _ => {
+                                self.failsafe(
+                                    t,
+                                    "the director, stepped ahead of the loop, saw other actors \
+                                     than the loop (an internal error): landing",
+                                );
+                                break;
+                            }
                         }
-                    },
+                    }
                 };
                 let sample = tick.sample;
                 self.written_t_s = tick.written_t_s;
@@ -1153,6 +1181,8 @@ impl<'s, 'b> Flight<'s, 'b> {
                     break;
                 }
             }
+            // The mocap's frames are whole again (the landing has no director ahead).
+            self.mocap.actors_from_feed(false);
             if let Some(last) = current {
                 // Over too: the last shot, or the one a failsafe cut short, as the director
                 // had it at this tick.

@@ -986,3 +986,54 @@ fn bad_settings_are_errors() {
     assert_eq!(clock.now_s(), 5.0);
     assert!(sim.truth().position_m.iter().all(|x| x.is_finite()));
 }
+
+/// While the flight takes the actors from the copy ahead (`Mocap::actors_from_feed`), the
+/// world's frames leave them out and draw the same numbers: the drone's part of every frame,
+/// and the whole frames after it is turned off, are those of a world that never left them
+/// out, bit for bit; the copy ahead has the actors the world leaves out. With noise and
+/// dropouts on (they draw from the streams this depends on), and actors that walk.
+#[test]
+fn frames_without_the_actors_draw_the_same_numbers() {
+    let mut cfg = SimConfig::new(7);
+    cfg.effects.battery = false;
+    cfg.mocap_dropout_fraction = 0.05;
+    cfg.actors_ahead = true;
+    let (mut whole, mut skipping) = (Rig::new(&cfg, &profile()), Rig::new(&cfg, &profile()));
+    whole.mocap.action(0.0);
+    skipping.mocap.action(0.0);
+    let mut feed = skipping.mocap.actors_ahead().expect("asked for");
+    skipping.mocap.actors_from_feed(true);
+    let (mut a, mut b, mut c) = (
+        MocapFrame::default(),
+        MocapFrame::default(),
+        MocapFrame::default(),
+    );
+    let (mut left_out, mut dropped) = (0, 0);
+    for k in 1..=3000 {
+        let t = k as f64 * 0.01;
+        if k == 2000 {
+            skipping.mocap.actors_from_feed(false);
+        }
+        whole.clock.sleep_until(t);
+        skipping.clock.sleep_until(t);
+        let polled = whole.mocap.poll(&mut a).unwrap();
+        assert_eq!(skipping.mocap.poll(&mut b).unwrap(), polled);
+        assert_eq!(feed.poll_at(t, &mut c), polled);
+        assert!(polled, "a frame every 10 ms");
+        assert_eq!(
+            (b.frame, b.t_s, b.drone),
+            (a.frame, a.t_s, a.drone),
+            "at {t} s"
+        );
+        assert_eq!(c.actors, a.actors, "the copy's actors at {t} s");
+        if k < 2000 {
+            assert!(b.actors.iter().all(Option::is_none));
+            left_out += 1;
+        } else {
+            assert_eq!(b, a, "whole again at {t} s");
+        }
+        dropped += a.actors.iter().filter(|x| x.is_none()).count();
+    }
+    assert_eq!(left_out, 1999);
+    assert!(dropped > 50, "dropouts drawn: {dropped}");
+}

@@ -15,7 +15,9 @@
 //! actors and the mocap's noise do not depend on the drone: [`SimMocap`] can hand out a copy
 //! of them that runs ahead of the world on another thread (`ActorWorld`, through
 //! `Mocap::actors_ahead`, when [`SimConfig::actors_ahead`] asks), on the same schedule
-//! (`next_event`) and with the same random draws.
+//! (`next_event`) and with the same random draws. While the flight takes the actors from that
+//! copy (`Mocap::actors_from_feed`), the world's own frames leave them out and only draw their
+//! noise, so the actors are computed once per flight, not twice.
 //!
 //! Modules: `config` (settings, defaults, validation), `plant` (physics, firmware, radio link),
 //! `actors`, `smooth` (smooth OU processes), `rng` (xoshiro256++ and the ziggurat).
@@ -135,6 +137,9 @@ struct World {
     battery_on: bool,
     /// [`SimConfig::actors_ahead`].
     actors_ahead: bool,
+    /// The flight takes the actors' part of the frames from the copy ahead
+    /// ([`Mocap::actors_from_feed`]): the frames leave it out.
+    actors_from_feed: bool,
     zig: &'static Ziggurat,
 }
 
@@ -180,11 +185,15 @@ impl MocapGen {
     /// Takes the frame at `t_s` into `latest`: the drone where `drone_at` says (asked only
     /// when it is tracked in this frame), every actor where they are, each with its noise and
     /// dropouts. The random draws do not depend on where the drone is, so an actors-only copy
-    /// that passes any `drone_at` draws the same numbers and finds the same actors.
+    /// that passes any `drone_at` draws the same numbers and finds the same actors. Without
+    /// `actors` (the flight takes them from that copy: [`Mocap::actors_from_feed`]) the
+    /// actors are left out (`None`), their noise drawn all the same: the drone's noise in
+    /// the frames after is the same.
     fn emit(
         &mut self,
         t_s: f64,
-        actors: &mut Actors,
+        actors: Option<&mut Actors>,
+        n_actors: usize,
         zig: &Ziggurat,
         drone_at: impl FnOnce() -> ([f64; 3], f64),
     ) {
@@ -215,7 +224,18 @@ impl MocapGen {
                 heading_rad: c,
             })
         };
-        for i in 0..actors.len() {
+        let Some(actors) = actors else {
+            for i in 0..n_actors {
+                m.latest.actors[i] = None;
+                if !m.burst[i + 1] && m.noise {
+                    for _ in 0..4 {
+                        m.noise_rng.normal(zig);
+                    }
+                }
+            }
+            return;
+        };
+        for i in 0..n_actors {
             // Actors move whether tracked or not: read every frame, forward in time.
             let pose = actors.pose(i, t_s, zig);
             m.latest.actors[i] = if m.burst[i + 1] {
@@ -264,7 +284,9 @@ impl World {
 
     fn emit_frame(&mut self, t_s: f64) {
         let plant = &self.plant;
-        self.mocap.emit(t_s, &mut self.actors, self.zig, || {
+        let n = self.actors.len();
+        let actors = (!self.actors_from_feed).then_some(&mut self.actors);
+        self.mocap.emit(t_s, actors, n, self.zig, || {
             (plant.position_at(t_s), plant.heading_at(t_s))
         });
     }
@@ -382,6 +404,7 @@ impl Simulator {
             mocap,
             battery_on: eff.battery,
             actors_ahead: config.actors_ahead,
+            actors_from_feed: false,
             zig,
         };
         world.emit_frame(0.0);
@@ -538,6 +561,12 @@ impl Mocap for SimMocap {
         self.world.borrow_mut().actors.action(t_s);
     }
 
+    fn actors_from_feed(&mut self, on: bool) {
+        let mut w = self.world.borrow_mut();
+        // Only with a copy to take them from (one taken, or one to take).
+        w.actors_from_feed = on && w.actors_ahead;
+    }
+
     fn actors_ahead(&self) -> Option<Box<dyn ActorFeed>> {
         let w = self.world.borrow();
         if !w.actors_ahead {
@@ -577,9 +606,11 @@ impl ActorFeed for ActorWorld {
         if t_s.is_finite() && t_s > self.now_s {
             loop {
                 match next_event(self.k, self.h, &self.mocap, t_s) {
-                    Event::Frame(t) => self
-                        .mocap
-                        .emit(t, &mut self.actors, self.zig, || ([0.0; 3], 0.0)),
+                    Event::Frame(t) => {
+                        let n = self.actors.len();
+                        let actors = Some(&mut self.actors);
+                        self.mocap.emit(t, actors, n, self.zig, || ([0.0; 3], 0.0))
+                    }
                     Event::Step => self.k += 1,
                     Event::Done => break,
                 }
