@@ -17,9 +17,11 @@
 //!
 //! The loop takes the actors of each tick's frame from the director's tick ([`FeedFrame`]: the
 //! feed's frames are the mocap's, so the simulator need not compute its actors a second time;
-//! `Mocap::actors_from_feed`) and checks each tick against its own: the frame polled, the
-//! director's tick time and the tracked poses it stepped with must be the loop's, bit for
-//! bit, or the loop lands the drone (a failsafe that says so; it would be a bug). A flight cut short mid-shot (a failsafe) tells that
+//! `Mocap::actors_from_feed`), and its tracked actors too (the director's tracker folded the
+//! same frames in: the loop's becomes it rather than folding them in again). It checks each
+//! tick against its own: the frame the mocap gave the loop and the director's tick time must
+//! be the director's, bit for bit, or the loop lands the drone (a failsafe that says so; it
+//! would be a bug). A flight cut short mid-shot (a failsafe) tells that
 //! shot's findings as the director had them at that tick, not as the thread, ticks ahead,
 //! has them: [`Ahead::rewound`] steps a copy taken at "action!" to that tick, on the loop's
 //! thread (once per flight, only when it is cut short).
@@ -66,9 +68,9 @@ pub(crate) struct DirectedTick {
     pub over_findings: Vec<Diagnostic>,
     /// When the director finished this tick: the findings over the last shot.
     pub last_findings: Vec<Diagnostic>,
-    /// On the director's thread: the tracked actors it stepped with (the loop checks them
-    /// against its own). Empty on the loop's thread.
-    pub actors: Vec<ActorPose>,
+    /// On the director's thread: its tracker after this tick's frame, whose poses it stepped
+    /// with (the loop's becomes it). Empty on the loop's thread.
+    pub tracker: ActorTracker,
     /// On the director's thread: the frame the feed gave at this tick, if any (the loop
     /// takes its actors from it: [`Mocap::actors_from_feed`](crate::backend::Mocap)).
     pub feed: FeedFrame,
@@ -187,8 +189,7 @@ impl Side {
             actors,
             out,
         );
-        out.actors.clear();
-        out.actors.extend_from_slice(actors);
+        out.tracker.copy_from(&self.tracker);
     }
 }
 

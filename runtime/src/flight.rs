@@ -37,7 +37,7 @@ use dronecine_grammar::script::{Scene, Script};
 use dronecine_grammar::{Code, Diagnostic, LineIndex};
 use serde::Serialize;
 
-use crate::ahead::{direct, Ahead, AheadStart, DirectedTick, Directing, FeedFrame};
+use crate::ahead::{direct, Ahead, AheadStart, DirectedTick, Directing};
 use crate::backend::{BackendError, BodyPose, Clock, Drone, FlightState, Mocap, MocapFrame};
 use crate::control::{Controller, Measurement, Reference, TickInput};
 use crate::frames::{wrap_angle_rad, ActorPose, Command, Sample};
@@ -188,7 +188,7 @@ impl From<BackendError> for FlightError {
 /// Facing: α = 0.7, β = 0.2. Smoothing it more was tried (α = 0.3, β = 0.05): the one-actor
 /// holds of `scene.psl`, whose framings turn with the actors' drifting facing, tracked worse
 /// (its first shot 2.9 → 3.8 cm RMS over seeds 1–10).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct ActorTracker {
     pub(crate) poses: Vec<ActorPose>,
     last_t_s: Vec<Option<f64>>,
@@ -227,6 +227,12 @@ impl ActorTracker {
                 .collect(),
             last_t_s: vec![None; scene.actors.len()],
         }
+    }
+
+    /// Becomes `other`, reusing its vectors (no allocation once they have room).
+    pub(crate) fn copy_from(&mut self, other: &ActorTracker) {
+        self.poses.clone_from(&other.poses);
+        self.last_t_s.clone_from(&other.last_t_s);
     }
 
     /// Folds a frame in. Untracked actors keep moving with their last velocity for the tick.
@@ -491,11 +497,6 @@ impl Stepper {
     }
 }
 
-/// Whether two lists of actor poses are the same, bit for bit.
-fn same_poses(a: &[ActorPose], b: &[ActorPose]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.same_bits(q))
-}
-
 /// A heading aimed from a fresh measurement of the drone's position, and its rate.
 #[derive(Clone, Copy, Debug)]
 struct Aim {
@@ -723,14 +724,16 @@ impl<'s, 'b> Flight<'s, 'b> {
         self.wait_tick_fed(t_next_s, None).map(|(now, _)| now)
     }
 
-    /// [`Flight::wait_tick`], with the actors of the frame polled taken from `feed`: the frame
-    /// the director's thread, ahead, had from the mocap's feed at this tick
-    /// ([`Mocap::actors_from_feed`]). Also says whether the two polls agreed (the same frame,
-    /// or no frame); when they do not, the frame's actors are as the mocap gave them.
+    /// [`Flight::wait_tick`] with the director's tick `ahead` (its thread steps ahead of the
+    /// loop): the frame polled takes its actors from the frame the director's thread had from
+    /// the mocap's feed at this tick ([`Mocap::actors_from_feed`]), and the tracked actors are
+    /// the ones it stepped with (its tracker folded the same frames in). Also says whether the
+    /// two polls agreed (the same frame, or no frame); when they do not, the frame's actors
+    /// are as the mocap gave them.
     fn wait_tick_fed(
         &mut self,
         t_next_s: f64,
-        feed: Option<&FeedFrame>,
+        ahead: Option<&DirectedTick>,
     ) -> Result<(f64, bool), FlightError> {
         self.clock.sleep_until(t_next_s);
         let now = self.clock.now_s();
@@ -747,7 +750,10 @@ impl<'s, 'b> Flight<'s, 'b> {
             );
         }
         self.fresh = self.mocap.poll(&mut self.frame)?;
-        let agreed = feed.is_none_or(|f| f.fill(self.fresh, &mut self.frame));
+        let agreed = ahead.is_none_or(|k| k.feed.fill(self.fresh, &mut self.frame));
+        if let Some(k) = ahead {
+            self.actors.copy_from(&k.tracker);
+        }
         if self.fresh {
             if !take_newer(&mut self.last_frame_t_s, &self.frame) {
                 // Out of order or replayed: its measurement is not used.
@@ -762,7 +768,9 @@ impl<'s, 'b> Flight<'s, 'b> {
                     ),
                 );
             } else {
-                self.actors.update(&self.frame);
+                if ahead.is_none() {
+                    self.actors.update(&self.frame);
+                }
                 for (seen, body) in self.actor_seen_s.iter_mut().zip(&self.frame.actors) {
                     if body.as_ref().is_some_and(finite_pose) {
                         *seen = now;
@@ -1092,15 +1100,9 @@ impl<'s, 'b> Flight<'s, 'b> {
                             self.mocap.actors_from_feed(false);
                         }
                         let agreed;
-                        (t, agreed) = self.wait_tick_fed(t_next, next.map(|k| &k.feed))?;
+                        (t, agreed) = self.wait_tick_fed(t_next, next)?;
                         match next {
-                            Some(tick)
-                                if agreed
-                                    && tick.t_s == t
-                                    && same_poses(&tick.actors, &self.actors.poses) =>
-                            {
-                                tick
-                            }
+                            Some(tick) if agreed && tick.t_s == t => tick,
                             _ => {
                                 self.failsafe(
                                     t,
