@@ -175,26 +175,40 @@ fn encode_sequences(buf: &mut Vec<u8>, tick: &TickRecord) {
         align(buf, 4);
         buf.extend_from_slice(&u32::try_from(n).unwrap_or(u32::MAX).to_le_bytes());
     };
-    let floats = |buf: &mut Vec<u8>, xs: &[f64]| {
-        for x in xs {
-            buf.extend_from_slice(&x.to_le_bytes());
+    // Each element filled in a stack array of its constant length and appended whole: one
+    // capacity check per element rather than one per field.
+    let floats = |e: &mut [u8], xs: &[f64]| {
+        for (k, x) in xs.iter().enumerate() {
+            e[8 * k..8 * k + 8].copy_from_slice(&x.to_le_bytes());
         }
     };
     count(buf, tick.actors.len());
     for a in tick.actors {
         align(buf, 8);
-        floats(buf, &a.position_m);
-        floats(buf, &a.velocity_mps);
-        floats(buf, &[a.facing_rad, a.facing_rate_radps, a.height_m]);
+        let mut e = [0u8; ACTOR_LEN];
+        let p = &a.position_m;
+        let v = &a.velocity_mps;
+        let xs = [p[0], p[1], p[2], v[0], v[1], v[2]];
+        floats(&mut e, &xs);
+        floats(
+            &mut e[48..],
+            &[a.facing_rad, a.facing_rate_radps, a.height_m],
+        );
+        buf.extend_from_slice(&e);
     }
     count(buf, tick.framing.len());
     for f in tick.framing {
         align(buf, 8);
-        floats(buf, &f.screen.unwrap_or_default());
-        floats(buf, &f.requested.unwrap_or_default());
-        buf.extend_from_slice(&u32::try_from(f.actor).unwrap_or(u32::MAX).to_le_bytes());
-        buf.push(u8::from(f.screen.is_some()));
-        buf.push(u8::from(f.requested.is_some()));
+        let mut e = [0u8; FRAMED_LEN];
+        let (s, r) = (
+            f.screen.unwrap_or_default(),
+            f.requested.unwrap_or_default(),
+        );
+        floats(&mut e, &[s[0], s[1], r[0], r[1]]);
+        e[32..36].copy_from_slice(&u32::try_from(f.actor).unwrap_or(u32::MAX).to_le_bytes());
+        e[36] = u8::from(f.screen.is_some());
+        e[37] = u8::from(f.requested.is_some());
+        buf.extend_from_slice(&e);
     }
 }
 
