@@ -182,9 +182,10 @@ impl std::error::Error for SessionError {}
 
 /// Whether a simulated flight gains by stepping its director on a thread of its own
 /// ([`SimConfig::actors_ahead`]): when the machine has a second core. Measured on the hour's
-/// flight (the `flight` bench) on two cores, 2026-11-27: without its log 0.453 → 0.337 s
-/// with the director ahead; with its log 0.483 → 0.446 s (0.68 → 0.75 s of CPU on all
-/// threads). Before the log's plot topics were CDR (JSON text then), the log's writer needed
+/// flight (the `flight` bench) on two cores, 2026-11-28: without its log 0.461 → 0.329 s
+/// with the director ahead; with its log 0.503 → 0.392 s (0.69 → 0.70 s of CPU on all
+/// threads; ahead, the actors are computed on the director's thread only). Before the log's
+/// plot topics were CDR (JSON text then), the log's writer needed
 /// the second core to itself and the director ahead made the flight with its log slower
 /// (0.512 → 0.695 s). On one core the threads only take turns. `shoot` asks it.
 pub fn director_thread_pays() -> bool {
