@@ -348,3 +348,62 @@ impl Drop for Ahead {
         self.stop();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn body(x: f64) -> Option<BodyPose> {
+        Some(BodyPose {
+            position_m: [x, 0.0, 0.0],
+            heading_rad: 0.0,
+        })
+    }
+
+    /// The loop's frame takes the director's actors only when both polls gave the same frame
+    /// (its number and time, bit for bit); no frame on both sides agrees and changes nothing;
+    /// any other case disagrees (the loop then lands) and leaves the loop's frame as it was.
+    #[test]
+    fn a_frame_takes_the_feeds_actors_only_when_the_polls_agree() {
+        let feed = FeedFrame {
+            polled: true,
+            frame: 7,
+            t_s: 0.07,
+            actors: vec![body(1.0), None],
+        };
+        let mine = MocapFrame {
+            t_s: 0.07,
+            received_s: 0.07,
+            frame: 7,
+            drone: body(5.0),
+            actors: vec![None, None],
+        };
+        let mut f = mine.clone();
+        assert!(feed.fill(true, &mut f));
+        assert_eq!(f.actors, feed.actors);
+        assert_eq!(
+            (f.frame, f.drone),
+            (7, body(5.0)),
+            "the drone is the loop's own"
+        );
+
+        for (polled, frame, t_s) in [(false, 7, 0.07), (true, 8, 0.07), (true, 7, 0.08)] {
+            let mut f = MocapFrame {
+                frame,
+                t_s,
+                ..mine.clone()
+            };
+            let before = f.clone();
+            assert!(!feed.fill(polled, &mut f), "{polled} {frame} {t_s}");
+            assert_eq!(f, before);
+        }
+        let none = FeedFrame::default();
+        let mut f = mine.clone();
+        assert!(none.fill(false, &mut f));
+        assert!(
+            !none.fill(true, &mut f),
+            "the loop had a frame, the feed none"
+        );
+        assert_eq!(f, mine);
+    }
+}

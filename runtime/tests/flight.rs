@@ -1,6 +1,7 @@
 //! The flight loop's failsafes and faults, on the embedded simulator wrapped to misbehave:
 //! the drone's body lost by the mocap, a NaN measurement, time going backward, the drone
-//! pushed out of the stage, and the pre-flight checks. Each ends in a defined, logged
+//! pushed out of the stage, the director ahead of the loop given other frames than the loop,
+//! and the pre-flight checks. Each ends in a defined, logged
 //! behaviour — never a panic.
 
 use dronecine_compiler::profile::Profile;
@@ -1218,4 +1219,87 @@ fn an_actor_lost_on_the_way_back_lands_the_drone_where_it_is() {
         .expect("landed by the failsafe");
     assert!(land.t_s < back_s + 2.5, "{land:?}");
     assert!(rec.first("landing").unwrap().t_s >= land.t_s);
+}
+
+/// The simulator's mocap whose feed ahead (`Mocap::actors_ahead`) gives no frame at the first
+/// poll after `drop_at_s`: the director's thread then stepped with other frames than the
+/// loop had, which the loop must catch (a bug's symptom, made here on purpose).
+struct Disagreeing {
+    inner: dronecine_runtime::sim::SimMocap,
+    drop_at_s: f64,
+}
+
+struct DroppingFeed {
+    inner: Box<dyn dronecine_runtime::backend::ActorFeed>,
+    drop_at_s: f64,
+    dropped: bool,
+}
+
+impl dronecine_runtime::backend::ActorFeed for DroppingFeed {
+    fn poll_at(&mut self, t_s: f64, frame: &mut MocapFrame) -> bool {
+        let polled = self.inner.poll_at(t_s, frame);
+        if polled && !self.dropped && frame.t_s >= self.drop_at_s {
+            self.dropped = true;
+            return false;
+        }
+        polled
+    }
+}
+
+impl Mocap for Disagreeing {
+    fn poll(&mut self, frame: &mut MocapFrame) -> Result<bool, BackendError> {
+        self.inner.poll(frame)
+    }
+    fn action(&mut self, t_s: f64) {
+        self.inner.action(t_s);
+    }
+    fn actors_ahead(&self) -> Option<Box<dyn dronecine_runtime::backend::ActorFeed>> {
+        Some(Box::new(DroppingFeed {
+            inner: self.inner.actors_ahead()?,
+            drop_at_s: self.drop_at_s,
+            dropped: false,
+        }))
+    }
+    fn actors_from_feed(&mut self, on: bool) {
+        self.inner.actors_from_feed(on);
+    }
+}
+
+/// With the director stepped ahead, a tick whose frame the director's thread did not have
+/// as the loop had it lands the drone with a failsafe that says so: no panic, no framing
+/// flown on actors the loop never saw (the simulator's frames leave the actors to the
+/// director's then); the landing after it sees the actors again.
+#[test]
+fn the_director_ahead_with_other_frames_than_the_loop_lands() {
+    let (result, rec, state) = fly_on(
+        SCRIPT,
+        |c| c.actors_ahead = true,
+        None,
+        |sim| Rig {
+            drone: Box::new(sim.drone()),
+            mocap: Box::new(Disagreeing {
+                inner: sim.mocap(),
+                drop_at_s: f64::NEG_INFINITY,
+            }),
+            clock: Box::new(sim.clock()),
+        },
+    );
+    let report = result.expect("a report, not an error");
+    assert!(!report.completed);
+    let failsafe = rec.first("failsafe").expect("a failsafe");
+    assert!(
+        failsafe.message.contains("stepped ahead of the loop"),
+        "{}",
+        failsafe.message
+    );
+    // The first shot tick: right after "action!".
+    let action = rec.first("action").expect("action!");
+    assert!(
+        failsafe.t_s - action.t_s < 0.015,
+        "{} {}",
+        failsafe.t_s,
+        action.t_s
+    );
+    assert_eq!(state, FlightState::Landed);
+    assert!(rec.first("landing").is_some(), "{:?}", rec.kinds());
 }
