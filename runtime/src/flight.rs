@@ -751,9 +751,6 @@ impl<'s, 'b> Flight<'s, 'b> {
         }
         self.fresh = self.mocap.poll(&mut self.frame)?;
         let agreed = ahead.is_none_or(|k| k.feed.fill(self.fresh, &mut self.frame));
-        if let Some(k) = ahead {
-            self.actors.copy_from(&k.tracker);
-        }
         if self.fresh {
             if !take_newer(&mut self.last_frame_t_s, &self.frame) {
                 // Out of order or replayed: its measurement is not used.
@@ -768,8 +765,10 @@ impl<'s, 'b> Flight<'s, 'b> {
                     ),
                 );
             } else {
-                if ahead.is_none() {
-                    self.actors.update(&self.frame);
+                match ahead {
+                    // The director's tracker folded this frame in already.
+                    Some(k) => self.actors.copy_from(&k.tracker),
+                    None => self.actors.update(&self.frame),
                 }
                 for (seen, body) in self.actor_seen_s.iter_mut().zip(&self.frame.actors) {
                     if body.as_ref().is_some_and(finite_pose) {

@@ -186,14 +186,19 @@ fn encode_sequences(buf: &mut Vec<u8>, tick: &TickRecord) {
     for a in tick.actors {
         align(buf, 8);
         let mut e = [0u8; ACTOR_LEN];
-        let p = &a.position_m;
-        let v = &a.velocity_mps;
-        let xs = [p[0], p[1], p[2], v[0], v[1], v[2]];
+        let (p, v) = (&a.position_m, &a.velocity_mps);
+        let xs = [
+            p[0],
+            p[1],
+            p[2],
+            v[0],
+            v[1],
+            v[2],
+            a.facing_rad,
+            a.facing_rate_radps,
+            a.height_m,
+        ];
         floats(&mut e, &xs);
-        floats(
-            &mut e[48..],
-            &[a.facing_rad, a.facing_rate_radps, a.height_m],
-        );
         buf.extend_from_slice(&e);
     }
     count(buf, tick.framing.len());

@@ -184,16 +184,14 @@ impl MocapGen {
 
     /// Takes the frame at `t_s` into `latest`: the drone where `drone_at` says (asked only
     /// when it is tracked in this frame), every actor where they are, each with its noise and
-    /// dropouts. The random draws do not depend on where the drone is, so an actors-only copy
-    /// that passes any `drone_at` draws the same numbers and finds the same actors. Without
-    /// `actors` (the flight takes them from that copy: [`Mocap::actors_from_feed`]) the
-    /// actors are left out (`None`), their noise drawn all the same: the drone's noise in
-    /// the frames after is the same.
+    /// dropouts. The random draws do not depend on where the bodies are, so an actors-only
+    /// copy that passes any `drone_at` draws the same numbers and finds the same actors; and
+    /// without `actors` (the flight takes them from that copy: [`Mocap::actors_from_feed`])
+    /// the actors are left out (`None`), their noise drawn all the same.
     fn emit(
         &mut self,
         t_s: f64,
-        actors: Option<&mut Actors>,
-        n_actors: usize,
+        mut actors: Option<&mut Actors>,
         zig: &Ziggurat,
         drone_at: impl FnOnce() -> ([f64; 3], f64),
     ) {
@@ -209,51 +207,48 @@ impl MocapGen {
                 *b = if *b { u >= m.p_exit } else { u < m.p_enter };
             }
         }
-        m.latest.drone = if m.burst[0] {
-            None
-        } else {
-            let (mut p, mut c) = drone_at();
-            if m.noise {
-                for x in &mut p {
-                    *x += m.sigma_p * m.noise_rng.normal(zig);
-                }
-                c = wrap(c + m.sigma_h * m.noise_rng.normal(zig));
-            }
-            Some(BodyPose {
-                position_m: p,
-                heading_rad: c,
-            })
-        };
-        let Some(actors) = actors else {
-            for i in 0..n_actors {
-                m.latest.actors[i] = None;
-                if !m.burst[i + 1] && m.noise {
-                    for _ in 0..4 {
-                        m.noise_rng.normal(zig);
-                    }
-                }
-            }
-            return;
-        };
-        for i in 0..n_actors {
+        m.latest.drone = (!m.burst[0]).then(|| m.seen(drone_at(), zig));
+        for i in 0..m.latest.actors.len() {
             // Actors move whether tracked or not: read every frame, forward in time.
-            let pose = actors.pose(i, t_s, zig);
-            m.latest.actors[i] = if m.burst[i + 1] {
-                None
-            } else {
-                let mut p = pose.position_m;
-                let mut c = pose.facing_rad;
-                if m.noise {
-                    for x in &mut p {
-                        *x += m.sigma_p * m.noise_rng.normal(zig);
-                    }
-                    c = wrap(c + m.sigma_h * m.noise_rng.normal(zig));
+            let at = actors.as_mut().map(|a| {
+                let p = a.pose(i, t_s, zig);
+                (p.position_m, p.facing_rad)
+            });
+            m.latest.actors[i] = match at {
+                _ if m.burst[i + 1] => None,
+                Some(at) => Some(m.seen(at, zig)),
+                None => {
+                    m.left_out(zig);
+                    None
                 }
-                Some(BodyPose {
-                    position_m: p,
-                    heading_rad: c,
-                })
             };
+        }
+    }
+
+    /// A body tracked in this frame at `at` (position, heading), with the mocap's noise: the
+    /// same draws wherever it is.
+    #[inline(always)]
+    fn seen(&mut self, at: ([f64; 3], f64), zig: &Ziggurat) -> BodyPose {
+        let (mut p, mut c) = at;
+        if self.noise {
+            for x in &mut p {
+                *x += self.sigma_p * self.noise_rng.normal(zig);
+            }
+            c = wrap(c + self.sigma_h * self.noise_rng.normal(zig));
+        }
+        BodyPose {
+            position_m: p,
+            heading_rad: c,
+        }
+    }
+
+    /// [`MocapGen::seen`]'s draws for a tracked body the frame leaves out.
+    #[inline(always)]
+    fn left_out(&mut self, zig: &Ziggurat) {
+        if self.noise {
+            for _ in 0..4 {
+                self.noise_rng.normal(zig);
+            }
         }
     }
 }
@@ -284,9 +279,8 @@ impl World {
 
     fn emit_frame(&mut self, t_s: f64) {
         let plant = &self.plant;
-        let n = self.actors.len();
         let actors = (!self.actors_from_feed).then_some(&mut self.actors);
-        self.mocap.emit(t_s, actors, n, self.zig, || {
+        self.mocap.emit(t_s, actors, self.zig, || {
             (plant.position_at(t_s), plant.heading_at(t_s))
         });
     }
@@ -607,9 +601,8 @@ impl ActorFeed for ActorWorld {
             loop {
                 match next_event(self.k, self.h, &self.mocap, t_s) {
                     Event::Frame(t) => {
-                        let n = self.actors.len();
                         let actors = Some(&mut self.actors);
-                        self.mocap.emit(t, actors, n, self.zig, || ([0.0; 3], 0.0))
+                        self.mocap.emit(t, actors, self.zig, || ([0.0; 3], 0.0))
                     }
                     Event::Step => self.k += 1,
                     Event::Done => break,
