@@ -738,6 +738,54 @@ fn a_crash_loses_at_most_the_last_second() {
     }
 }
 
+/// Through `LogThread` (as `shoot` writes), a flight in real time loses at most the last
+/// second too: the writer thread keeps closed chunks for one larger write only while batches
+/// wait (a flight faster than real time), and hands them to the OS before it sleeps. The
+/// file is read while the thread runs, as a crash would leave it.
+#[test]
+fn a_flight_in_real_time_through_the_log_thread_loses_at_most_the_last_second() {
+    use dronecine_runtime::flight::FlightSink;
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let path = dir.path().join("real-time.mcap");
+    let ticks: Vec<Tick> = (0..400).map(flight_tick).collect();
+    let w = FlightLogWriter::create(&path, &header(), &scene_of(&names)).unwrap();
+    let mut sink = LogThread::spawn(w, 100.0).unwrap();
+    for (k, t) in ticks.iter().enumerate() {
+        sink.tick(&t.record()).unwrap();
+        if k % 25 == 24 {
+            // A quarter of a second of flight, in a fraction of one: the writer idles.
+            std::thread::sleep(std::time::Duration::from_millis(30));
+        }
+    }
+    let crash_s = ticks.last().unwrap().input.t_s;
+    let must = ticks
+        .iter()
+        .filter(|t| t.input.t_s <= crash_s - 1.0)
+        .count();
+    // Once the writer has caught up (no more batches come, so nothing else writes: a busy
+    // machine may only delay it).
+    let cut = dir.path().join("cut.mcap");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+    let log = loop {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        std::fs::copy(&path, &cut).unwrap();
+        let log = FlightLog::open(&cut).unwrap();
+        if log.ticks.len() >= must || std::time::Instant::now() > deadline {
+            break log;
+        }
+    };
+    assert!(log.truncated);
+    assert!(
+        log.ticks.len() >= must,
+        "{} recovered, {must} expected",
+        log.ticks.len()
+    );
+    let want: Vec<LoggedTick> = ticks[..log.ticks.len()].iter().map(Tick::logged).collect();
+    assert_eq!(log.ticks, want, "a prefix of what was written");
+    sink.finish().unwrap();
+}
+
 fn reference_log() -> &'static [u8] {
     static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
     BYTES.get_or_init(|| {

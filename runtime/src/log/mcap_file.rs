@@ -4,7 +4,10 @@
 //! whole when a flush is due (see the `log` module doc). This writer does exactly that and no
 //! more: each message is copied once, into the chunk buffer; the chunk is hashed once (its
 //! `uncompressed_crc`), and written to the file with its header in one write (uncompressed:
-//! the header is filled into room kept before the records).
+//! the header is filled into room kept before the records). A caller that keeps up with a
+//! flight faster than real time may keep closed chunks in that buffer, one after the other,
+//! and write them together ([`McapFile::set_hand_over_bytes`], [`McapFile::hand_over`]): the
+//! same bytes in fewer, larger writes. A chunk is indexed once it is written.
 //!
 //! On Linux the file's disk space is reserved ahead of the writes, [`RESERVE_STEP`] at a time
 //! (`fallocate` keeping the size, best effort): the kernel then copies each chunk into blocks
@@ -65,6 +68,18 @@ mod op {
 /// A message record's fixed part after opcode and length: channel id, sequence, log time,
 /// publish time.
 const MESSAGE_HEADER_LEN: u64 = 2 + 4 + 8 + 8;
+
+/// A closed chunk's index entry, kept until the chunk is handed to the OS.
+#[derive(Clone, Copy, Debug)]
+struct ClosedChunk {
+    start_ns: u64,
+    end_ns: u64,
+    /// File offset of the Chunk record, and its whole length.
+    offset: u64,
+    length: u64,
+    compressed_size: u64,
+    uncompressed_size: u64,
+}
 
 /// How chunks are compressed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -152,9 +167,17 @@ pub struct McapFile {
     /// Bytes handed to `out` so far: the file offset of the next record.
     pos: u64,
     compression: ChunkCompression,
-    /// Room for the Chunk record's header ([`CHUNK_PREFIX`] bytes), then the open chunk's
-    /// records: an uncompressed chunk is filled in and written with one system call.
+    /// The closed chunks not yet handed to `out` (the first `closed` bytes, whole records),
+    /// then room for the open chunk's header ([`CHUNK_PREFIX`] bytes), then its records: an
+    /// uncompressed chunk is closed in place, and the closed chunks go to the OS in one write.
     chunk: Vec<u8>,
+    /// Bytes of closed chunks at the start of `chunk`.
+    closed: usize,
+    /// Their chunk indexes, put in the summary once they are handed over.
+    closed_indexes: Vec<ClosedChunk>,
+    /// Closed chunks are handed to the OS once they reach this many bytes (0: each one as it
+    /// closes); [`McapFile::hand_over`] hands them over whatever their size.
+    hand_over_bytes: usize,
     /// The open chunk's least and greatest message log time.
     chunk_times: Option<(u64, u64)>,
     /// The LZ4 frame of a chunk, reused.
@@ -196,6 +219,9 @@ impl McapFile {
                 c.resize(CHUNK_PREFIX, 0);
                 c
             },
+            closed: 0,
+            closed_indexes: Vec::new(),
+            hand_over_bytes: 0,
             chunk_times: None,
             compressed: Vec::new(),
             schemas: Vec::new(),
@@ -239,6 +265,7 @@ impl McapFile {
         content: impl FnOnce(&mut Vec<u8>),
     ) -> io::Result<(u64, u64)> {
         self.close_chunk()?;
+        self.write_closed()?;
         let offset = self.pos;
         self.scratch.clear();
         record(&mut self.scratch, opcode, content);
@@ -315,12 +342,15 @@ impl McapFile {
         *count += 1;
         let c = &mut self.chunk;
         let start = c.len();
-        c.push(op::MESSAGE);
-        c.extend_from_slice(&[0; 8]); // the length, below
-        c.extend_from_slice(&header.channel_id.to_le_bytes());
-        c.extend_from_slice(&header.sequence.to_le_bytes());
-        c.extend_from_slice(&header.log_time.to_le_bytes());
-        c.extend_from_slice(&header.publish_time.to_le_bytes());
+        // Opcode, the length (filled in below), channel, sequence, log and publish times: one
+        // copy into the chunk.
+        let mut head = [0u8; 31];
+        head[0] = op::MESSAGE;
+        head[9..11].copy_from_slice(&header.channel_id.to_le_bytes());
+        head[11..15].copy_from_slice(&header.sequence.to_le_bytes());
+        head[15..23].copy_from_slice(&header.log_time.to_le_bytes());
+        head[23..31].copy_from_slice(&header.publish_time.to_le_bytes());
+        c.extend_from_slice(&head);
         let data_start = c.len();
         encode(c);
         let len = MESSAGE_HEADER_LEN + (c.len() - data_start) as u64;
@@ -339,12 +369,14 @@ impl McapFile {
         self.write_message_with(header, |c| c.extend_from_slice(data))
     }
 
-    /// Writes the open chunk (if it holds anything) to the file's buffer.
+    /// Closes the open chunk (if it holds anything) in place, after the closed chunks before
+    /// it; they are all handed to `out` once they reach [`McapFile::hand_over_bytes`].
     fn close_chunk(&mut self) -> io::Result<()> {
         let Some((start_ns, end_ns)) = self.chunk_times.take() else {
             return Ok(());
         };
-        let uncompressed = &self.chunk[CHUNK_PREFIX..];
+        let at = self.closed;
+        let uncompressed = &self.chunk[at + CHUNK_PREFIX..];
         let uncompressed_crc = crc32fast::hash(uncompressed);
         let uncompressed_size = uncompressed.len() as u64;
         if self.compression == ChunkCompression::Lz4 {
@@ -352,10 +384,14 @@ impl McapFile {
             let mut enc = lz4::EncoderBuilder::new()
                 .block_checksum(lz4::liblz4::BlockChecksum::NoBlockChecksum)
                 .build(std::mem::take(&mut self.compressed))?;
-            enc.write_all(uncompressed)?;
+            let written = enc.write_all(uncompressed);
             let (frame, result) = enc.finish();
             self.compressed = frame;
-            result?;
+            if let Err(e) = written.and(result) {
+                // The chunk is lost; the next one starts afresh.
+                self.chunk.truncate(at + CHUNK_PREFIX);
+                return Err(e);
+            }
         }
         let compression = self.compression;
         let records_len = match compression {
@@ -364,7 +400,6 @@ impl McapFile {
         };
         let name = compression.name();
         let content_len = 8 + 8 + 8 + 4 + 4 + name.len() as u64 + 8 + records_len;
-        let chunk_start = self.pos;
         self.scratch.clear();
         self.scratch.push(op::CHUNK);
         put_u64(&mut self.scratch, content_len);
@@ -374,45 +409,87 @@ impl McapFile {
         put_u32(&mut self.scratch, uncompressed_crc);
         put_str(&mut self.scratch, name);
         put_u64(&mut self.scratch, records_len);
-        self.reserve(self.pos + self.scratch.len() as u64 + records_len);
-        let written = match compression {
-            // The header in the room before the records: one write.
+        match compression {
+            // The header in the room before the records.
             ChunkCompression::None => {
-                self.chunk[..CHUNK_PREFIX].copy_from_slice(&self.scratch);
-                self.out.write_all(&self.chunk)
+                self.chunk[at..at + CHUNK_PREFIX].copy_from_slice(&self.scratch);
             }
-            ChunkCompression::Lz4 => self
-                .out
-                .write_all(&self.scratch)
-                .and_then(|()| self.out.write_all(&self.compressed)),
-        };
-        let chunk_len = self.scratch.len() as u64 + records_len;
+            ChunkCompression::Lz4 => {
+                self.chunk.truncate(at);
+                self.chunk.extend_from_slice(&self.scratch);
+                self.chunk.extend_from_slice(&self.compressed);
+            }
+        }
         self.scratch.clear();
+        self.closed_indexes.push(ClosedChunk {
+            start_ns,
+            end_ns,
+            offset: self.pos + at as u64,
+            length: 9 + content_len,
+            compressed_size: records_len,
+            uncompressed_size,
+        });
+        self.closed = self.chunk.len();
+        // The next chunk's header room.
+        self.chunk.resize(self.closed + CHUNK_PREFIX, 0);
+        if self.closed >= self.hand_over_bytes {
+            self.write_closed()?;
+        }
+        Ok(())
+    }
+
+    /// Hands the closed chunks to `out` in one write and indexes them. After an error the
+    /// file is as far as it got and they are not indexed; the open chunk is kept.
+    fn write_closed(&mut self) -> io::Result<()> {
+        if self.closed == 0 {
+            return Ok(());
+        }
+        let closed = std::mem::replace(&mut self.closed, 0);
+        self.reserve(self.pos + closed as u64);
+        let written = self.out.write_all(&self.chunk[..closed]);
+        // The open chunk to the front (right after a close, only its header's room).
+        self.chunk.drain(..closed);
         if let Err(e) = written {
-            // The file is as far as it got; the next chunk starts afresh.
-            self.chunk.truncate(CHUNK_PREFIX);
+            self.closed_indexes.clear();
             return Err(e);
         }
-        self.pos += chunk_len;
-        let compressed_size = records_len;
-        record(&mut self.chunk_indexes, op::CHUNK_INDEX, |b| {
-            put_u64(b, start_ns);
-            put_u64(b, end_ns);
-            put_u64(b, chunk_start);
-            put_u64(b, 9 + content_len);
-            put_u32(b, 0); // no message indexes
-            put_u64(b, 0);
-            put_str(b, name);
-            put_u64(b, compressed_size);
-            put_u64(b, uncompressed_size);
-        });
-        self.chunk.truncate(CHUNK_PREFIX);
-        self.chunk_count += 1;
-        self.message_times = Some(match self.message_times {
-            None => (start_ns, end_ns),
-            Some((lo, hi)) => (lo.min(start_ns), hi.max(end_ns)),
-        });
+        self.pos += closed as u64;
+        let name = self.compression.name();
+        for c in self.closed_indexes.drain(..) {
+            record(&mut self.chunk_indexes, op::CHUNK_INDEX, |b| {
+                put_u64(b, c.start_ns);
+                put_u64(b, c.end_ns);
+                put_u64(b, c.offset);
+                put_u64(b, c.length);
+                put_u32(b, 0); // no message indexes
+                put_u64(b, 0);
+                put_str(b, name);
+                put_u64(b, c.compressed_size);
+                put_u64(b, c.uncompressed_size);
+            });
+            self.chunk_count += 1;
+            self.message_times = Some(match self.message_times {
+                None => (c.start_ns, c.end_ns),
+                Some((lo, hi)) => (lo.min(c.start_ns), hi.max(c.end_ns)),
+            });
+        }
         Ok(())
+    }
+
+    /// Closed chunks are kept until they reach `bytes` and then handed to the OS in one write
+    /// (0, the default: each chunk as it closes). Fewer, larger writes cost the kernel less
+    /// per byte; what waits is what a crash of the process may lose, so a caller that sets
+    /// this calls [`McapFile::hand_over`] whenever it has nothing else to write.
+    pub fn set_hand_over_bytes(&mut self, bytes: usize) {
+        self.hand_over_bytes = bytes;
+        let room = bytes + (1 << 18);
+        self.chunk.reserve(room.saturating_sub(self.chunk.len()));
+    }
+
+    /// Hands the closed chunks to the OS (no `fsync`); the open chunk stays open.
+    pub fn hand_over(&mut self) -> io::Result<()> {
+        self.write_closed()?;
+        self.out.flush()
     }
 
     /// Reserves the file's disk space up to at least `end` (see the module doc); best effort.
@@ -430,6 +507,14 @@ impl McapFile {
 
     /// Closes the open chunk and hands everything written to the OS (no `fsync`).
     pub fn flush(&mut self) -> io::Result<()> {
+        self.close_chunk()?;
+        self.write_closed()?;
+        self.out.flush()
+    }
+
+    /// Closes the open chunk; hands the closed chunks to the OS when they reach
+    /// [`McapFile::set_hand_over_bytes`]'s size (each one, by default).
+    pub fn close_and_hand_over_when_due(&mut self) -> io::Result<()> {
         self.close_chunk()?;
         self.out.flush()
     }
@@ -852,6 +937,113 @@ mod tests {
             f.finish().is_err(),
             "an unfinished file is not reported finished"
         );
+    }
+
+    /// Six chunks of three messages, closed as the flight log closes them; the file's
+    /// length on disk after each close, after a hand-over at the end, and its final bytes.
+    fn six_chunks(
+        compression: ChunkCompression,
+        keep_bytes: usize,
+    ) -> (Vec<u64>, u64, Vec<u8>, Vec<u8>) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.mcap");
+        let mut f = McapFile::new(File::create(&path).unwrap(), "p", "l", compression).unwrap();
+        let s = f.add_schema("S", "ros2msg", b"float64 x").unwrap();
+        let c = f.add_channel(s, "/c", "cdr").unwrap();
+        f.set_hand_over_bytes(keep_bytes);
+        let on_disk = || std::fs::metadata(&path).unwrap().len();
+        let mut lengths = Vec::new();
+        for chunk in 0..6u32 {
+            for k in 0..3u32 {
+                let n = chunk * 3 + k;
+                let data: Vec<u8> = (0..200).map(|i| (i * 7 + n) as u8).collect();
+                f.write_message(&header(c, n, u64::from(n) * 10), &data)
+                    .unwrap();
+            }
+            f.close_and_hand_over_when_due().unwrap();
+            lengths.push(on_disk());
+        }
+        f.hand_over().unwrap();
+        let handed = on_disk();
+        // What a crash now would leave: the file as it is, without its summary.
+        let cut = std::fs::read(&path).unwrap();
+        f.finish().unwrap();
+        f.into_file().unwrap();
+        (lengths, handed, cut, std::fs::read(&path).unwrap())
+    }
+
+    /// Closed chunks kept for one write (`set_hand_over_bytes`, as the log's writer thread
+    /// keeps them while batches wait) make the same file as chunks written as they close;
+    /// they reach the file when they reach the size or on `hand_over`, and what was handed
+    /// over reads back from a file cut there, as a crash would cut it.
+    #[test]
+    fn chunks_kept_for_one_write_make_the_same_file_and_reach_it_when_handed_over() {
+        for compression in [ChunkCompression::None, ChunkCompression::Lz4] {
+            let (eager, eager_handed, _, eager_file) = six_chunks(compression, 0);
+            assert!(
+                eager.windows(2).all(|w| w[0] < w[1]),
+                "each chunk on disk as it closes: {eager:?}"
+            );
+            assert_eq!(eager_handed, eager[5]);
+
+            // Kept whatever their number: nothing reaches the file until the hand-over.
+            let (kept, handed, cut, file) = six_chunks(compression, 1 << 20);
+            assert!(kept.iter().all(|&l| l == kept[0]), "{kept:?}");
+            assert!(kept[0] < eager[0], "{kept:?} against {eager:?}");
+            assert_eq!(handed, eager[5], "the hand-over writes every closed chunk");
+            assert!(file == eager_file, "the same bytes");
+            let messages = mcap::MessageStream::new(&cut)
+                .unwrap()
+                .take_while(Result::is_ok)
+                .count();
+            assert_eq!(
+                messages, 18,
+                "a file cut after the hand-over keeps every message"
+            );
+
+            // Kept until they reach a size (the first chunk's and a byte): on disk as the
+            // closes that reach it, and only those, wrote them.
+            let threshold = (eager[0] - kept[0]) as usize + 1;
+            let (by_size, _, _, file) = six_chunks(compression, threshold);
+            let (mut expected, mut on_disk, mut waiting) = (Vec::new(), kept[0], 0);
+            for (i, &end) in eager.iter().enumerate() {
+                let previous = if i == 0 { kept[0] } else { eager[i - 1] };
+                waiting += (end - previous) as usize;
+                if waiting >= threshold {
+                    (on_disk, waiting) = (end, 0);
+                }
+                expected.push(on_disk);
+            }
+            assert_eq!(by_size, expected, "against {eager:?}");
+            assert!(
+                by_size[0] == kept[0] && by_size[1] == eager[1],
+                "{by_size:?}"
+            );
+            assert!(file == eager_file);
+        }
+    }
+
+    /// A kept chunk that cannot be written is an error at the hand-over, not a panic, and is
+    /// not indexed: the summary still describes the file.
+    #[test]
+    fn a_kept_chunk_the_file_refuses_is_an_error_at_the_hand_over() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.mcap");
+        std::fs::write(&path, b"").unwrap();
+        let file = File::open(&path).unwrap();
+        let mut f = McapFile::new(file, "p", "l", ChunkCompression::None).unwrap();
+        f.set_hand_over_bytes(1 << 20);
+        let s = f.add_schema("S", "ros2msg", b"float64 x").unwrap();
+        let c = f.add_channel(s, "/c", "cdr").unwrap();
+        // Larger than the write buffer: its write goes to the file.
+        f.write_message(&header(c, 1, 0), &[0; 1 << 17]).unwrap();
+        // The chunk is kept; the records before it, flushed, are refused.
+        assert!(f.close_and_hand_over_when_due().is_err());
+        assert_eq!((f.closed_indexes.len(), f.chunk_count), (1, 0));
+        assert!(f.hand_over().is_err());
+        assert_eq!(f.chunk_count, 0, "no chunk reached the file");
+        assert!(f.closed_indexes.is_empty() && f.closed == 0);
+        assert!(f.finish().is_err());
     }
 
     #[test]

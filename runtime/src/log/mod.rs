@@ -56,7 +56,10 @@
 //! the file flushed (to the OS, without `fsync`) every `flush_period_s` of flight time
 //! ([`LogOptions`]). `shoot` writes through [`LogThread`], which hands the ticks to a writer
 //! thread every quarter second (taken up within 20 ms) and closes chunks every 0.73 s, so a
-//! crash of the process loses at most the last second; [`FlightLog::open`] reads every complete
+//! crash of the process in a flight in real time loses at most the last second (a simulated
+//! flight, thousands of times faster, may lose its last few milliseconds of wall-clock time:
+//! seconds of flight, which the writer had not caught up with or keeps for one larger write;
+//! see [`LogThread`]); [`FlightLog::open`] reads every complete
 //! chunk before the cut and sets [`FlightLog::truncated`]. (The writer reserves the file's
 //! disk space 8 MB ahead, its size unchanged, and gives back what it did not use when it
 //! finishes; a crash-cut log keeps up to 8 MB reserved after its data, freed when the file is

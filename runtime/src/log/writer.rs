@@ -61,7 +61,8 @@ pub struct LogOptions {
     /// Rate of `/measurement`: the actors' raw measured poses are kept nowhere else.
     pub measurement_hz: f64,
     /// Flight time between two chunk closes and flushes: what a crash may lose. Also closed
-    /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say.
+    /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say. (After
+    /// [`FlightLogWriter::defer_hand_over`], closed chunks may wait for one larger write.)
     pub flush_period_s: f64,
 }
 
@@ -383,15 +384,52 @@ impl FlightLogWriter {
         self.put(|c| &mut c.actor_scene, ns, &scene)
     }
 
+    /// The MCAP writer and the log's path, or the error of a finished log.
+    fn mcap(&mut self) -> io::Result<(&mut McapFile, &Path)> {
+        let path = &self.path;
+        match self.writer.as_mut() {
+            Some(w) => Ok((w, path)),
+            None => Err(io::Error::other(format!(
+                "cannot write {}: log finished",
+                path.display()
+            ))),
+        }
+    }
+
     /// Closes the current chunk and flushes the file to the OS.
     fn flush(&mut self) -> io::Result<()> {
-        let path = &self.path;
-        let writer = self.writer.as_mut().ok_or_else(|| {
-            io::Error::other(format!("cannot write {}: log finished", path.display()))
-        })?;
+        let (writer, path) = self.mcap()?;
         writer.flush().map_err(|e| annotate(path, e))?;
         self.ticks_since_flush = 0;
         Ok(())
+    }
+
+    /// Closes the current chunk at its flush time; it reaches the OS then, or, after
+    /// [`FlightLogWriter::defer_hand_over`], with the chunks after it.
+    fn close_chunk(&mut self) -> io::Result<()> {
+        let (writer, path) = self.mcap()?;
+        writer
+            .close_and_hand_over_when_due()
+            .map_err(|e| annotate(path, e))?;
+        self.ticks_since_flush = 0;
+        Ok(())
+    }
+
+    /// Keeps closed chunks until they reach `bytes`, then hands them to the OS in one write
+    /// (the default, 0: each chunk as it closes, every `flush_period_s` of flight). For a
+    /// writer that keeps up with a flight faster than real time ([`LogThread`](super::LogThread)):
+    /// the kernel's cost per byte falls with the write's size. What waits is what a crash of
+    /// the process may lose, so the caller calls [`FlightLogWriter::hand_over`] whenever it
+    /// has no tick waiting to be written.
+    pub fn defer_hand_over(&mut self, bytes: usize) -> io::Result<()> {
+        self.mcap()?.0.set_hand_over_bytes(bytes);
+        Ok(())
+    }
+
+    /// Hands the closed chunks to the OS (see [`FlightLogWriter::defer_hand_over`]).
+    pub fn hand_over(&mut self) -> io::Result<()> {
+        let (writer, path) = self.mcap()?;
+        writer.hand_over().map_err(|e| annotate(path, e))
     }
 
     /// Writes one tick on every per-tick topic, `/tf` when due, and closes the chunk when a
@@ -474,7 +512,7 @@ impl FlightLogWriter {
                 let period = self.options.flush_period_s;
                 self.next_flush_s = (self.next_flush_s + period).clamp(t_s, t_s + period);
             }
-            self.flush()?;
+            self.close_chunk()?;
         }
         Ok(())
     }
