@@ -9,7 +9,15 @@
 #[inline]
 pub(crate) fn for_write<T>(start: *const T, bytes: usize) {
     #[cfg(target_arch = "x86_64")]
-    each_line::<{ std::arch::x86_64::_MM_HINT_ET0 }, T>(start, bytes);
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_ET0};
+        each_line(start, bytes, |p| {
+            // SAFETY: a prefetch is a hint: it reads nothing the program can observe and
+            // never faults, whatever the address (`each_line` keeps the pointer arithmetic
+            // defined), and SSE is part of every x86-64 processor.
+            unsafe { _mm_prefetch::<_MM_HINT_ET0>(p) }
+        });
+    }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (start, bytes);
 }
@@ -18,25 +26,27 @@ pub(crate) fn for_write<T>(start: *const T, bytes: usize) {
 #[inline]
 pub(crate) fn for_read<T>(start: *const T, bytes: usize) {
     #[cfg(target_arch = "x86_64")]
-    each_line::<{ std::arch::x86_64::_MM_HINT_T0 }, T>(start, bytes);
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        each_line(start, bytes, |p| {
+            // SAFETY: as in `for_write`.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p) }
+        });
+    }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (start, bytes);
 }
 
-/// Prefetches (with the `_mm_prefetch` strategy `HINT`) each 64-byte line of the `bytes`
-/// from `start`.
+/// Calls `hint` with an address in each 64-byte line of the `bytes` from `start`.
 #[cfg(target_arch = "x86_64")]
 #[inline]
-fn each_line<const HINT: i32, T>(start: *const T, bytes: usize) {
+fn each_line<T>(start: *const T, bytes: usize, mut hint: impl FnMut(*const i8)) {
     // From the start of the first line.
     let misalign = start.addr() % 64;
     let (start, bytes) = (start.cast::<i8>().wrapping_sub(misalign), bytes + misalign);
     let mut offset = 0;
     while offset < bytes {
-        // SAFETY: a prefetch is a hint: it reads nothing the program can observe and never
-        // faults, whatever the address (`wrapping_add` keeps the pointer arithmetic
-        // defined), and SSE is part of every x86-64 processor.
-        unsafe { std::arch::x86_64::_mm_prefetch::<HINT>(start.wrapping_add(offset)) };
+        hint(start.wrapping_add(offset));
         offset += 64;
     }
 }
