@@ -43,7 +43,6 @@ use dronecine_grammar::Diagnostic;
 use crate::backend::{ActorFeed, BodyPose, MocapFrame};
 use crate::flight::{take_newer, ActorTracker};
 use crate::frames::ActorPose;
-use crate::prefetch;
 
 /// Ticks per batch: 2.56 s of flight at 100 Hz.
 const BATCH_TICKS: usize = 256;
@@ -75,34 +74,6 @@ pub(crate) struct DirectedTick {
     /// On the director's thread: the frame the feed gave at this tick, if any (the loop
     /// takes its actors from it: [`Mocap::actors_from_feed`](crate::backend::Mocap)).
     pub feed: FeedFrame,
-}
-
-impl DirectedTick {
-    /// Hints this core's cache to the tick's lines and its tracker's and frame's actors: for
-    /// writing before the director's thread fills it (the loop's core read it last), for
-    /// reading a tick before the loop reads it (the director's core wrote it). Without it
-    /// each copy in or out waits for its lines, one by one, from the other core: perf put
-    /// 2–8 % of the director's thread in copying [`Director::held`] into the slot. Measured
-    /// on the hour's flight without its log, which the director's thread bounds (probe, 16
-    /// interleaved runs each): median 0.336 → 0.328 s, fastest 0.328 → 0.320 s.
-    fn prefetch(&self, write: bool) {
-        let hint = if write {
-            prefetch::for_write::<u8>
-        } else {
-            prefetch::for_read::<u8>
-        };
-        hint((self as *const Self).cast(), std::mem::size_of::<Self>());
-        let poses = &self.tracker.poses;
-        hint(
-            poses.as_ptr().cast(),
-            std::mem::size_of_val(poses.as_slice()),
-        );
-        let actors = &self.feed.actors;
-        hint(
-            actors.as_ptr().cast(),
-            std::mem::size_of_val(actors.as_slice()),
-        );
-    }
 }
 
 /// The actors' part of the frame the feed gave at a tick, as the loop takes it.
@@ -303,9 +274,6 @@ impl Ahead {
                         if batch.len() <= n {
                             batch.push(DirectedTick::default());
                         }
-                        if let Some(after) = batch.get(n + 1) {
-                            after.prefetch(true);
-                        }
                         thread_side.tick(feed.as_mut(), &mut batch[n]);
                         done = batch[n].finished;
                         n += 1;
@@ -350,9 +318,6 @@ impl Ahead {
         }
         self.next += 1;
         self.taken += 1;
-        if let Some(after) = self.batch.get(self.next) {
-            after.prefetch(false);
-        }
         self.batch.get(self.next - 1)
     }
 

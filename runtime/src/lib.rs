@@ -36,7 +36,6 @@ pub mod math;
 pub mod model;
 pub mod natnet;
 pub mod pid;
-mod prefetch;
 pub mod record;
 pub mod replay;
 pub mod report;
