@@ -145,6 +145,11 @@ fn too_long(what: &str) -> io::Error {
     )
 }
 
+/// The chunk buffer's room for the open chunk (a second of flight's log is about 80 kB),
+/// allocated up front; closed chunks kept for one write ([`McapFile::set_hand_over_bytes`])
+/// get their room on top of it.
+const CHUNK_ROOM: usize = 1 << 18;
+
 /// Disk space reserved ahead of the writes at a time (see the module doc).
 pub const RESERVE_STEP: u64 = 8 << 20;
 
@@ -215,7 +220,7 @@ impl McapFile {
             pos: 0,
             compression,
             chunk: {
-                let mut c = Vec::with_capacity(1 << 18);
+                let mut c = Vec::with_capacity(CHUNK_ROOM);
                 c.resize(CHUNK_PREFIX, 0);
                 c
             },
@@ -482,7 +487,7 @@ impl McapFile {
     /// this calls [`McapFile::hand_over`] whenever it has nothing else to write.
     pub fn set_hand_over_bytes(&mut self, bytes: usize) {
         self.hand_over_bytes = bytes;
-        let room = bytes + (1 << 18);
+        let room = bytes + CHUNK_ROOM;
         self.chunk.reserve(room.saturating_sub(self.chunk.len()));
     }
 
@@ -508,8 +513,7 @@ impl McapFile {
     /// Closes the open chunk and hands everything written to the OS (no `fsync`).
     pub fn flush(&mut self) -> io::Result<()> {
         self.close_chunk()?;
-        self.write_closed()?;
-        self.out.flush()
+        self.hand_over()
     }
 
     /// Closes the open chunk; hands the closed chunks to the OS when they reach
@@ -920,14 +924,20 @@ mod tests {
         assert!(err.is_some(), "a flipped bit must fail the chunk CRC");
     }
 
-    #[test]
-    fn a_file_that_refuses_writes_gives_errors_not_panics() {
+    /// A writer on a file opened for reading only: every write that reaches it fails
+    /// (EBADF). The directory is kept with it.
+    fn refusing_file() -> (tempfile::TempDir, McapFile) {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("t.mcap");
         std::fs::write(&path, b"").unwrap();
-        // Opened for reading only: every write fails (EBADF).
         let file = File::open(&path).unwrap();
-        let mut f = McapFile::new(file, "p", "l", ChunkCompression::None).unwrap();
+        let f = McapFile::new(file, "p", "l", ChunkCompression::None).unwrap();
+        (dir, f)
+    }
+
+    #[test]
+    fn a_file_that_refuses_writes_gives_errors_not_panics() {
+        let (_dir, mut f) = refusing_file();
         // Larger than the write buffer: it goes to the file at once.
         f.add_schema("S", "jsonschema", &[b'x'; 1 << 17])
             .unwrap_err();
@@ -1027,11 +1037,7 @@ mod tests {
     /// not indexed: the summary still describes the file.
     #[test]
     fn a_kept_chunk_the_file_refuses_is_an_error_at_the_hand_over() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("t.mcap");
-        std::fs::write(&path, b"").unwrap();
-        let file = File::open(&path).unwrap();
-        let mut f = McapFile::new(file, "p", "l", ChunkCompression::None).unwrap();
+        let (_dir, mut f) = refusing_file();
         f.set_hand_over_bytes(1 << 20);
         let s = f.add_schema("S", "ros2msg", b"float64 x").unwrap();
         let c = f.add_channel(s, "/c", "cdr").unwrap();
