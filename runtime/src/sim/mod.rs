@@ -153,9 +153,11 @@ enum Event {
     Done,
 }
 
-fn next_event(k: u64, h: f64, mocap: &MocapGen, t_s: f64) -> Event {
+///
+/// `t_frame` is [`MocapGen::next_frame_s`], which changes only when a frame is taken: the
+/// loops that follow the schedule compute it once per frame, not once per step.
+fn next_event(k: u64, h: f64, t_frame: f64, t_s: f64) -> Event {
     let t_end = (k + 1) as f64 * h;
-    let t_frame = mocap.next as f64 / mocap.rate_hz;
     if t_frame <= t_s + TIME_EPS_S && t_frame < t_end - TIME_EPS_S {
         Event::Frame(t_frame)
     } else if t_end <= t_s + TIME_EPS_S {
@@ -166,6 +168,11 @@ fn next_event(k: u64, h: f64, mocap: &MocapGen, t_s: f64) -> Event {
 }
 
 impl MocapGen {
+    /// When the next frame is due.
+    fn next_frame_s(&self) -> f64 {
+        self.next as f64 / self.rate_hz
+    }
+
     /// The newest frame into `frame` if it is not `last_returned` (which it becomes): what a
     /// poll returns, each frame once.
     fn take_latest(&self, last_returned: &mut Option<u64>, frame: &mut MocapFrame) -> bool {
@@ -258,9 +265,13 @@ impl World {
         if !t_s.is_finite() || t_s <= self.now_s {
             return;
         }
+        let mut t_frame = self.mocap.next_frame_s();
         loop {
-            match next_event(self.plant.k, self.plant.h, &self.mocap, t_s) {
-                Event::Frame(t_frame) => self.emit_frame(t_frame),
+            match next_event(self.plant.k, self.plant.h, t_frame, t_s) {
+                Event::Frame(t) => {
+                    self.emit_frame(t);
+                    t_frame = self.mocap.next_frame_s();
+                }
                 Event::Step => {
                     if self.wind_on {
                         let t = self.plant.t_k();
@@ -598,11 +609,13 @@ struct ActorWorld {
 impl ActorFeed for ActorWorld {
     fn poll_at(&mut self, t_s: f64, frame: &mut MocapFrame) -> bool {
         if t_s.is_finite() && t_s > self.now_s {
+            let mut t_frame = self.mocap.next_frame_s();
             loop {
-                match next_event(self.k, self.h, &self.mocap, t_s) {
+                match next_event(self.k, self.h, t_frame, t_s) {
                     Event::Frame(t) => {
                         let actors = Some(&mut self.actors);
-                        self.mocap.emit(t, actors, self.zig, || ([0.0; 3], 0.0))
+                        self.mocap.emit(t, actors, self.zig, || ([0.0; 3], 0.0));
+                        t_frame = self.mocap.next_frame_s();
                     }
                     Event::Step => self.k += 1,
                     Event::Done => break,
