@@ -132,6 +132,11 @@ enum Command {
         /// Keep to the wall clock (by default a simulated flight runs as fast as it can).
         #[arg(long)]
         realtime: bool,
+        /// Force the log to the disk as it is written (fsync), as for a real or --realtime
+        /// flight. A simulated flight's log is otherwise left for the OS to write back: the
+        /// flight is reproducible from its script and seed.
+        #[arg(long)]
+        sync_log: bool,
         /// Control rate, Hz, from 10 to 1000 (the simulator's mocap sends 100 frames a second:
         /// a faster loop predicts between them).
         #[arg(
@@ -359,6 +364,7 @@ fn run(cli: Cli) -> ExitCode {
             paper_prefilter,
             per_tick_solve,
             realtime,
+            sync_log,
             rate,
             report,
             effects,
@@ -377,6 +383,7 @@ fn run(cli: Cli) -> ExitCode {
             paper_prefilter,
             per_tick_solve,
             realtime,
+            sync_log,
             rate_hz: rate,
             json: report == ReportFormat::Json,
             quiet,

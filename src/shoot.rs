@@ -12,7 +12,7 @@ use dronecine_compiler::compile::{self, Options};
 use dronecine_compiler::director::Director;
 use dronecine_grammar::diag;
 use dronecine_runtime::flight::{FlightError, Observer, Progress};
-use dronecine_runtime::log::{self, FlightLogWriter, LogOptions, LogScene, LogThread};
+use dronecine_runtime::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
 use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase};
 use dronecine_runtime::report::{Figures, FlightReport};
 use dronecine_runtime::session::{self, HardwareFlight, SessionError, SimFlight};
@@ -30,6 +30,8 @@ pub struct Args<'a> {
     pub paper_prefilter: bool,
     pub per_tick_solve: bool,
     pub realtime: bool,
+    /// Force a simulated flight's log to the disk as it is written (as a real flight's is).
+    pub sync_log: bool,
     pub rate_hz: f64,
     pub json: bool,
     pub quiet: bool,
@@ -291,11 +293,11 @@ pub fn run(a: &Args) -> ExitCode {
     };
     // The log is written on a thread of its own; a crash loses at most the last second
     // (a batch handed to the writer every 0.25 s, taken up within 0.02 s, a chunk closed
-    // every 0.73 s).
-    let options = LogOptions {
-        flush_period_s: 1.0 - log::BATCH_PERIOD_S - log::POLL_MAX_S,
-        ..LogOptions::default()
-    };
+    // every 0.73 s). Forced to the disk as it is written when the flight cannot be flown
+    // again (paced by the wall clock), or asked: a simulated flight as fast as it goes is
+    // its script's, profile's and seed's to reproduce, and leaves the disk to the OS.
+    let durable = a.sync_log || a.realtime || !matches!(target, Target::Sim);
+    let options = LogOptions::shoot(durable);
     // A flight never overwrites a recording: a `--log` that exists is refused before take-off,
     // and a default name already taken (two flights in one second) gets `-2`, `-3`, …
     let created = if a.log.is_some() && into_dir.is_none() {

@@ -556,3 +556,38 @@ fn emulate_refuses_a_script_without_a_scene_for_what_it_lacks() {
         assert!(!e.contains("a shot"), "{script}: {e}");
     }
 }
+
+/// `--sync-log` forces a simulated flight's log to the disk as it is written (as a real
+/// flight's is); the log is the same bytes as the default one, which leaves the disk to the
+/// OS, and replays.
+#[test]
+fn shoot_sync_log_writes_the_same_log() {
+    let dir = temp_dir("sync-log");
+    let (plain, synced) = (dir.join("plain.mcap"), dir.join("synced.mcap"));
+    for (path, sync) in [(&plain, false), (&synced, true)] {
+        let mut args = vec![
+            "shoot",
+            "shots/square.psl",
+            "-q",
+            "--log",
+            path.to_str().unwrap(),
+        ];
+        if sync {
+            args.push("--sync-log");
+        }
+        let o = dronecine(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    }
+    let (a, b) = (
+        std::fs::read(&plain).unwrap(),
+        std::fs::read(&synced).unwrap(),
+    );
+    assert!(
+        a == b,
+        "the same log either way ({} and {} bytes)",
+        a.len(),
+        b.len()
+    );
+    let o = dronecine(&["replay", synced.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -1,8 +1,11 @@
 //! A whole simulated flight, flight log included: `shoot` of a generated one-hour script at
 //! 100 Hz (720 shots of 5 s, one- and two-actor framings, walking actors), on the embedded
 //! simulator with every effect on, the LQG servo, and the MCAP flight log written to a
-//! temporary file. Also the same flight without the log, to split the cost, and the hour with
-//! the director stepped ahead of the loop on a thread of its own (`SimConfig::actors_ahead`).
+//! temporary file with `shoot`'s options ([`LogOptions::shoot`]: handed to the OS, not forced
+//! to the disk, as `shoot` writes a simulated flight's). Also the same flight without the log,
+//! to split the cost, the hour with the director stepped ahead of the loop on a thread of its
+//! own (`SimConfig::actors_ahead`), and that hour with its log forced to the disk as it is
+//! written (`shoot --sync-log`, as a real flight's is).
 //!
 //! Each group also prints the CPU time a flight took, all threads together (the loop, the log's
 //! writer and syncer): on a machine with two cores, the flight with its log cannot take less
@@ -17,7 +20,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use dronecine_compiler::profile::Profile;
 use dronecine_grammar::Script;
 use dronecine_runtime::flight::{NoObserver, NullSink};
-use dronecine_runtime::log::{FlightLogWriter, LogScene, LogThread};
+use dronecine_runtime::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
 use dronecine_runtime::record::{ControllerSetup, FlightHeader};
 use dronecine_runtime::session::{fly_simulated, SimFlight};
 use dronecine_runtime::sim::SimConfig;
@@ -58,7 +61,9 @@ fn parse(text: &str) -> Script {
     checked.script.unwrap()
 }
 
-fn fly(text: &str, script: &Script, log: Option<&std::path::Path>, ahead: bool) {
+/// Flies the script; with `log`, writes it there as `shoot` does, forced to the disk as it is
+/// written if `durable`.
+fn fly(text: &str, script: &Script, log: Option<(&std::path::Path, bool)>, ahead: bool) {
     let scene = script.scene.as_ref().unwrap();
     let profile = Profile::builtin("ardrone2").unwrap();
     let mut sim = SimConfig::new(1);
@@ -78,7 +83,7 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>, ahead: bool) 
     };
     let report = match log {
         None => fly_simulated(&flight, &mut NullSink, &mut NoObserver).unwrap(),
-        Some(path) => {
+        Some((path, durable)) => {
             let names: Vec<String> = scene.actors.iter().map(|a| a.name.clone()).collect();
             let heights: Vec<f64> = scene.actors.iter().map(|a| a.height_m).collect();
             let header = FlightHeader {
@@ -96,7 +101,8 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>, ahead: bool) 
                 dronecine_version: "bench".into(),
             };
             let lens = *dronecine_compiler::director::Director::new(script, scene, &profile).lens();
-            let writer = FlightLogWriter::create(
+            // As `shoot` writes a simulated flight's log: its options, on a thread of its own.
+            let writer = FlightLogWriter::create_with(
                 path,
                 &header,
                 &LogScene {
@@ -105,9 +111,9 @@ fn fly(text: &str, script: &Script, log: Option<&std::path::Path>, ahead: bool) 
                     actor_names: &names,
                     actor_heights_m: &heights,
                 },
+                LogOptions::shoot(durable),
             )
             .unwrap();
-            // As `shoot` writes it: on a thread of its own.
             let mut sink = LogThread::spawn(writer, 100.0).unwrap();
             let r = fly_simulated(&flight, &mut sink, &mut NoObserver).unwrap();
             sink.finish().unwrap();
@@ -178,21 +184,30 @@ fn bench(c: &mut Criterion) {
         // time): the previous flight's file is removed before the clock starts. Truncating it
         // inside the timed run instead (an hour's 400 MB of page cache to drop, some of it
         // still being written back) added about 0.1 s that no flight pays.
-        let mut tally = CpuTally::default();
-        let name = format!("{minutes} min flight{how} with its log");
-        g.bench_function(&name, |b| {
-            b.iter_custom(|iters| {
-                let mut total = Duration::ZERO;
-                for _ in 0..iters {
-                    let _ = std::fs::remove_file(&path);
-                    let start = Instant::now();
-                    tally.measure(|| fly(&text, &script, Some(&path), ahead));
-                    total += start.elapsed();
-                }
-                total
-            })
-        });
-        tally.report(&name);
+        //
+        // The log as `shoot` writes a simulated flight's, handed to the OS and not forced to
+        // the disk (the file is removed before the OS writes it back: no disk write is
+        // measured); and for the hour with the director ahead, also forced to the disk as it
+        // is written (`shoot --sync-log`, and a real flight's).
+        let durabilities: &[bool] = if ahead { &[false, true] } else { &[false] };
+        for &durable in durabilities {
+            let mut tally = CpuTally::default();
+            let forced = if durable { " forced to the disk" } else { "" };
+            let name = format!("{minutes} min flight{how} with its log{forced}");
+            g.bench_function(&name, |b| {
+                b.iter_custom(|iters| {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        let _ = std::fs::remove_file(&path);
+                        let start = Instant::now();
+                        tally.measure(|| fly(&text, &script, Some((&path, durable)), ahead));
+                        total += start.elapsed();
+                    }
+                    total
+                })
+            });
+            tally.report(&name);
+        }
     }
     g.finish();
 }

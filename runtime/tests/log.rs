@@ -1198,6 +1198,36 @@ fn a_short_compressed_log_reads_whole() {
     assert_eq!(log.ticks.len(), ticks.len());
 }
 
+/// A log not forced to the disk (`shoot`'s for a simulated flight) is the same file as one that
+/// is, through the log thread as `shoot` writes them: only the durable one gets a handle for
+/// its syncer.
+#[test]
+fn a_log_not_forced_to_the_disk_is_the_same_file() {
+    use dronecine_runtime::flight::FlightSink;
+    use dronecine_runtime::log::LogOptions;
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let ticks: Vec<Tick> = (0..600).map(flight_tick).collect();
+    let mut files = Vec::new();
+    for durable in [true, false] {
+        let path = dir.path().join(format!("durable-{durable}.mcap"));
+        let options = LogOptions::shoot(durable);
+        assert_eq!(options.durable, durable);
+        let w = FlightLogWriter::create_with(&path, &header(), &scene_of(&names), options).unwrap();
+        assert_eq!(w.sync_handle().is_some(), durable);
+        let mut sink = LogThread::spawn(w, 100.0).unwrap();
+        for t in &ticks {
+            sink.tick(&t.record()).unwrap();
+        }
+        sink.finish().unwrap();
+        let log = FlightLog::open(&path).unwrap();
+        assert!(!log.truncated, "{:?}", log.damage);
+        assert_eq!(log.ticks.len(), ticks.len());
+        files.push(std::fs::read(&path).unwrap());
+    }
+    assert!(files[0] == files[1], "the same bytes either way");
+}
+
 /// The log's writer and syncer lower their own priority (nice +10, clamped at 19) so that the
 /// loop comes first when every core is busy; the loop's thread keeps its own.
 #[cfg(target_os = "linux")]

@@ -64,6 +64,15 @@ pub struct LogOptions {
     /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say. (After
     /// [`FlightLogWriter::defer_hand_over`], closed chunks may wait for one larger write.)
     pub flush_period_s: f64,
+    /// Whether the log is forced to the disk as it is written: its data synced every few
+    /// seconds while the flight goes on ([`LogThread`](super::LogThread)'s syncer) and the
+    /// file at [`FlightLogWriter::finish`]; a power cut then loses at most what came since the
+    /// last sync. Without, the log is handed to the OS all the same (a crash of the process
+    /// loses what it did before), which writes it to the disk in its own time. `shoot` forces
+    /// a flight paced by the wall clock (a real one, or `--realtime`), whose log cannot be
+    /// made again; a simulated flight as fast as it can go is reproducible from its script,
+    /// profile and seed (which its log records), and is forced only with `--sync-log`.
+    pub durable: bool,
 }
 
 impl Default for LogOptions {
@@ -74,6 +83,21 @@ impl Default for LogOptions {
             plot_hz: 10.0,
             measurement_hz: 30.0,
             flush_period_s: 1.0,
+            durable: true,
+        }
+    }
+}
+
+impl LogOptions {
+    /// `shoot`'s log: a chunk closed every `1 − BATCH_PERIOD_S − POLL_MAX_S` (0.73 s) of
+    /// flight, so that a crash of the process loses at most the last second of a flight in
+    /// real time ([`LogThread`](super::LogThread)), forced to the disk as it is written if
+    /// `durable`.
+    pub fn shoot(durable: bool) -> LogOptions {
+        LogOptions {
+            flush_period_s: 1.0 - super::BATCH_PERIOD_S - super::POLL_MAX_S,
+            durable,
+            ..LogOptions::default()
         }
     }
 }
@@ -590,26 +614,29 @@ impl FlightLogWriter {
         )
     }
 
-    /// Closes the last chunk and writes the summary and the closing magic.
+    /// Closes the last chunk, writes the summary and the closing magic, and (a
+    /// [`LogOptions::durable`] log) `fsync`s the file.
     pub fn finish(mut self) -> io::Result<()> {
         let path = self.path.clone();
         let mut writer = self.writer.take().ok_or_else(|| {
             io::Error::other(format!("cannot write {}: log finished", path.display()))
         })?;
         writer.finish().map_err(|e| annotate(&path, e))?;
-        writer
-            .into_file()
-            .map_err(|e| annotate(&path, e))?
-            .sync_all()
-            .map_err(|e| annotate(&path, e))
+        let file = writer.into_file().map_err(|e| annotate(&path, e))?;
+        if self.options.durable {
+            file.sync_all().map_err(|e| annotate(&path, e))?;
+        }
+        Ok(())
     }
 
     /// A handle on the log's file for `sync_data` from another thread while this one writes
     /// ([`LogThread`](super::LogThread) syncs every few seconds, so that the final `fsync` of
     /// [`finish`](Self::finish) has only the tail left to write, and a power cut loses less).
-    /// `None` when the OS could not duplicate the handle.
+    /// `None` for a log that is not [`LogOptions::durable`], or when the OS could not
+    /// duplicate the handle.
     pub fn sync_handle(&self) -> Option<File> {
-        self.sync_file.as_ref().and_then(|f| f.try_clone().ok())
+        let file = self.sync_file.as_ref().filter(|_| self.options.durable)?;
+        file.try_clone().ok()
     }
 
     /// The log's path.
