@@ -65,7 +65,12 @@
 //! finishes; a crash-cut log keeps up to 8 MB reserved after its data, freed when the file is
 //! truncated or copied.) Damage inside the file (a bad
 //! sector, a corrupt copy) costs the chunks it touches: the reader skips to the next intact
-//! chunk and reads on. A power cut may lose what the OS had not yet written.
+//! chunk and reads on. A power cut may lose what the OS had not yet written: for a log forced
+//! to the disk as it is written ([`LogOptions::durable`]: `shoot`'s for a real flight, one
+//! paced by the wall clock, or with `--sync-log`), what came since the last sync (two
+//! seconds in real time); for a simulated flight's log as `shoot` writes it by default, left
+//! to the OS (the flight is reproducible from the script, the profile and the seed its log
+//! records), whatever the OS had not written back yet.
 
 pub mod cdr;
 mod mcap_file;
