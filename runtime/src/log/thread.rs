@@ -17,12 +17,11 @@
 //! For a log forced to the disk as it is written ([`LogOptions::durable`]: a flight paced by
 //! the wall clock, or `shoot --sync-log`), a third thread, which mostly waits on the disk,
 //! syncs the file's data (`sync_data`) when the writer thread asks it (waking it is a system
-//! call: not one the loop makes): every
-//! two seconds of flight when two seconds of wall-clock time have passed since the last sync
-//! (a flight in real time: every two seconds), and every 32 s of flight whatever the clock
-//! says (a simulated flight, thousands of times faster than real time). A power cut loses
-//! less, and the disk writes while the flight goes on, so the final `fsync` has only the tail
-//! left: measured on an hour of simulated flight (500 MB of log), syncing only by the clock
+//! call: not one the loop makes): every two seconds of flight when two seconds of wall-clock
+//! time have passed since the last sync (a flight in real time: every two seconds), and every
+//! 32 s of flight whatever the clock says (a simulated flight, thousands of times faster
+//! than real time). A power cut loses less, and the disk writes while the flight goes on, so
+//! the final `fsync` has only the tail left: measured on an hour of simulated flight (500 MB of log), syncing only by the clock
 //! left 0.21 s of final `fsync` and took 1.20 s, syncing also every 32 s of flight 1.07 s;
 //! syncing every two seconds of flight (1,800 syncs) was slower again. Not syncing at all is
 //! slower too, not faster: the hour's flight bench with its log on disk took 0.72 s against

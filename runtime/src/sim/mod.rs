@@ -153,9 +153,9 @@ enum Event {
     Done,
 }
 
-///
-/// `t_frame` is [`MocapGen::next_frame_s`], which changes only when a frame is taken: the
-/// loops that follow the schedule compute it once per frame, not once per step.
+/// The schedule's next [`Event`] from step `k` (of `h` seconds) on the way to `t_s`, with the
+/// next frame due at `t_frame` ([`MocapGen::next_frame_s`], which changes only when a frame
+/// is taken: the loops that follow the schedule compute it once per frame, not per step).
 fn next_event(k: u64, h: f64, t_frame: f64, t_s: f64) -> Event {
     let t_end = (k + 1) as f64 * h;
     if t_frame <= t_s + TIME_EPS_S && t_frame < t_end - TIME_EPS_S {
