@@ -166,7 +166,7 @@ pub struct FlightLogWriter {
     flush_every_ticks: u64,
     /// Where `/tf` puts the drone on ticks without an estimate.
     last_estimate: Option<([f64; 3], f64)>,
-    /// A second handle on the file, for syncing it from another thread.
+    /// A second handle on the file, for syncing it from another thread (a durable log only).
     sync_file: Option<File>,
 }
 
@@ -229,7 +229,8 @@ impl FlightLogWriter {
         options: LogOptions,
     ) -> io::Result<FlightLogWriter> {
         let err = |e| annotate(path, e);
-        let sync_file = file.try_clone().ok();
+        // The syncer's handle, for a log forced to the disk only.
+        let sync_file = options.durable.then(|| file.try_clone().ok()).flatten();
         let compression = match options.compression {
             LogCompression::None => ChunkCompression::None,
             LogCompression::Lz4 => ChunkCompression::Lz4,
@@ -635,8 +636,7 @@ impl FlightLogWriter {
     /// `None` for a log that is not [`LogOptions::durable`], or when the OS could not
     /// duplicate the handle.
     pub fn sync_handle(&self) -> Option<File> {
-        let file = self.sync_file.as_ref().filter(|_| self.options.durable)?;
-        file.try_clone().ok()
+        self.sync_file.as_ref().and_then(|f| f.try_clone().ok())
     }
 
     /// The log's path.
