@@ -8,14 +8,14 @@ use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
+use dronecine_backend::Backends;
 use dronecine_grammar::script::{Scene, Stage};
-use dronecine_runtime::calibrate::{self as cal, Plan};
-use dronecine_runtime::flight::Backends;
-use dronecine_runtime::identify::{self, Axis, FitError, ModelFit, Segment};
-use dronecine_runtime::log::FlightLog;
-use dronecine_runtime::session;
-use dronecine_runtime::sim::{Effects, SimConfig, Simulator};
+use dronecine_identify::calibrate::{self as cal, Plan};
+use dronecine_identify::{self as identify, Axis, FitError, ModelFit, Segment};
+use dronecine_mcap::log::FlightLog;
+use dronecine_profile::{Profile, DEFAULT_NAME};
+use dronecine_runtime as session;
+use dronecine_sim::{Effects, SimConfig, Simulator};
 
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
 
@@ -221,7 +221,7 @@ fn write_report(
         let svg_path = dir.join(format!("{}.svg", axis.name()));
         crate::files::write_atomic(&svg_path, &svg)
             .map_err(|e| format!("cannot write `{}`: {e}", svg_path.display()))?;
-        let png = dronecine_compiler::preview::svg_to_png(&svg)
+        let png = dronecine_preview::svg_to_png(&svg)
             .map_err(|e| format!("cannot render the {} report: {e}", axis.name()))?;
         let png_path = dir.join(format!("{}.png", axis.name()));
         std::fs::write(&png_path, png)

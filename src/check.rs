@@ -6,10 +6,11 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use dronecine_compiler::profile::{Profile, ProfileError};
-use dronecine_grammar::diag::{self, JsonDiagnostic};
+use dronecine_diag::Severity;
+use dronecine_diag::{self as diag, JsonDiagnostic};
 use dronecine_grammar::script::DroneRef;
-use dronecine_grammar::{Checked, Options, Script, Severity};
+use dronecine_grammar::{Checked, Options, Script};
+use dronecine_profile::{Profile, ProfileError};
 use serde::Serialize;
 
 use crate::files;
@@ -47,8 +48,8 @@ pub fn check_file(path: &std::path::Path) -> FileResult {
     let bytes = match std::fs::read(path) {
         Ok(b) => b,
         Err(e) => {
-            let d = dronecine_grammar::Diagnostic::error(
-                dronecine_grammar::Code::FileNotFound,
+            let d = dronecine_diag::Diagnostic::error(
+                dronecine_grammar::PslCode::FileNotFound,
                 Default::default(),
                 format!("cannot read `{name}`: {e}"),
             )
@@ -69,7 +70,7 @@ pub fn check_file(path: &std::path::Path) -> FileResult {
         Ok(src) => {
             let base = files::base_dir(path);
             let opts = Options {
-                known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+                known_drones: dronecine_profile::BUILTIN_NAMES,
                 base_dir: Some(&base),
             };
             let checked = dronecine_grammar::check(src, &opts);
@@ -95,7 +96,7 @@ pub fn check_file(path: &std::path::Path) -> FileResult {
 struct ProfileCheck {
     name: String,
     text: String,
-    diagnostics: Vec<dronecine_grammar::Diagnostic>,
+    diagnostics: Vec<dronecine_diag::Diagnostic>,
 }
 
 /// The [`ProfileCheck`] of `path`'s script; `None` when the script names no profile file,

@@ -8,14 +8,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use dronecine_compiler::compile::{self, Compiled, Options};
-use dronecine_compiler::director::ShotTiming;
-use dronecine_compiler::output::{CsvWriter, McapWriter, RunInfo};
-use dronecine_compiler::preview::{self, PreviewInput, ShotInfo, ShotKind};
-use dronecine_compiler::profile::{Profile, ProfileError, DEFAULT_NAME};
+use dronecine_compiler::reference::ShotTiming;
 use dronecine_compiler::reference::{ActorPose, Sample};
-use dronecine_grammar::diag;
+use dronecine_diag as diag;
+use dronecine_diag::Severity;
 use dronecine_grammar::script::{DroneRef, Scene, Script, ShotContent};
-use dronecine_grammar::Severity;
+use dronecine_mcap::output::{CsvWriter, McapWriter, RunInfo};
+use dronecine_preview::{self as preview, PreviewInput, ShotInfo, ShotKind};
+use dronecine_profile::{Profile, ProfileError, DEFAULT_NAME};
 
 use crate::check;
 
@@ -112,8 +112,8 @@ pub fn profile_arg(option: &str, arg: &str, color: bool) -> Result<Profile, Exit
 /// The message for `option NAME` that names no built-in profile and no file: the closest
 /// built-in names, all of them, and how to give a file instead.
 fn unknown_profile(option: &str, name: &str) -> String {
-    use dronecine_compiler::profile::BUILTIN_NAMES;
-    use dronecine_grammar::suggest;
+    use dronecine_diag::suggest;
+    use dronecine_profile::BUILTIN_NAMES;
     let list = suggest::or_list(BUILTIN_NAMES);
     let help = match suggest::did_you_mean(name, BUILTIN_NAMES.iter().copied()) {
         Some(guess) => format!(

@@ -7,13 +7,13 @@ use std::net::{IpAddr, SocketAddr};
 use std::path::Path;
 use std::process::ExitCode;
 
-use dronecine_compiler::profile::{Profile, DEFAULT_NAME};
-use dronecine_runtime::emulator::{
+use dronecine_emulator::{
     empty_scene, Emulator, EmulatorConfig, NatNetConfig, NatNetData, ACTOR_ID_BASE, DRONE_ID,
 };
-use dronecine_runtime::natnet::frame::{UpAxis, Version};
-use dronecine_runtime::session;
-use dronecine_runtime::sim::SimConfig;
+use dronecine_natnet::frame::{UpAxis, Version};
+use dronecine_profile::{Profile, DEFAULT_NAME};
+use dronecine_runtime as session;
+use dronecine_sim::SimConfig;
 
 pub struct Args<'a> {
     pub host: IpAddr,

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use dronecine_grammar::diag;
+use dronecine_diag as diag;
 
 use crate::files;
 

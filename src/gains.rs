@@ -6,8 +6,8 @@
 
 use std::process::ExitCode;
 
-use dronecine_compiler::profile::DEFAULT_NAME;
-use dronecine_runtime::lqg::{GainsReport, LqgServo, ServoOptions};
+use dronecine_profile::DEFAULT_NAME;
+use dronecine_servo::lqg::{GainsReport, LqgServo, ServoOptions};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -139,7 +139,7 @@ pub fn run(a: &Args, color: bool) -> ExitCode {
         for (section, key, what, x, flag) in values {
             let overridden = given.iter().any(|g| g.rsplit('.').next() == Some(flag));
             if let Some(why) = overridden
-                .then(|| dronecine_compiler::profile::out_of_range(section, key, &what, x))
+                .then(|| dronecine_profile::out_of_range(section, key, &what, x))
                 .flatten()
             {
                 return Err(format!("--{flag}: {why}"));

@@ -3,9 +3,10 @@
 
 use std::path::Path;
 
-use dronecine_grammar::diag;
-use dronecine_runtime::natnet::rig::{Rig, RigError};
-use dronecine_runtime::url::{ArDroneUrl, NatNetUrl};
+use dronecine_ardrone::url::ArDroneUrl;
+use dronecine_diag as diag;
+use dronecine_natnet::rig::{Rig, RigError};
+use dronecine_natnet::url::NatNetUrl;
 
 /// A real drone and its motion capture.
 pub struct Target {

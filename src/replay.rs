@@ -4,8 +4,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use dronecine_runtime::log::FlightLog;
-use dronecine_runtime::replay;
+use dronecine_flight::replay;
+use dronecine_mcap::log::FlightLog;
 
 pub fn run(file: &Path, json: bool) -> ExitCode {
     let log = match FlightLog::open(file) {
@@ -162,7 +162,7 @@ pub fn damage_warnings(file: &Path, log: &FlightLog) -> Vec<String> {
 
 /// Where the logged flight was flown, as a reader wants it to fly it again: the drone's URL,
 /// or the simulator's seed and the effects that were off (`shoot --seed N --sim-off …`).
-fn flown_on(h: &dronecine_runtime::record::FlightHeader) -> String {
+fn flown_on(h: &dronecine_mcap::record::FlightHeader) -> String {
     if h.backend != "sim" {
         return format!("flown on {}", h.backend);
     }

@@ -10,13 +10,14 @@ use std::time::{Duration, Instant};
 
 use dronecine_compiler::compile::{self, Options};
 use dronecine_compiler::director::Director;
-use dronecine_grammar::diag;
-use dronecine_runtime::flight::{FlightError, Observer, Progress};
-use dronecine_runtime::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
-use dronecine_runtime::record::{ControllerSetup, Event, FlightHeader, Phase};
-use dronecine_runtime::report::{Figures, FlightReport};
-use dronecine_runtime::session::{self, HardwareFlight, SessionError, SimFlight};
-use dronecine_runtime::sim::{Effects, SimConfig};
+use dronecine_diag as diag;
+use dronecine_flight::report::{Figures, FlightReport};
+use dronecine_flight::{FlightError, Observer, Progress};
+use dronecine_mcap::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
+use dronecine_mcap::record::{Event, FlightHeader, Phase};
+use dronecine_runtime::{self as session, HardwareFlight, SessionError, SimFlight};
+use dronecine_servo::setup::ControllerSetup;
+use dronecine_sim::{Effects, SimConfig};
 
 /// Ctrl-C presses during the flight.
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
@@ -70,7 +71,7 @@ pub(crate) fn sim_effects(ideal: bool, off: &[String]) -> Result<Effects, String
     for name in off.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
         if !effects.set(name, false) {
             let names = Effects::NAMES.iter().map(|(n, _)| *n);
-            let guess = dronecine_grammar::suggest::did_you_mean(name, names.clone())
+            let guess = dronecine_diag::suggest::did_you_mean(name, names.clone())
                 .map_or(String::new(), |g| format!(" ({g})"));
             return Err(format!(
                 "--sim-off: no simulator effect `{name}`{guess}; the effects are {}",
@@ -128,7 +129,7 @@ pub(crate) fn check_servo_rate(rate_hz: f64) -> Result<(), String> {
 fn warnings_line(diagnostics: &[diag::Diagnostic], name: &str, rate: &str) -> Option<String> {
     let mut counts: Vec<(&str, usize)> = Vec::new();
     for d in diagnostics {
-        if d.is_error() || d.code == dronecine_grammar::Code::Reposition {
+        if d.is_error() || d.code == dronecine_compiler::CompileCode::Reposition {
             continue;
         }
         match counts.iter_mut().find(|(c, _)| *c == d.code.as_str()) {
@@ -727,10 +728,10 @@ pub fn render_report_as(
 mod tests {
     use super::{civil_from_days, effects_off_phrase, first_free, render_report, sim_effects};
     use super::{Display, EventTally, DISPLAY_PERIOD};
-    use dronecine_runtime::flight::Progress;
-    use dronecine_runtime::record::{Event, Phase};
-    use dronecine_runtime::report::{Figures, FlightReport, ShotReport};
-    use dronecine_runtime::sim::Effects;
+    use dronecine_flight::report::{Figures, FlightReport, ShotReport};
+    use dronecine_flight::Progress;
+    use dronecine_mcap::record::{Event, Phase};
+    use dronecine_sim::Effects;
     use std::path::Path;
     use std::time::{Duration, Instant};
 

@@ -8,9 +8,9 @@
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use dronecine_runtime::ardrone::client::{ArDroneClient, ArDroneOptions, ArDroneStatus};
-use dronecine_runtime::backend::Drone;
-use dronecine_runtime::url::ArDroneUrl;
+use dronecine_ardrone::client::{ArDroneClient, ArDroneOptions, ArDroneStatus};
+use dronecine_ardrone::url::ArDroneUrl;
+use dronecine_backend::Drone;
 
 pub struct Args<'a> {
     pub drone: &'a str,

@@ -9,12 +9,12 @@
 //! [`Blocking::contacts`] finds the walks that bring two actors within
 //! [`ACTORS_MIN_APART_M`] of each other (the grammar checks only where they start).
 
+use dronecine_diag::Span;
 use dronecine_grammar::script::{Action, Scene, ACTORS_MIN_APART_M};
-use dronecine_grammar::vocab::wrap_angle_rad;
-use dronecine_grammar::Span;
+use dronecine_math::wrap_angle_rad;
 
-use crate::math;
 use crate::reference::ActorPose;
+use dronecine_math as math;
 
 /// Minimum-jerk profile: position, velocity and acceleration factors of `u ∈ [0, 1]`.
 pub fn min_jerk(u: f64) -> (f64, f64, f64) {

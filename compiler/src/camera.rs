@@ -1,16 +1,34 @@
-//! The camera conventions (camera-math.md, preamble and §4): lens, pose, projection and the
-//! roll-free orientation that puts a target at a screen point.
+//! The camera conventions: lens, pose, projection and the roll-free orientation that puts a
+//! target at a screen point.
 //!
 //! This module is the one source of truth for the camera frame: world z up; heading ψ
 //! counter-clockwise from +x; camera pitch τ up positive; no roll. Screen (x, y) in [−1, 1]²,
 //! x right, y up. A point at camera-frame coordinates (right r, forward f, up u) projects to
 //! `(r·Sx/f, u·Sy/f)` with `Sx = 1/tan(fovX/2)`, `Sy = 1/tan(fovY/2)`.
 
-use crate::math;
+use dronecine_math as math;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 pub type Vec3 = Vector3<f64>;
+
+/// The angle between `a` and `b`, in [0, π] (nalgebra's `a.angle(&b)`, whose `acos` is the
+/// platform's): 0 when either is zero.
+#[inline]
+pub fn angle(a: &Vec3, b: &Vec3) -> f64 {
+    let (na, nb) = (a.norm(), b.norm());
+    if na == 0.0 || nb == 0.0 {
+        return 0.0;
+    }
+    let c = a.dot(b) / (na * nb);
+    if c > 1.0 {
+        0.0
+    } else if c < -1.0 {
+        std::f64::consts::PI
+    } else {
+        math::acos(c)
+    }
+}
 
 /// A pinhole lens: horizontal field of view and frame aspect (width over height).
 ///
@@ -185,7 +203,7 @@ pub struct Orientation {
 pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2]) -> Orientation {
     let d = target_m - position_m;
     let b = math::atan2(d.y, d.x);
-    let e = math::atan2(d.z, crate::norm_xy(d.x, d.y));
+    let e = math::atan2(d.z, dronecine_math::norm_xy(d.x, d.y));
     let sx = lens.sx();
     let xp = screen[0] / sx;
     let yp = screen[1] / (sx * lens.aspect());
@@ -195,7 +213,7 @@ pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2])
     let pitch = math::asin(arg.clamp(-1.0, 1.0)) - math::atan(yp);
     let heading = b + math::atan2(xp, math::cos(pitch) - yp * math::sin(pitch));
     Orientation {
-        heading_rad: dronecine_grammar::vocab::wrap_angle_rad(heading),
+        heading_rad: dronecine_math::wrap_angle_rad(heading),
         pitch_rad: pitch,
         clamped,
     }
@@ -214,7 +232,7 @@ pub fn orient_fixed_pitch(
     // (d·r, d·f); with pitch τ, forward f = cos τ·h + sin τ·dz where h is the horizontal
     // component along the heading. Solve r·Sx = x·f for the heading.
     let d = target_m - position_m;
-    let rho = crate::norm_xy(d.x, d.y);
+    let rho = dronecine_math::norm_xy(d.x, d.y);
     let xp = screen_x / lens.sx();
     // A level camera (+0, bit for bit: sin(−0) is −0) skips the library call.
     let (sin_t, cos_t) = if pitch_rad.to_bits() == 0 {
@@ -228,9 +246,9 @@ pub fn orient_fixed_pitch(
     let a = rho;
     let c = -xp * cos_t * rho;
     let rhs = xp * sin_t * d.z;
-    let amp = crate::norm_xy(a, c);
+    let amp = dronecine_math::norm_xy(a, c);
     if amp < 1e-12 {
-        return dronecine_grammar::vocab::wrap_angle_rad(math::atan2(d.y, d.x));
+        return dronecine_math::wrap_angle_rad(math::atan2(d.y, d.x));
     }
     // heading = bearing + asin(s) − φ, composed as unit vectors (one atan2, no asin):
     // bearing (d.x, d.y)/ρ, asin(s) (√(1 − s²), s), −φ (a, −c)/amp; the scales do not
@@ -239,12 +257,31 @@ pub fn orient_fixed_pitch(
     let cs = (1.0 - s * s).sqrt();
     let (u, v) = (cs * a + s * c, s * a - cs * c);
     let (x, y) = (d.x * u - d.y * v, d.x * v + d.y * u);
-    dronecine_grammar::vocab::wrap_angle_rad(math::atan2(y, x))
+    dronecine_math::wrap_angle_rad(math::atan2(y, x))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// nalgebra's `angle`, with the portable `acos`: within an ulp, the same edge cases.
+    #[test]
+    fn angle_is_nalgebras() {
+        use dronecine_math::cos;
+        fn ulps(a: f64, b: f64) -> u64 {
+            (a.to_bits() as i64 - b.to_bits() as i64).unsigned_abs()
+        }
+        for k in 0..500 {
+            let t = k as f64 * 0.0127;
+            let a = Vector3::new(cos(t), 0.3 * t - 1.0, 0.7);
+            let b = Vector3::new(-0.4, t.sin(), 1.0 - t);
+            assert!(ulps(angle(&a, &b), a.angle(&b)) <= 1, "{t}");
+        }
+        let (x, z) = (Vector3::x(), Vector3::zeros());
+        assert_eq!(angle(&x, &z), 0.0);
+        assert_eq!(angle(&x, &x), 0.0);
+        assert_eq!(angle(&x, &-x), std::f64::consts::PI);
+    }
 
     fn lens() -> Lens {
         Lens::new(84f64.to_radians(), 16.0 / 9.0)

@@ -1,14 +1,16 @@
 //! Batch compilation: the director driven by the script's own blocking, sample by sample,
 //! into any sink (MCAP, CSV, previews, tests).
 
+use crate::code::CompileCode;
+use dronecine_diag::{Diagnostic, Span};
 use dronecine_grammar::script::{Script, ShotContent, ACTORS_MIN_APART_M};
 use dronecine_grammar::vocab::CameraAngle;
-use dronecine_grammar::{Code, Diagnostic, Span};
+use dronecine_grammar::PslCode;
 
 use crate::blocking::Blocking;
-use crate::director::{Director, ShotTiming};
-use crate::profile::{Gimbal, Profile};
-use crate::reference::{ActorPose, Sample};
+use crate::director::Director;
+use crate::reference::{ActorPose, Sample, ShotTiming};
+use dronecine_profile::{Gimbal, Profile};
 
 /// Default sampling rate of the reference.
 pub const DEFAULT_RATE_HZ: f64 = 100.0;
@@ -115,7 +117,7 @@ pub fn unflyable(script: &Script) -> Option<Diagnostic> {
         (Some(_), Some(_)) => None,
         (None, Some(first)) => Some(
             Diagnostic::error(
-                Code::NoScene,
+                CompileCode::NoScene,
                 first.span,
                 "this script is a film annotation: it has no stage, actors or drone to fly",
             )
@@ -126,7 +128,7 @@ pub fn unflyable(script: &Script) -> Option<Diagnostic> {
             ),
         ),
         (None, None) => Some(
-            Diagnostic::error(Code::EmptyScript, Span::default(), "the script is empty")
+            Diagnostic::error(PslCode::EmptyScript, Span::default(), "the script is empty")
                 .with_label("nothing to fly")
                 .with_help(
                     "write a scene set-up (`stage 8m x 6m x 3m`, `drone ardrone2`, `actor A \
@@ -143,7 +145,7 @@ pub fn unflyable(script: &Script) -> Option<Diagnostic> {
                 .unwrap_or(0);
             Some(
                 Diagnostic::error(
-                    Code::EmptyScript,
+                    PslCode::EmptyScript,
                     Span::new(end, end),
                     "the script has no shots: there is nothing to fly",
                 )
@@ -169,7 +171,7 @@ fn collisions(blocking: &Blocking) -> Vec<Diagnostic> {
                 format!("`{walker}` walks into `{other}`")
             };
             Diagnostic::error(
-                Code::ActorsCollide,
+                CompileCode::ActorsCollide,
                 c.walk_span,
                 format!(
                     "{what}: {:.2} m apart at {:.1} s, where two bodies cannot pass",
@@ -207,7 +209,7 @@ fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
             if c.camera_angle != CameraAngle::EyeLevel {
                 out.push(
                     Diagnostic::warning(
-                        Code::AngleNotRendered,
+                        CompileCode::AngleNotRendered,
                         shot.span,
                         format!(
                             "{} has a fixed level camera: a {} cannot be rendered, the shot is \
@@ -236,7 +238,7 @@ mod tests {
 
     fn script(text: &str) -> Script {
         let opts = dronecine_grammar::Options {
-            known_drones: crate::profile::BUILTIN_NAMES,
+            known_drones: dronecine_profile::BUILTIN_NAMES,
             base_dir: None,
         };
         let checked = dronecine_grammar::check(text, &opts);
@@ -260,7 +262,7 @@ mod tests {
         .unwrap();
         assert_eq!((samples, c.samples), (0, 0));
         assert!(c.has_errors());
-        assert_eq!(c.diagnostics[0].code, Code::EmptyScript);
+        assert_eq!(c.diagnostics[0].code, PslCode::EmptyScript);
         assert!(
             c.diagnostics[0].message.contains("no shots"),
             "{:?}",
@@ -400,7 +402,7 @@ mod tests {
             for a in actors {
                 let [ax, ay, az] = a.position_m;
                 if pz <= az + a.height_m + safety_m {
-                    closest_m = closest_m.min(crate::norm_xy(px - ax, py - ay));
+                    closest_m = closest_m.min(dronecine_math::norm_xy(px - ax, py - ay));
                 }
             }
             Ok::<(), ()>(())
@@ -422,10 +424,10 @@ mod tests {
     fn annotations_and_empty_scripts_are_refused_for_what_they_are() {
         let annotation = script("1 00:00:01 --> 00:00:05 LS on Rick 34left screen left\n");
         let d = unflyable(&annotation).unwrap();
-        assert_eq!(d.code, Code::NoScene);
+        assert_eq!(d.code, CompileCode::NoScene);
         let empty = script("# nothing yet\n");
         let d = unflyable(&empty).unwrap();
-        assert_eq!(d.code, Code::EmptyScript);
+        assert_eq!(d.code, PslCode::EmptyScript);
         assert!(d.message.contains("empty"), "{}", d.message);
         let flyable = script(
             "stage 8m x 6m x 3m\nactor A height 1.80m at (0, 0) facing 0deg\nMS on A for 2s\n",
@@ -583,7 +585,7 @@ impl FramingCheck {
                     .to_string()
             };
             out.push(
-                Diagnostic::warning(Code::FramingOff, shot.span, message)
+                Diagnostic::warning(CompileCode::FramingOff, shot.span, message)
                     .with_label(format!("{who} off their screen point"))
                     .with_help(help),
             );

@@ -18,21 +18,22 @@
 //!    position;
 //! 4. check the sample against the profile (`feasibility`).
 
-use crate::math;
+use crate::code::CompileCode;
+use dronecine_diag::{Diagnostic, Span};
 use dronecine_grammar::script::{Composition, Scene, Script, Shot, ShotContent, Transition};
-use dronecine_grammar::vocab::wrap_angle_rad;
 use dronecine_grammar::vocab::Size;
-use dronecine_grammar::{Code, Diagnostic, Span};
+use dronecine_math as math;
+use dronecine_math::wrap_angle_rad;
 
 use crate::blocking::{min_jerk, Blocking};
 use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
 use crate::feasibility::{round_up_1, Carried, Monitor};
 use crate::framing::{self, FramingError};
 use crate::paths::PathPlan;
-use crate::profile::{Gimbal, Profile};
-use crate::reference::{ActorPose, Sample};
+use crate::reference::{ActorPose, Sample, ShotTiming};
 use crate::route::{self, Keepout, Route};
 use crate::steering::{self, HeadingState, Kinematics, SteerGains, SteerLimits};
+use dronecine_profile::{Gimbal, Profile};
 
 /// How far inside the profile's actor distance a framing's camera may be before
 /// `compile::too_close` is told.
@@ -100,20 +101,8 @@ enum Phase {
     Done,
 }
 
-/// When each shot was actually flown.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct ShotTiming {
-    pub index: usize,
-    /// As written (back to back, or pinned).
-    pub script_start_s: f64,
-    pub start_s: f64,
-    pub end_s: f64,
-    /// The repositioning flight inserted before the shot, if any.
-    pub reposition: Option<(f64, f64)>,
-}
-
 /// The evaluator. See the module documentation. A clone steps on as the original would,
-/// bit for bit (a flight keeps one to rewind to: `dronecine_runtime::ahead`).
+/// bit for bit (a flight keeps one to rewind to).
 #[derive(Clone)]
 pub struct Director {
     shots: Vec<Shot>,
@@ -143,7 +132,7 @@ pub struct Director {
     /// first, or when it does not turn).
     route_turn: Option<f64>,
     safety_m: f64,
-    /// The distance kept on set ([`Safety::on_set_m`](crate::profile::Safety::on_set_m)).
+    /// The distance kept on set ([`Safety::on_set_m`](dronecine_profile::Safety::on_set_m)).
     on_set_m: f64,
     /// How far the steering keeps the reference from the actors' bodies: `safety_m`, and on
     /// set (see [`Director::actors_measured`]) the tracking margin more. The monitor, the
@@ -442,10 +431,12 @@ impl Director {
         self.monitor
             .shot_diagnostics(index, &self.shots, &self.timings, held_off, out);
         let span = self.shots.get(index).map(|s| s.span);
-        let told_close =
-            (self.diagnostics.iter()).any(|t| t.code == Code::TooClose && Some(t.span) == span);
+        let told_close = (self.diagnostics.iter())
+            .any(|t| t.code == CompileCode::TooClose && Some(t.span) == span);
         // (The monitor tells the camera near an actor once a shot at most.)
-        let near = out[from..].iter().position(|d| d.code == Code::TooClose);
+        let near = out[from..]
+            .iter()
+            .position(|d| d.code == CompileCode::TooClose);
         if let (true, Some(k)) = (told_close, near) {
             out.remove(from + k);
         }
@@ -1017,7 +1008,7 @@ impl Director {
                 let late = soonest - written;
                 self.diagnostics.push(
                     Diagnostic::error(
-                        Code::CutTooShort,
+                        CompileCode::CutTooShort,
                         shot.span,
                         format!(
                             "the drone needs {needed:.1} s to fly to this shot's first framing \
@@ -1048,7 +1039,7 @@ impl Director {
         if !pinned && needed > 0.0 {
             self.diagnostics.push(
                 Diagnostic::warning(
-                    Code::Reposition,
+                    CompileCode::Reposition,
                     shot.span,
                     format!(
                         "a {needed:.1} s repositioning flight ({flown}) is inserted before \
@@ -1643,7 +1634,7 @@ impl Director {
                 let name = self.names.get(i).map(String::as_str).unwrap_or("an actor");
                 self.diagnostics.push(
                     Diagnostic::error(
-                        Code::TooClose,
+                        CompileCode::TooClose,
                         self.shots[index].span,
                         format!(
                             "this framing puts the camera {d:.2} m from {name} ({:.1} s into \
@@ -1700,7 +1691,7 @@ impl Director {
         // The circle's diameter grows with the distance between the two aim points (band
         // centres), the angle between them on screen fixed: apart enough when that distance
         // has grown by the stretch.
-        let apart_m = crate::norm_xy(
+        let apart_m = dronecine_math::norm_xy(
             p.position_m[0] - q.position_m[0],
             p.position_m[1] - q.position_m[1],
         );
@@ -1709,7 +1700,7 @@ impl Director {
         let more_cm = ((needed_m - apart_m) * 100.0).ceil();
         self.diagnostics.push(
             Diagnostic::warning(
-                Code::BeyondReach,
+                CompileCode::BeyondReach,
                 self.shots[index].span,
                 format!(
                     "{name} is framed {:.0}% larger than {size}: {:.2} m from {other_name}, no camera \
@@ -1813,12 +1804,12 @@ impl Director {
                     None => {
                         // Along the path: the target's direction of travel.
                         let a = plan.at(into_s, actors);
-                        let v = if crate::norm_xy(a.v.x, a.v.y) > 1e-3 {
+                        let v = if dronecine_math::norm_xy(a.v.x, a.v.y) > 1e-3 {
                             a.v
                         } else {
                             plan.at((into_s + 0.5).min(duration), actors).p - a.p
                         };
-                        if crate::norm_xy(v.x, v.y) > 1e-6 {
+                        if dronecine_math::norm_xy(v.x, v.y) > 1e-6 {
                             (math::atan2(v.y, v.x), 0.0)
                         } else {
                             (self.heading.heading_rad, 0.0)
@@ -2029,7 +2020,7 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
         _ => "frame one actor, two actors in one framing, or two framings of one actor each",
     };
     Diagnostic::error(
-        Code::Unframeable,
+        CompileCode::Unframeable,
         span,
         format!("this composition cannot be framed: {e}"),
     )
@@ -2148,7 +2139,7 @@ mod tests {
                     at 6s A turns to 170deg over 1s\n\
                     MS on A for 10s\n";
         let opts = dronecine_grammar::Options {
-            known_drones: crate::profile::BUILTIN_NAMES,
+            known_drones: dronecine_profile::BUILTIN_NAMES,
             base_dir: None,
         };
         let script = dronecine_grammar::check(text, &opts).script.unwrap();

@@ -7,14 +7,14 @@
 //! actors, inside the stage, how far it lags its target). Violations become one diagnostic
 //! per shot and kind, on the shot's line, with the numbers and a concrete fix.
 
+use crate::code::CompileCode;
+use dronecine_diag::Diagnostic;
 use dronecine_grammar::script::{Scene, Shot, ShotContent};
-use dronecine_grammar::{Code, Diagnostic};
 
 use crate::camera::Vec3;
-use crate::director::ShotTiming;
-use crate::profile::Profile;
-use crate::reference::{ActorPose, Sample};
+use crate::reference::{ActorPose, Sample, ShotTiming};
 use crate::steering::Kinematics;
+use dronecine_profile::Profile;
 
 /// How far the reference may lag its target during a shot before the framing is lost.
 pub const TRACKING_TOLERANCE_M: f64 = 0.10;
@@ -149,7 +149,7 @@ impl Monitor {
     pub fn tilt_needed_rad(&self, v: &Vec3, a: &Vec3) -> f64 {
         let x = self.tau * a.x + v.x;
         let y = self.tau * a.y + v.y;
-        crate::norm_xy(x, y) / self.gain
+        dronecine_math::norm_xy(x, y) / self.gain
     }
 
     /// One sample, the goal the steering chased and the target as solved (`solved`: before
@@ -170,8 +170,10 @@ impl Monitor {
         let v = Vec3::from(s.velocity_mps);
         let a = Vec3::from(s.acceleration_mps2);
         if in_shot {
-            st.demand_speed.see(crate::norm_xy(goal.v.x, goal.v.y), t);
-            st.demand_accel.see(crate::norm_xy(goal.a.x, goal.a.y), t);
+            st.demand_speed
+                .see(dronecine_math::norm_xy(goal.v.x, goal.v.y), t);
+            st.demand_accel
+                .see(dronecine_math::norm_xy(goal.a.x, goal.a.y), t);
             let lag_m = (goal.p - p).norm();
             // What the shot just before left: the lag of its last sample. (A target that
             // steps at the boundary is this shot's lag, not an inherited one.)
@@ -199,10 +201,10 @@ impl Monitor {
             self.last_outside = None;
             self.last_intrusion = None;
         }
-        st.speed.see(crate::norm_xy(v.x, v.y), t);
+        st.speed.see(dronecine_math::norm_xy(v.x, v.y), t);
         let x = self.tau * a.x + v.x;
         let y = self.tau * a.y + v.y;
-        st.tilt.see(crate::norm_xy(x, y) / self.gain, t);
+        st.tilt.see(dronecine_math::norm_xy(x, y) / self.gain, t);
         st.vz.see(v.z.abs(), t);
         st.yaw_rate.see(s.heading_rate_radps.abs(), t);
         let intrusion_of =
@@ -346,7 +348,7 @@ impl Monitor {
         // What the shot asks that the drone cannot give: an error on its line, with what
         // the label points at and the fix.
         let infeasible = |message: String, label: &str, help: String| {
-            Diagnostic::error(Code::Infeasible, shot.span, message)
+            Diagnostic::error(CompileCode::Infeasible, shot.span, message)
                 .with_label(label)
                 .with_help(help)
         };
@@ -464,7 +466,7 @@ impl Monitor {
                 if peak.value > max * SLACK {
                     out.push(
                         Diagnostic::error(
-                            Code::Infeasible,
+                            CompileCode::Infeasible,
                             shot.span,
                             format!(
                                 "the reference needs a {what} of {:.2} {unit} ({}); {} allows {:.2} {unit}",
@@ -498,7 +500,7 @@ impl Monitor {
                 .unwrap_or("an actor");
             out.push(
                 Diagnostic::error(
-                    Code::TooClose,
+                    CompileCode::TooClose,
                     shot.span,
                     format!(
                         "the camera comes within {:.2} m of {who} ({}); {} keeps {:.2} m from actors",
@@ -539,7 +541,7 @@ impl Monitor {
             };
             out.push(
                 Diagnostic::warning(
-                    Code::InMargin,
+                    CompileCode::InMargin,
                     shot.span,
                     format!(
                         "this framing puts the camera {by:.2} m into the stage's {margin:.2} m \
@@ -569,7 +571,7 @@ impl Monitor {
                 format!("the camera leaves the stage by {by:.2} m {at_p}")
             };
             out.push(
-                Diagnostic::error(Code::LeavesStage, shot.span, message)
+                Diagnostic::error(CompileCode::LeavesStage, shot.span, message)
                 .with_label("outside the flight volume")
                 .with_help("make the stage larger, or move the path or the framing inside it (a tighter size brings the camera closer)"),
             );

@@ -16,14 +16,16 @@
 //! bearing from the actor the profile. Reported when the size is two or more sizes off, or the
 //! profile more than one and a half profile steps (67.5°).
 
+use crate::code::CompileCode;
+use dronecine_diag::Diagnostic;
 use dronecine_grammar::script::{Script, ShotContent};
-use dronecine_grammar::vocab::{wrap_angle_rad, Profile, Size};
-use dronecine_grammar::{Code, Diagnostic};
+use dronecine_grammar::vocab::{Profile, Size};
+use dronecine_math::wrap_angle_rad;
 
 use crate::camera::Lens;
-use crate::math;
-use crate::profile::Gimbal;
 use crate::reference::ActorPose;
+use dronecine_math as math;
+use dronecine_profile::Gimbal;
 
 /// Sizes apart (in `Size::ALL` order) from which a framed size is reported.
 pub const SIZE_STEPS_OFF: usize = 2;
@@ -121,7 +123,7 @@ impl FramedAs {
                 camera_m[0] - pose.position_m[0],
                 camera_m[1] - pose.position_m[1],
             );
-            a.sum_distance_m += crate::norm_xy(dx, dy);
+            a.sum_distance_m += dronecine_math::norm_xy(dx, dy);
             let (s, c) = math::sin_cos(math::atan2(dy, dx) - pose.facing_rad);
             a.sum_cos += c;
             a.sum_sin += s;
@@ -176,7 +178,7 @@ impl FramedAs {
                         };
                         out.push(
                             Diagnostic::warning(
-                                Code::SizeOff,
+                                CompileCode::SizeOff,
                                 shot.span,
                                 format!(
                                     "{who} is framed as {} {} ({distance_m:.1} m away), not as \
@@ -203,7 +205,7 @@ impl FramedAs {
                         let seen = nearest_profile(seen_rad);
                         out.push(
                             Diagnostic::warning(
-                                Code::ProfileOff,
+                                CompileCode::ProfileOff,
                                 shot.span,
                                 format!(
                                     "{who} is seen from the {} side ({}), {:.0}° from the {} \

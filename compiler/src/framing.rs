@@ -61,13 +61,14 @@
 //! one to change it smoothly.
 
 use crate::camera::{orient, orient_fixed_pitch, Lens, Vec3};
-use crate::math;
-use crate::profile::Gimbal;
 use crate::reference::ActorPose;
 use crate::toric::Toric;
 use crate::{size, sphere, toric};
 use dronecine_grammar::script::{Composition, Subject};
-use dronecine_grammar::vocab::{wrap_angle_rad, Size};
+use dronecine_grammar::vocab::Size;
+use dronecine_math as math;
+use dronecine_math::wrap_angle_rad;
+use dronecine_profile::Gimbal;
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// The visual parameters of a composition solved against actor poses.
@@ -922,7 +923,7 @@ fn solve_over_shoulder(
                 phi_rad: phi,
             },
         ) {
-            Ok(c) => math::angle(&(c - origin), &u),
+            Ok(c) => crate::camera::angle(&(c - origin), &u),
             Err(_) => f64::INFINITY,
         }
     };
@@ -1298,7 +1299,11 @@ fn place_blend(
     let centre = blend_centre(from, to, s, actors);
     let cyl = |p: &Vec3| {
         let d = p - centre;
-        (crate::norm_xy(d.x, d.y), math::atan2(d.y, d.x), d.z)
+        (
+            dronecine_math::norm_xy(d.x, d.y),
+            math::atan2(d.y, d.x),
+            d.z,
+        )
     };
     let (r0, a0, z0) = cyl(&p0.position_m);
     let (r1, a1, z1) = cyl(&p1.position_m);

@@ -1,33 +1,34 @@
 //! The compiler: from a resolved PSL `Script` to the timed 6D reference a drone flies.
 //!
-//! Modules: `profile` (drone profiles), `camera` (lens, pose, projection, orientation: the
-//! camera conventions), `reference` (the output samples), `size` (shot size → band →
-//! distance), `sphere` and `toric` (the one- and two-actor manifolds), `framing` (composition →
-//! visual parameters → camera placement).
+//! - `camera`: **the camera conventions** (lens, roll-free pose, projection, orientation).
+//! - `size`, `sphere`, `toric`: the one- and two-actor manifolds; `framing`: a composition →
+//!   visual parameters → a camera placement; `framed_as`: what a hold really frames.
+//! - `blocking`: the actors over time; `paths`: square, helix, orbit, waypoints.
+//! - `steering`: jerk-limited arrival with feed-forward, braking for walls and bodies;
+//!   `route`: repositioning routes round the actors.
+//! - `director`: **the one evaluator**, `Director::step(t, actors) -> Sample`, which
+//!   `compile` runs over the scripted blocking and `shoot` runs against live actors.
+//! - `feasibility`: the monitor of a reference against the profile's limits and the stage.
+//! - `compile`: the whole script, sampled; `reference`: the samples.
+//! - `code`: the `compile::` diagnostic codes.
+//!
+//! The compiler renders nothing and writes no file: `dronecine-preview` draws a reference,
+//! `dronecine-mcap` writes it.
 
 pub mod blocking;
 pub mod camera;
+pub mod code;
 pub mod compile;
 pub mod director;
 pub mod feasibility;
 pub mod framed_as;
 pub mod framing;
-pub mod math;
-pub mod output;
 pub mod paths;
-pub mod preview;
-pub mod profile;
 pub mod reference;
 pub mod route;
 pub mod size;
 pub mod sphere;
 pub mod steering;
-pub mod toml_text;
 pub mod toric;
 
-/// √(x² + y²) without libm's `hypot` (which guards against overflow at a cost the per-tick
-/// code pays twenty times a sample): stage-sized lengths and speeds never come near it.
-#[inline]
-pub fn norm_xy(x: f64, y: f64) -> f64 {
-    (x * x + y * y).sqrt()
-}
+pub use code::CompileCode;

@@ -7,7 +7,7 @@
 //! acceleration within half the profile's limit) and waypoints are joined by a C¹ spline with
 //! chord-length parameters, so the target the camera steers toward has bounded acceleration.
 
-use crate::math;
+use dronecine_math as math;
 use std::f64::consts::{PI, TAU};
 
 use dronecine_grammar::script::{OrbitCenter, PathShape};

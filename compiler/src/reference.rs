@@ -25,6 +25,18 @@ pub struct Sample {
     pub shot: usize,
 }
 
+/// When each shot was actually flown.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ShotTiming {
+    pub index: usize,
+    /// As written (back to back, or pinned).
+    pub script_start_s: f64,
+    pub start_s: f64,
+    pub end_s: f64,
+    /// The repositioning flight inserted before the shot, if any.
+    pub reposition: Option<(f64, f64)>,
+}
+
 /// An actor at one instant.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ActorPose {

@@ -21,10 +21,10 @@
 //! end `b` follows the next shot's framing as the actors move.
 
 use crate::camera::Vec3;
-use crate::math;
 use crate::reference::ActorPose;
 use crate::steering::SteerLimits;
-use dronecine_grammar::vocab::wrap_angle_rad;
+use dronecine_math as math;
+use dronecine_math::wrap_angle_rad;
 use std::f64::consts::PI;
 
 /// Below this distance from the pivot's vertical an end has no useful angle: the arc is
@@ -60,7 +60,11 @@ pub enum Route {
 /// Cylindrical coordinates (radius, angle, height) of `p` about the vertical through `c`.
 fn cylindrical(p: &Vec3, c: &Vec3) -> (f64, f64, f64) {
     let d = p - c;
-    (crate::norm_xy(d.x, d.y), math::atan2(d.y, d.x), p.z)
+    (
+        dronecine_math::norm_xy(d.x, d.y),
+        math::atan2(d.y, d.x),
+        p.z,
+    )
 }
 
 impl Route {
@@ -165,9 +169,9 @@ impl Route {
                 let (p0, p1, p2) = (w[0], w[1], w[2]);
                 let v = (p2 - p0) / (2.0 * h);
                 let acc = (p2 - 2.0 * p1 + p0) / (h * h);
-                v_max = v_max.max(crate::norm_xy(v.x, v.y));
+                v_max = v_max.max(dronecine_math::norm_xy(v.x, v.y));
                 vz_max = vz_max.max(v.z.abs());
-                a_max = a_max.max(crate::norm_xy(acc.x, acc.y));
+                a_max = a_max.max(dronecine_math::norm_xy(acc.x, acc.y));
             }
             let scale = (v_max / (0.8 * limits.speed_h_mps))
                 .max(vz_max / (0.8 * limits.speed_v_mps))
@@ -587,7 +591,7 @@ mod tests {
             // Halfway: radius 2.5, angle 45° the short way, −135° the long way.
             let m = r.at(&a, &b, 0.5);
             let want = if long_way { -0.75 * PI } else { 0.25 * PI };
-            assert!((crate::norm_xy(m.x, m.y) - 2.5).abs() < 1e-12);
+            assert!((dronecine_math::norm_xy(m.x, m.y) - 2.5).abs() < 1e-12);
             assert!(wrap_angle_rad(math::atan2(m.y, m.x) - want).abs() < 1e-12);
             assert!((m.z - 1.25).abs() < 1e-12);
         }

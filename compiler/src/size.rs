@@ -7,8 +7,8 @@
 //! rays through the two screen points they should land on.
 
 use crate::camera::{Lens, Vec3};
-use crate::math;
 use dronecine_grammar::vocab::Size;
+use dronecine_math as math;
 
 /// Frame bottom and top as fractions of stature, for every size in `Size::ALL` order.
 /// LS and ELS frame 2.0 H and 5.0 H centred on the actor's half height.
@@ -52,7 +52,7 @@ pub fn centred_distance_m(framed_height_m: f64, lens: &Lens) -> f64 {
 pub fn band_angle_rad(lens: &Lens, screen: [f64; 2]) -> f64 {
     let top = lens.ray([screen[0], screen[1] + 1.0]);
     let bottom = lens.ray([screen[0], screen[1] - 1.0]);
-    math::angle(&top, &bottom)
+    crate::camera::angle(&top, &bottom)
 }
 
 /// The screen point of the bisector of the rays through `(x, y + 1)` and `(x, y − 1)`: where
@@ -103,7 +103,7 @@ pub fn exact_distance_m(half_band_m: f64, sin_elevation: f64, band_angle_rad: f6
     let u = Vec3::new((1.0 - s * s).sqrt(), 0.0, s);
     let angle = |d: f64| {
         let c = u * d;
-        math::angle(
+        crate::camera::angle(
             &(Vec3::new(0.0, 0.0, h) - c),
             &(Vec3::new(0.0, 0.0, -h) - c),
         )

@@ -8,8 +8,9 @@
 //! through their sum: an actor who turns swings the camera round.
 
 use crate::camera::Vec3;
-use crate::math;
-use dronecine_grammar::vocab::{wrap_angle_rad, CameraAngle};
+use dronecine_grammar::vocab::CameraAngle;
+use dronecine_math as math;
+use dronecine_math::wrap_angle_rad;
 
 /// Elevation of `high angle` (project convention, camera-math §2).
 pub const HIGH_ANGLE_ELEVATION_RAD: f64 = 20.0 * std::f64::consts::PI / 180.0;

@@ -21,7 +21,7 @@
 //! Heading is steered the same way one order down (rate and rate-of-rate limits), with the
 //! error wrapped to (−π, π] so the camera never turns the long way round.
 
-use dronecine_grammar::vocab::wrap_angle_rad;
+use dronecine_math::wrap_angle_rad;
 
 use crate::camera::Vec3;
 
@@ -165,7 +165,7 @@ pub struct HeadingState {
 
 /// Scale the horizontal part of `v` to at most `h` and the vertical part to at most `z`.
 pub fn truncate_hv(v: Vec3, h: f64, z: f64) -> Vec3 {
-    let n = crate::norm_xy(v.x, v.y);
+    let n = dronecine_math::norm_xy(v.x, v.y);
     let s = if n > h && n > 0.0 { h / n } else { 1.0 };
     Vec3::new(v.x * s, v.y * s, v.z.clamp(-z, z))
 }
@@ -292,7 +292,10 @@ pub fn step(
 /// `ardrone2` flies 1.84. The rest of the acceleration (the turn of a curving target) is
 /// kept.
 pub fn at_speed_limit(want: &Vec3, des: &Vec3, mut a: Vec3, trend: &mut Vec3) -> Vec3 {
-    let (h_want, h_des) = (crate::norm_xy(want.x, want.y), crate::norm_xy(des.x, des.y));
+    let (h_want, h_des) = (
+        dronecine_math::norm_xy(want.x, want.y),
+        dronecine_math::norm_xy(des.x, des.y),
+    );
     if h_want > h_des && h_des > 0.0 {
         let (ux, uy) = (des.x / h_des, des.y / h_des);
         for v in [&mut a, trend] {
@@ -416,7 +419,7 @@ fn stop_before_walls(
 /// The most acceleration the camera has along the unit vector `n` within its horizontal
 /// and vertical limits.
 fn accel_along_mps2(n: &Vec3, limits: &SteerLimits) -> f64 {
-    let h = crate::norm_xy(n.x, n.y);
+    let h = dronecine_math::norm_xy(n.x, n.y);
     let by_h = if h > 0.0 {
         limits.accel_h_mps2 / h
     } else {
@@ -1301,7 +1304,7 @@ mod tests {
         };
         let (_, free) = closest_flown(start, |_| goal, &axes, false, 1.0);
         let (_, kept) = closest_flown(start, |_| goal, &axes, true, 1.0);
-        let from_axis = |k: &Kinematics| crate::norm_xy(k.p.x, k.p.y);
+        let from_axis = |k: &Kinematics| dronecine_math::norm_xy(k.p.x, k.p.y);
         assert!(from_axis(&free) < 0.45, "{:?}", free.p);
         assert!(from_axis(&kept) > 0.49, "{:?}", kept.p);
         let (_, end) = closest_flown(start, |_| goal, &axes, true, 15.0);

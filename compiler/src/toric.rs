@@ -9,8 +9,8 @@
 //! and are never wrapped; φ is wrapped to (−π, π].
 
 use crate::camera::{Lens, Vec3};
-use crate::math;
-use dronecine_grammar::vocab::wrap_angle_rad;
+use dronecine_math as math;
+use dronecine_math::wrap_angle_rad;
 use std::f64::consts::PI;
 
 /// Why a toric computation has no answer.
@@ -49,7 +49,7 @@ pub struct Toric {
 
 /// α from two requested screen points: the angle between their rays through the lens.
 pub fn alpha_from_screens(lens: &Lens, screen_a: [f64; 2], screen_b: [f64; 2]) -> f64 {
-    math::angle(&lens.ray(screen_a), &lens.ray(screen_b))
+    crate::camera::angle(&lens.ray(screen_a), &lens.ray(screen_b))
 }
 
 /// Radius of the circle carrying the generating arc: `r = |AB| / (2 sin α)`.
@@ -71,7 +71,7 @@ pub fn frame(a_m: &Vec3, b_m: &Vec3) -> Result<Frame, ToricError> {
     if len < 1e-9 {
         return Err(ToricError::Coincident);
     }
-    let horizontal = crate::norm_xy(ab.x, ab.y);
+    let horizontal = dronecine_math::norm_xy(ab.x, ab.y);
     if horizontal < 1e-9 * len.max(1.0) {
         return Err(ToricError::Vertical);
     }
@@ -127,8 +127,8 @@ pub fn inverse(a_m: &Vec3, b_m: &Vec3, c_m: &Vec3) -> Result<Toric, ToricError> 
         // At an actor: α is undefined.
         return Err(ToricError::Coincident);
     }
-    let beta = math::angle(&(b_m - a_m), &ac);
-    let alpha = math::angle(&ac, &bc);
+    let beta = crate::camera::angle(&(b_m - a_m), &ac);
+    let alpha = crate::camera::angle(&ac, &bc);
     let w = ac - f.n * ac.dot(&f.n);
     let phi = if w.norm() < 1e-12 {
         0.0
@@ -255,7 +255,7 @@ pub fn toric_distance_m(x_m: &Vec3, y_m: &Vec3, alpha_rad: f64, u: &Vec3) -> Opt
     if xy.norm() < 1e-12 || u.norm() < 1e-12 {
         return None;
     }
-    let gamma = math::angle(&xy, u);
+    let gamma = crate::camera::angle(&xy, u);
     if gamma >= PI - alpha_rad {
         return None;
     }
@@ -316,7 +316,7 @@ pub fn interpolate(
         let linear = v0.norm() + (v1.norm() - v0.norm()) * s;
         let d = match toric_distance_m(x, y, alpha, &u) {
             Some(toric) => {
-                let margin = PI - alpha - math::angle(&(y - x), &u);
+                let margin = PI - alpha - crate::camera::angle(&(y - x), &u);
                 let w = (margin / PULL_FADE_RAD).clamp(0.0, 1.0);
                 linear + (toric - linear) * w
             }

@@ -7,7 +7,7 @@
 
 use std::io::Write;
 
-use dronecine_runtime::log::FlightLog;
+use dronecine_mcap::log::FlightLog;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

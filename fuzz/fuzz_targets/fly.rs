@@ -5,13 +5,14 @@
 //! would otherwise take seconds). Seed it with the shipped shots (`../shots/*.psl`).
 #![no_main]
 
-use dronecine_compiler::compile::{compile, unflyable, Options};
-use dronecine_compiler::profile::{Profile, BUILTIN_NAMES};
+use dronecine_compiler::compile::{compile, Options, unflyable};
+use dronecine_profile::{BUILTIN_NAMES, Profile};
 use dronecine_grammar::{check, decode};
-use dronecine_runtime::flight::{NoObserver, NullSink};
-use dronecine_runtime::record::ControllerSetup;
-use dronecine_runtime::session::{fly_simulated, SimFlight};
-use dronecine_runtime::sim::SimConfig;
+use dronecine_flight::NoObserver;
+use dronecine_mcap::record::NullSink;
+use dronecine_servo::setup::ControllerSetup;
+use dronecine_runtime::{fly_simulated, SimFlight};
+use dronecine_sim::SimConfig;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -4,10 +4,7 @@
 //! every accepted rigid body converts to the world frame without panicking.
 #![no_main]
 
-use dronecine_runtime::natnet::frame::{
-    decode_connect, decode_frame, decode_frame_payload, decode_server_info, encode_frame, Frame,
-    FrameOut, UpAxis, Version,
-};
+use dronecine_natnet::frame::{decode_connect, decode_frame, decode_frame_payload, decode_server_info, encode_frame, Frame, FrameOut, UpAxis, Version};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -4,8 +4,8 @@
 //! re-encodes and parses back to the same command).
 #![no_main]
 
-use dronecine_runtime::ardrone::at::{self, AtEncoder, Datagram};
-use dronecine_runtime::ardrone::navdata::{self, Navdata, NavdataWriter};
+use dronecine_ardrone::at::{self, AtEncoder, Datagram};
+use dronecine_ardrone::navdata::{self, Navdata, NavdataWriter};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

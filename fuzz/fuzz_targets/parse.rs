@@ -2,7 +2,8 @@
 //! the diagnostic renderer, and the formatter (which must be idempotent).
 #![no_main]
 
-use dronecine_grammar::{check, decode, diag, format, Options};
+use dronecine_diag as diag;
+use dronecine_grammar::{check, decode, format, Options};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -1,5 +1,5 @@
-//! Parse + resolve (`check`), `format`, and the parser with and without its fast path, on a
-//! generated 10,000-shot script.
+//! Parse + resolve (`check`), `format`, and the parser alone, on a generated 10,000-shot
+//! script.
 //!
 //! Run: `cargo bench -p dronecine-grammar --bench parse -- --warm-up-time 1 --measurement-time 5`
 
@@ -76,12 +76,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| check(black_box(&src), &Options::default()))
     });
     g.bench_function("format", |b| b.iter(|| format(black_box(&src))));
-    // The parser alone: with the fast path (what `check` and `format` use), and pest on
-    // every line (the reference the fast path must agree with).
     g.bench_function("parse", |b| b.iter(|| parser::parse(black_box(&src))));
-    g.bench_function("parse_with_pest", |b| {
-        b.iter(|| parser::parse_with_pest(black_box(&src)))
-    });
     g.finish();
 }
 

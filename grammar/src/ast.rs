@@ -5,8 +5,8 @@
 //! parsed (`Quantity::value`) but not checked: units, ranges and references are the
 //! semantic pass's job (`resolve.rs`).
 
-use crate::span::Span;
 use crate::vocab::{CameraAngle, MoveKind, Profile, ScreenThird, Size};
+use dronecine_diag::Span;
 
 /// A whole script: one entry per source line, blank and comment lines included.
 #[derive(Clone, Debug, PartialEq)]

@@ -5,49 +5,20 @@
 //! next lines are parsed as usual. The tree-building code below relies on the grammar's
 //! shape; `expect_*` helpers turn a mismatch into an internal-error diagnostic rather than a
 //! panic.
-//!
-//! Each line first goes to the hand-written fast path (`fast.rs`), which accepts only lines
-//! pest accepts and builds the same `Line`; any other line (and every error) goes through
-//! pest, so diagnostics are pest's. `parse_with_pest` skips the fast path: it is the
-//! reference the fast path is tested against.
 
 use pest::iterators::Pair;
 use pest::Parser as _;
 
+use dronecine_diag::{Diagnostic, Span};
+
 use crate::ast::*;
-use crate::diag::Diagnostic;
-use crate::fast;
-use crate::span::Span;
+use crate::code::internal;
+use crate::rules::{PslParser, Rule};
 use crate::syntax;
 use crate::vocab::{CameraAngle, MoveKind, Profile, ScreenThird, Size};
 
-#[derive(pest_derive::Parser)]
-#[grammar = "psl.pest"]
-pub struct PslParser;
-
 /// Parse a whole script. Returns the tree and the syntax diagnostics, all lines considered.
 pub fn parse(src: &str) -> (File<'_>, Vec<Diagnostic>) {
-    parse_lines(src, true)
-}
-
-/// `parse` with every line through pest, without the fast path: the same result, slower.
-pub fn parse_with_pest(src: &str) -> (File<'_>, Vec<Diagnostic>) {
-    parse_lines(src, false)
-}
-
-/// One line (without its line break, starting at byte `offset`, 1-based `number`) through
-/// pest only, with its diagnostics: what `fast::parse_line` must agree with.
-pub fn parse_line_with_pest(
-    text: &str,
-    offset: usize,
-    number: usize,
-) -> (Line<'_>, Vec<Diagnostic>) {
-    let mut diagnostics = Vec::new();
-    let line = parse_line(text, offset, number, &mut diagnostics);
-    (line, diagnostics)
-}
-
-fn parse_lines(src: &str, fast_path: bool) -> (File<'_>, Vec<Diagnostic>) {
     let mut lines = Vec::with_capacity(src.bytes().filter(|&b| b == b'\n').count() + 1);
     let mut diagnostics = Vec::new();
     let mut offset = 0;
@@ -60,15 +31,7 @@ fn parse_lines(src: &str, fast_path: bool) -> (File<'_>, Vec<Diagnostic>) {
                 text = rest;
             }
         }
-        let fast = if fast_path {
-            fast::parse_line(text, start, i + 1)
-        } else {
-            None
-        };
-        lines.push(match fast {
-            Some(line) => line,
-            None => parse_line(text, start, i + 1, &mut diagnostics),
-        });
+        lines.push(parse_line(text, start, i + 1, &mut diagnostics));
         offset += raw.len() + 1;
     }
     // A trailing newline does not open a new line.
@@ -159,7 +122,7 @@ impl Builder {
     }
 
     fn bug(&self, p: &Pair<'_, Rule>, what: &str) -> Diagnostic {
-        Diagnostic::internal(
+        internal(
             self.span(p),
             format!("the parser met {:?} where it expected {what}", p.as_rule()),
         )
@@ -189,8 +152,7 @@ impl Builder {
                 _ => return Err(self.bug(&c, "a number")),
             }
         }
-        let number =
-            number.ok_or_else(|| Diagnostic::internal(span, "a quantity without number".into()))?;
+        let number = number.ok_or_else(|| internal(span, "a quantity without number".into()))?;
         // The grammar admits only digits, one dot and a sign, so this parse cannot fail; a
         // literal too large for f64 becomes infinite and is rejected by the semantic pass.
         let value = number.parse::<f64>().unwrap_or(f64::NAN);
@@ -217,7 +179,7 @@ impl Builder {
     ) -> Result<Quantity<'a>> {
         match it.next() {
             Some(q) => self.quantity(q),
-            None => Err(Diagnostic::internal(span, "a missing number".into())),
+            None => Err(internal(span, "a missing number".into())),
         }
     }
 
@@ -237,7 +199,7 @@ impl Builder {
         let mut qs = p.into_inner().filter(|c| c.as_rule() == Rule::quantity);
         let mut next = || match qs.next() {
             Some(q) => self.quantity(q),
-            None => Err(Diagnostic::internal(span, "stage needs three sizes".into())),
+            None => Err(internal(span, "stage needs three sizes".into())),
         };
         Ok(Stage {
             span,
@@ -258,7 +220,7 @@ impl Builder {
                 _ => {}
             }
         }
-        let fov = fov.ok_or_else(|| Diagnostic::internal(span, "lens without angle".into()))?;
+        let fov = fov.ok_or_else(|| internal(span, "lens without angle".into()))?;
         Ok(Lens { span, fov, aspect })
     }
 
@@ -281,7 +243,7 @@ impl Builder {
                 _ => {}
             }
         }
-        Err(Diagnostic::internal(span, "drone without profile".into()))
+        Err(internal(span, "drone without profile".into()))
     }
 
     fn actor<'a>(&self, p: Pair<'a, Rule>) -> Result<ActorDecl<'a>> {
@@ -298,13 +260,13 @@ impl Builder {
                     let pt = c
                         .into_inner()
                         .find(|x| x.as_rule() == Rule::point)
-                        .ok_or_else(|| Diagnostic::internal(cs, "`at` without point".into()))?;
+                        .ok_or_else(|| internal(cs, "`at` without point".into()))?;
                     attrs.push(ActorAttr::At(cs, self.point(pt)?));
                 }
                 _ => {}
             }
         }
-        let name = name.ok_or_else(|| Diagnostic::internal(span, "actor without name".into()))?;
+        let name = name.ok_or_else(|| internal(span, "actor without name".into()))?;
         Ok(ActorDecl { span, name, attrs })
     }
 
@@ -317,7 +279,7 @@ impl Builder {
             .last()
         {
             Some(q) => self.quantity(q),
-            None => Err(Diagnostic::internal(span, "a missing number".into())),
+            None => Err(internal(span, "a missing number".into())),
         }
     }
 
@@ -333,8 +295,7 @@ impl Builder {
                 _ => {}
             }
         }
-        let value =
-            value.ok_or_else(|| Diagnostic::internal(span, "duration without value".into()))?;
+        let value = value.ok_or_else(|| internal(span, "duration without value".into()))?;
         Ok(Duration {
             span,
             keyword,
@@ -357,7 +318,7 @@ impl Builder {
                     let pt = c
                         .into_inner()
                         .find(|x| x.as_rule() == Rule::point)
-                        .ok_or_else(|| Diagnostic::internal(cs, "walk without point".into()))?;
+                        .ok_or_else(|| internal(cs, "walk without point".into()))?;
                     action = Some(Action::Walk(cs, self.point(pt)?));
                 }
                 Rule::turn => action = Some(Action::Turn(cs, self.last_quantity(c)?)),
@@ -373,7 +334,7 @@ impl Builder {
                 action,
                 duration,
             }),
-            _ => Err(Diagnostic::internal(span, "incomplete movement".into())),
+            _ => Err(internal(span, "incomplete movement".into())),
         }
     }
 
@@ -387,7 +348,7 @@ impl Builder {
                 _ => body = Some(self.shot_body(c)?),
             }
         }
-        let body = body.ok_or_else(|| Diagnostic::internal(span, "empty shot".into()))?;
+        let body = body.ok_or_else(|| internal(span, "empty shot".into()))?;
         Ok(Shot { span, pin, body })
     }
 
@@ -413,8 +374,8 @@ impl Builder {
                 _ => return Err(self.bug(&c, "a part of a shot")),
             }
         }
-        let composition = composition
-            .ok_or_else(|| Diagnostic::internal(span, "shot without composition".into()))?;
+        let composition =
+            composition.ok_or_else(|| internal(span, "shot without composition".into()))?;
         Ok(FramedShot {
             span,
             transition,
@@ -475,7 +436,7 @@ impl Builder {
         let inner = p
             .into_inner()
             .next()
-            .ok_or_else(|| Diagnostic::internal(span, "empty transition".into()))?;
+            .ok_or_else(|| internal(span, "empty transition".into()))?;
         let kind = match inner.as_rule() {
             Rule::cut_to => TransitionKind::Cut,
             Rule::dissolve_to => TransitionKind::Dissolve,
@@ -490,7 +451,7 @@ impl Builder {
                             let m = c
                                 .into_inner()
                                 .next()
-                                .ok_or_else(|| Diagnostic::internal(span, "empty move".into()))?;
+                                .ok_or_else(|| internal(span, "empty move".into()))?;
                             if m.as_rule() == Rule::follow {
                                 kind = MoveKind::Follow;
                                 follow = m
@@ -556,7 +517,7 @@ impl Builder {
                 _ => {}
             }
         }
-        let size = size.ok_or_else(|| Diagnostic::internal(span, "framing without size".into()))?;
+        let size = size.ok_or_else(|| internal(span, "framing without size".into()))?;
         Ok(Framing {
             span,
             size,
@@ -580,8 +541,7 @@ impl Builder {
                 _ => {}
             }
         }
-        let actor =
-            actor.ok_or_else(|| Diagnostic::internal(span, "subject without actor".into()))?;
+        let actor = actor.ok_or_else(|| internal(span, "subject without actor".into()))?;
         Ok(Subject {
             span,
             actor,
@@ -615,7 +575,7 @@ impl Builder {
                 _ => {}
             }
         }
-        Err(Diagnostic::internal(span, "screen without position".into()))
+        Err(internal(span, "screen without position".into()))
     }
 
     fn path<'a>(&self, p: Pair<'a, Rule>) -> Result<PathShot<'a>> {
@@ -636,7 +596,7 @@ impl Builder {
                     let k = c
                         .into_inner()
                         .next()
-                        .ok_or_else(|| Diagnostic::internal(cs, "empty path kind".into()))?;
+                        .ok_or_else(|| internal(cs, "empty path kind".into()))?;
                     let pk = match k.as_rule() {
                         Rule::kw_square => PathKind::Square,
                         Rule::kw_helix => PathKind::Helix,
@@ -646,9 +606,7 @@ impl Builder {
                                 .into_inner()
                                 .find(|x| x.as_rule() == Rule::string)
                                 .map(|s| self.string(s))
-                                .ok_or_else(|| {
-                                    Diagnostic::internal(cs, "waypoints without file".into())
-                                })?;
+                                .ok_or_else(|| internal(cs, "waypoints without file".into()))?;
                             PathKind::Waypoints(file)
                         }
                         _ => return Err(self.bug(&k, "a path kind")),
@@ -668,7 +626,7 @@ impl Builder {
                     let pt = c
                         .into_inner()
                         .find(|x| x.as_rule() == Rule::point)
-                        .ok_or_else(|| Diagnostic::internal(cs, "center without point".into()))?;
+                        .ok_or_else(|| internal(cs, "center without point".into()))?;
                     PathValue::Center(self.point(pt)?)
                 }
                 Rule::p_from_to => {
@@ -677,7 +635,7 @@ impl Builder {
                         (Some(a), Some(b)) => {
                             PathValue::FromTo(self.quantity(a)?, self.quantity(b)?)
                         }
-                        _ => return Err(Diagnostic::internal(cs, "from without to".into())),
+                        _ => return Err(internal(cs, "from without to".into())),
                     }
                 }
                 Rule::p_around | Rule::looking_at => {
@@ -686,7 +644,7 @@ impl Builder {
                         .into_inner()
                         .find(|x| x.as_rule() == Rule::name)
                         .map(|n| self.text(&n))
-                        .ok_or_else(|| Diagnostic::internal(cs, "missing actor".into()))?;
+                        .ok_or_else(|| internal(cs, "missing actor".into()))?;
                     if is_around {
                         PathValue::Around(n)
                     } else {
@@ -698,7 +656,7 @@ impl Builder {
             };
             params.push(PathParam { span: cs, value });
         }
-        let kind = kind.ok_or_else(|| Diagnostic::internal(span, "path without kind".into()))?;
+        let kind = kind.ok_or_else(|| internal(span, "path without kind".into()))?;
         Ok(PathShot {
             span,
             transition,
@@ -729,7 +687,7 @@ impl Builder {
                 end: *end,
                 body,
             }),
-            _ => Err(Diagnostic::internal(span, "incomplete timed entry".into())),
+            _ => Err(internal(span, "incomplete timed entry".into())),
         }
     }
 }

@@ -11,11 +11,13 @@ use std::collections::HashMap;
 use std::path::Path as FsPath;
 
 use crate::ast::{self, DurationKeyword, PathValue, Quantity, ShotBody, Statement, TransitionKind};
-use crate::diag::{Code, Diagnostic};
+use crate::code::PslCode;
 use crate::script::*;
-use crate::span::Span;
-use crate::suggest::{did_you_mean, shorten};
-use crate::vocab::{wrap_angle_rad, CameraAngle, MoveKind};
+use crate::vocab::{CameraAngle, MoveKind};
+use dronecine_diag::suggest::{did_you_mean, shorten};
+use dronecine_diag::Diagnostic;
+use dronecine_diag::Span;
+use dronecine_math::wrap_angle_rad;
 
 /// What the semantic pass needs from outside the script.
 #[derive(Clone, Copy, Debug, Default)]
@@ -158,7 +160,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             None if !unit_optional => {
                 self.err(
                     Diagnostic::error(
-                        Code::MissingUnit,
+                        PslCode::MissingUnit,
                         q.span,
                         format!("{what} `{}` has no unit", q.number),
                     )
@@ -171,7 +173,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             Some(u) if u.text == dim.unit() => {}
             Some(u) => {
                 let mut d = Diagnostic::error(
-                    Code::WrongUnit,
+                    PslCode::WrongUnit,
                     u.span,
                     match Dim::unit_factor(u.text) {
                         Some((d, _)) if d != dim => {
@@ -199,7 +201,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         if !value.is_finite() || value.abs() > 1e9 {
             self.err(
                 Diagnostic::error(
-                    Code::OutOfRange,
+                    PslCode::OutOfRange,
                     q.span,
                     format!("{what} `{}` is too large", shorten(q.number)),
                 )
@@ -218,7 +220,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         if let Some(u) = q.unit {
             self.err(
                 Diagnostic::error(
-                    Code::WrongUnit,
+                    PslCode::WrongUnit,
                     u.span,
                     format!("{what} has no unit, found `{}`", u.text),
                 )
@@ -228,7 +230,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         }
         if !q.value.is_finite() || q.value.abs() > 1e9 {
             self.err(Diagnostic::error(
-                Code::OutOfRange,
+                PslCode::OutOfRange,
                 q.span,
                 format!("{what} `{}` is too large", shorten(q.number)),
             ));
@@ -254,7 +256,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             };
             self.err(
                 Diagnostic::error(
-                    Code::OutOfRange,
+                    PslCode::OutOfRange,
                     span,
                     format!(
                         "{what} is {}{unit}; it must be {lo_txt} and at most {}{unit}",
@@ -283,7 +285,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         if v <= 0.0 {
             self.err(
                 Diagnostic::error(
-                    Code::NonPositiveDuration,
+                    PslCode::NonPositiveDuration,
                     d.value.span,
                     format!(
                         "a duration must be more than 0s, found `{}`",
@@ -315,7 +317,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             let (lo, hi) = (stage.min_m(), stage.max_m());
             self.err(
                 Diagnostic::error(
-                    Code::OutsideStage,
+                    PslCode::OutsideStage,
                     span,
                     format!("{what} ({}, {}) lies outside the stage", fmt_num(p[0]), fmt_num(p[1])),
                 )
@@ -336,7 +338,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         if z < 0.0 || z > stage.size_m[2] + 1e-9 {
             self.err(
                 Diagnostic::error(
-                    Code::OutsideStage,
+                    PslCode::OutsideStage,
                     span,
                     format!("{what} {}m is outside the stage's height", fmt_num(z)),
                 )
@@ -362,7 +364,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             return false;
         }
         let mut d = Diagnostic::error(
-            Code::UnknownActor,
+            PslCode::UnknownActor,
             name.span,
             format!("unknown actor `{}`", name.text),
         )
@@ -421,7 +423,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                         };
                         self.err(
                             Diagnostic::error(
-                                Code::SetupAfterShots,
+                                PslCode::SetupAfterShots,
                                 s.span(),
                                 format!("`{what}` comes after the first shot"),
                             )
@@ -448,7 +450,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 if let Some(first) = declared.get(a.name.text) {
                     self.err(
                         Diagnostic::error(
-                            Code::DuplicateActor,
+                            PslCode::DuplicateActor,
                             a.name.span,
                             format!("actor `{}` is declared twice", a.name.text),
                         )
@@ -481,7 +483,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             if let Some((a, d)) = near {
                 self.err(
                     Diagnostic::error(
-                        Code::ActorsOverlap,
+                        PslCode::ActorsOverlap,
                         b.span,
                         format!(
                             "`{}` starts {d:.2} m from `{}`: two actors cannot stand in one place",
@@ -519,7 +521,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             let actor = actors.first().map_or("A", |a| a.name.as_str());
             self.err(
                 Diagnostic::warning(
-                    Code::EmptyScript,
+                    PslCode::EmptyScript,
                     Span::new(end, end),
                     "the script has no shots",
                 )
@@ -544,9 +546,15 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     {
                         let first = statements.first().map(|s| s.span()).unwrap_or_default();
                         self.err(
-                            Diagnostic::error(Code::MissingStage, first, "the scene has no stage")
-                                .with_label("a scene needs a stage before its shots")
-                                .with_help("add the flight volume above the shots, e.g. `stage 8m x 6m x 3m`"),
+                            Diagnostic::error(
+                                PslCode::MissingStage,
+                                first,
+                                "the scene has no stage",
+                            )
+                            .with_label("a scene needs a stage before its shots")
+                            .with_help(
+                                "add the flight volume above the shots, e.g. `stage 8m x 6m x 3m`",
+                            ),
                         );
                     }
                     None
@@ -576,7 +584,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     None => found = Some(x),
                     Some(first) => self.err(
                         Diagnostic::error(
-                            Code::DuplicateSetting,
+                            PslCode::DuplicateSetting,
                             span_of(x),
                             format!("`{what}` is set twice"),
                         )
@@ -656,7 +664,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 } else {
                     self.err(
                         Diagnostic::error(
-                            Code::BadAspect,
+                            PslCode::BadAspect,
                             a.span,
                             format!("`{}` is not a usable aspect ratio", a.text),
                         )
@@ -689,12 +697,12 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 let known = self.opts.known_drones;
                 if !known.is_empty() && !known.contains(&name.text) {
                     let mut diag = Diagnostic::error(
-                        Code::UnknownDrone,
+                        PslCode::UnknownDrone,
                         name.span,
                         format!("unknown drone profile `{}`", name.text),
                     )
                     .with_label("not a built-in profile");
-                    let list = crate::suggest::or_list(known);
+                    let list = dronecine_diag::suggest::or_list(known);
                     diag.help = Some(match did_you_mean(name.text, known.iter().copied()) {
                         Some(s) => format!("{s} (built-in profiles: {list}; or give a file: `drone \"mine.toml\"`)"),
                         None => format!("built-in profiles are {list}; for your own, write `drone \"profiles/mine.toml\"`"),
@@ -713,7 +721,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                         let folder = full.is_dir();
                         self.err(
                             Diagnostic::error(
-                                Code::FileNotFound,
+                                PslCode::FileNotFound,
                                 path.span,
                                 if folder {
                                     format!("`{}` is a folder, not a drone profile file", path.text)
@@ -753,7 +761,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             if let Some(first) = seen.insert(key, attr.span()) {
                 self.err(
                     Diagnostic::error(
-                        Code::DuplicateAttribute,
+                        PslCode::DuplicateAttribute,
                         attr.span(),
                         format!("`{key}` is given twice for `{}`", a.name.text),
                     )
@@ -810,7 +818,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             if !value {
                 self.err(
                     Diagnostic::error(
-                        Code::MissingAttribute,
+                        PslCode::MissingAttribute,
                         a.name.span,
                         format!("actor `{}` has no {key}", a.name.text),
                     )
@@ -867,7 +875,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 None => {
                     self.err(
                         Diagnostic::error(
-                            Code::MissingDuration,
+                            PslCode::MissingDuration,
                             Span::new(b.span.end, b.span.end),
                             "this movement has no duration",
                         )
@@ -880,7 +888,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     if d.keyword == DurationKeyword::For {
                         self.err(
                             Diagnostic::warning(
-                                Code::DurationKeyword,
+                                PslCode::DurationKeyword,
                                 d.span,
                                 "a movement is timed with `over`",
                             )
@@ -913,7 +921,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 if m.start_s < end - EPS_S {
                     overlapping.push(
                         Diagnostic::error(
-                            Code::OverlappingMovement,
+                            PslCode::OverlappingMovement,
                             m.span,
                             format!(
                                 "`{}` is still moving until {}s when this movement starts at {}s",
@@ -988,7 +996,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 if let Some(d) = body.duration() {
                     self.err(
                         Diagnostic::error(
-                            Code::DurationInTimedEntry,
+                            PslCode::DurationInTimedEntry,
                             d.span,
                             "a timed entry takes its duration from its timecodes",
                         )
@@ -1001,7 +1009,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     if b <= a {
                         self.err(
                             Diagnostic::error(
-                                Code::TimecodeOrder,
+                                PslCode::TimecodeOrder,
                                 t.start.span.to(t.end.span),
                                 format!(
                                     "this entry ends at {} before it starts at {}",
@@ -1016,7 +1024,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     } else {
                         if a < clock - EPS_S {
                             let mut d = Diagnostic::error(
-                                Code::TimecodeOrder,
+                                PslCode::TimecodeOrder,
                                 t.start.span,
                                 format!(
                                     "this entry starts at {} while the previous one runs until {}s",
@@ -1043,7 +1051,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 if let Some(at) = self.time(p, "the start time") {
                     if at < clock - EPS_S {
                         let mut d = Diagnostic::error(
-                            Code::PinnedStartOverlaps,
+                            PslCode::PinnedStartOverlaps,
                             p.span,
                             format!(
                                 "this shot is pinned at {}s but the shots before it run until {}s",
@@ -1069,7 +1077,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 let end = body.span().end;
                 self.err(
                     Diagnostic::error(
-                        Code::MissingDuration,
+                        PslCode::MissingDuration,
                         Span::new(end, end),
                         "this shot has no duration",
                     )
@@ -1105,7 +1113,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
     fn mixed(&mut self, span: Span, other: Span) {
         self.err(
             Diagnostic::error(
-                Code::MixedTiming,
+                PslCode::MixedTiming,
                 span,
                 "timed (subtitle) entries and untimed shots are mixed",
             )
@@ -1130,7 +1138,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         let bad = |this: &mut Self, why: &str| {
             this.err(
                 Diagnostic::error(
-                    Code::BadTimecode,
+                    PslCode::BadTimecode,
                     t.span,
                     format!("timecode `{}` {why}", t.text),
                 )
@@ -1213,7 +1221,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     if is_move && d.keyword == DurationKeyword::For {
                         self.err(
                             Diagnostic::warning(
-                                Code::DurationKeyword,
+                                PslCode::DurationKeyword,
                                 d.span,
                                 "a camera move is timed with `over`",
                             )
@@ -1226,7 +1234,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     } else if !is_move && d.keyword == DurationKeyword::Over {
                         self.err(
                             Diagnostic::warning(
-                                Code::DurationKeyword,
+                                PslCode::DurationKeyword,
                                 d.span,
                                 "a held composition is timed with `for`",
                             )
@@ -1265,7 +1273,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     if matches!(t.kind, TransitionKind::Move { .. }) {
                         self.err(
                             Diagnostic::error(
-                                Code::ThenToPath,
+                                PslCode::ThenToPath,
                                 t.span,
                                 "a `then` move cannot lead into a path",
                             )
@@ -1299,7 +1307,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             None if self.failed_lines.iter().any(|&l| l < span.start) => None,
             None => {
                 self.err(
-                    Diagnostic::error(Code::ThenWithoutShot, span, "`then` continues a shot, but no shot comes before it")
+                    Diagnostic::error(PslCode::ThenWithoutShot, span, "`then` continues a shot, but no shot comes before it")
                         .with_help("start with a composition such as `MS on A front for 4s`, or write `cut to`"),
                 );
                 None
@@ -1307,7 +1315,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             Some((pspan, Some(ShotContent::Path(_)))) => {
                 self.err(
                     Diagnostic::error(
-                        Code::ThenAfterPath,
+                        PslCode::ThenAfterPath,
                         span,
                         "`then` cannot continue a path: a path has no composition to move from",
                     )
@@ -1341,7 +1349,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 if let Some(&(ffi, first)) = seen.get(name) {
                     let d = if ffi == fi {
                         Diagnostic::error(
-                            Code::TwoShotSameActor,
+                            PslCode::TwoShotSameActor,
                             s.actor.span,
                             format!("`{name}` is framed twice in one framing"),
                         )
@@ -1352,7 +1360,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                         )
                     } else {
                         Diagnostic::error(
-                            Code::ActorFramedTwice,
+                            PslCode::ActorFramedTwice,
                             s.actor.span,
                             format!("`{name}` appears in two framings of one composition"),
                         )
@@ -1405,7 +1413,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         if !annotation && distinct > 2 {
             self.err(
                 Diagnostic::error(
-                    Code::TooManyActors,
+                    PslCode::TooManyActors,
                     c.span,
                     format!(
                         "this composition frames {distinct} actors; a drone frames at most two"
@@ -1436,7 +1444,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             if let Some((first, _)) = given.get(key) {
                 self.err(
                     Diagnostic::error(
-                        Code::DuplicateAttribute,
+                        PslCode::DuplicateAttribute,
                         param.span,
                         format!("`{key}` is given twice"),
                     )
@@ -1479,14 +1487,14 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     .collect();
                 self.err(
                     Diagnostic::error(
-                        Code::UnexpectedPathParameter,
+                        PslCode::UnexpectedPathParameter,
                         param.span,
                         format!("a {shape_name} path takes no `{key}`"),
                     )
                     .with_label("not a parameter of this shape")
                     .with_help(format!(
                         "a {shape_name} path takes {}",
-                        crate::suggest::or_list(&shown)
+                        dronecine_diag::suggest::or_list(&shown)
                     )),
                 );
                 ok = false;
@@ -1498,7 +1506,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             }
             this.err(
                 Diagnostic::error(
-                    Code::MissingPathParameter,
+                    PslCode::MissingPathParameter,
                     *kind_span,
                     format!("a {shape_name} path needs `{key}`"),
                 )
@@ -1641,7 +1649,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     }
                     (Some((a, _)), Some((c, _))) => {
                         self.err(
-                            Diagnostic::error(Code::UnexpectedPathParameter, c, "an orbit goes `around` an actor or about a `center`, not both")
+                            Diagnostic::error(PslCode::UnexpectedPathParameter, c, "an orbit goes `around` an actor or about a `center`, not both")
                                 .with_related(a, "`around` given here")
                                 .with_help("remove `center (x, y)` to orbit the actor, or `around` to orbit a fixed point"),
                         );
@@ -1649,7 +1657,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     }
                     _ => {
                         self.err(
-                            Diagnostic::error(Code::MissingPathParameter, *kind_span, "an orbit needs `around A` or `center (x, y)`")
+                            Diagnostic::error(PslCode::MissingPathParameter, *kind_span, "an orbit needs `around A` or `center (x, y)`")
                                 .with_label("what to orbit?")
                                 .with_help("add `around A` to circle an actor, or `center (0, 0)` for a fixed point"),
                         );
@@ -1704,7 +1712,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         {
             self.err(
                 Diagnostic::error(
-                    Code::OutsideStage,
+                    PslCode::OutsideStage,
                     span,
                     format!("the {what} (radius {}m about ({}, {})) leaves the stage", fmt_num(r), fmt_num(c[0]), fmt_num(c[1])),
                 )
@@ -1732,7 +1740,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     Ok(t) => t,
                     Err(_) => {
                         self.err(
-                        Diagnostic::error(Code::BadWaypoints, file.span, format!("`{}` is not UTF-8 text", file.text))
+                        Diagnostic::error(PslCode::BadWaypoints, file.span, format!("`{}` is not UTF-8 text", file.text))
                             .with_help("save the waypoints as a plain-text CSV: x, y, z in metres per line"),
                     );
                         return None;
@@ -1742,7 +1750,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
             Err(e) => {
                 self.err(
                     Diagnostic::error(
-                        Code::FileNotFound,
+                        PslCode::FileNotFound,
                         file.span,
                         format!("cannot read waypoints file `{}`: {e}", file.text),
                     )
@@ -1775,7 +1783,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     if stage.is_some_and(|s| !s.contains(p)) {
                         self.err(
                             Diagnostic::error(
-                                Code::OutsideStage,
+                                PslCode::OutsideStage,
                                 file.span,
                                 format!(
                                     "`{}` line {}: waypoint ({}, {}, {}) is outside the stage",
@@ -1795,7 +1803,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 _ => {
                     self.err(
                         Diagnostic::error(
-                            Code::BadWaypoints,
+                            PslCode::BadWaypoints,
                             file.span,
                             format!(
                                 "`{}` line {}: expected three numbers x, y, z, found `{}`",
@@ -1813,7 +1821,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
         if points.len() < 2 {
             self.err(
                 Diagnostic::error(
-                    Code::BadWaypoints,
+                    PslCode::BadWaypoints,
                     file.span,
                     format!(
                         "`{}` has {} waypoint(s); a path needs at least 2",

@@ -8,8 +8,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::span::Span;
 use crate::vocab::{CameraAngle, MoveKind, Profile, Size};
+use dronecine_diag::Span;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Script {

@@ -7,11 +7,12 @@
 
 use pest::error::{ErrorVariant, InputLocation};
 
-use crate::diag::{Code, Diagnostic};
-use crate::parser::Rule;
-use crate::span::Span;
-use crate::suggest::{did_you_mean, or_list, shorten};
+use crate::code::PslCode;
+use crate::rules::Rule;
 use crate::vocab::{is_keyword, KEYWORDS, MOVE_NAMES, PROFILE_NAMES, SIZE_NAMES};
+use dronecine_diag::suggest::{did_you_mean, or_list, shorten};
+use dronecine_diag::Diagnostic;
+use dronecine_diag::Span;
 
 /// What the grammar expected, in words, with the vocabulary a misspelling is matched against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -280,7 +281,7 @@ pub fn diagnostic(err: &pest::error::Error<Rule>, line: &str, offset: usize) -> 
                     .unwrap_or(0);
                 let number = &before[num_start..];
                 return Diagnostic::error(
-                    Code::UnitSpace,
+                    PslCode::UnitSpace,
                     Span::new(offset + num_start, span.end),
                     format!("the unit `{w}` is written apart from its number"),
                 )
@@ -306,7 +307,7 @@ pub fn diagnostic(err: &pest::error::Error<Rule>, line: &str, offset: usize) -> 
                         "write the actor's name here, e.g. `MS on A front`; keywords cannot be names".to_string(),
                     )
                 };
-                return Diagnostic::error(Code::KeywordAsName, span, message)
+                return Diagnostic::error(PslCode::KeywordAsName, span, message)
                     .with_label("a keyword, not a name")
                     .with_help(help);
             }
@@ -361,7 +362,7 @@ pub fn diagnostic(err: &pest::error::Error<Rule>, line: &str, offset: usize) -> 
         help =
             Some("a shot looks like `MS on A front for 4s`; comments start with `#`".to_string());
     }
-    let mut d = Diagnostic::error(Code::Syntax, span, message).with_label(label);
+    let mut d = Diagnostic::error(PslCode::Syntax, span, message).with_label(label);
     d.help = help;
     d
 }

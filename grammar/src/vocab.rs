@@ -273,24 +273,10 @@ pub fn is_keyword(word: &str) -> bool {
     KEYWORDS.contains(&word)
 }
 
-/// Wrap an angle to (−π, π]: the one angle-wrap convention of the project.
-///
-/// An angle already in (−π, π] comes back bit for bit (and without the cost of `fmod`).
-pub fn wrap_angle_rad(a: f64) -> f64 {
-    if a > -PI && a <= PI {
-        return a;
-    }
-    let w = a.rem_euclid(2.0 * PI); // [0, 2π)
-    if w > PI {
-        w - 2.0 * PI
-    } else {
-        w
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dronecine_math::wrap_angle_rad;
 
     #[test]
     fn profile_azimuths_follow_psl_section_3() {

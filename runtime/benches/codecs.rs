@@ -3,15 +3,13 @@
 //! AT datagram (PCMD + COMWDG), and map a generic command to PCMD values.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use dronecine_compiler::profile::Profile;
-use dronecine_runtime::ardrone::at::{AtCommand, AtEncoder, Datagram, PcmdLimits};
-use dronecine_runtime::ardrone::navdata::{
-    self, ControlState, Demo, DroneState, Navdata, NavdataWriter,
-};
-use dronecine_runtime::frames::Command;
-use dronecine_runtime::natnet::frame::{
+use dronecine_ardrone::at::{AtCommand, AtEncoder, Datagram, PcmdLimits};
+use dronecine_ardrone::navdata::{self, ControlState, Demo, DroneState, Navdata, NavdataWriter};
+use dronecine_backend::frames::Command;
+use dronecine_natnet::frame::{
     decode_frame, encode_frame, Frame, FrameOut, MarkerSet, RigidBody, UpAxis, Version,
 };
+use dronecine_profile::Profile;
 
 fn navdata_packet() -> Vec<u8> {
     let mut buf = [0u8; 4096];

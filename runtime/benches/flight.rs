@@ -17,13 +17,15 @@ use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use dronecine_compiler::profile::Profile;
+use dronecine_flight::NoObserver;
 use dronecine_grammar::Script;
-use dronecine_runtime::flight::{NoObserver, NullSink};
-use dronecine_runtime::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
-use dronecine_runtime::record::{ControllerSetup, FlightHeader};
-use dronecine_runtime::session::{fly_simulated, SimFlight};
-use dronecine_runtime::sim::SimConfig;
+use dronecine_mcap::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
+use dronecine_mcap::record::FlightHeader;
+use dronecine_mcap::record::NullSink;
+use dronecine_profile::Profile;
+use dronecine_runtime::{fly_simulated, SimFlight};
+use dronecine_servo::setup::ControllerSetup;
+use dronecine_sim::SimConfig;
 
 /// `minutes` of shots: blocks of one-actor and two-actor holds while the actors walk.
 fn generated_script(minutes: usize) -> String {
@@ -53,7 +55,7 @@ fn generated_script(minutes: usize) -> String {
 
 fn parse(text: &str) -> Script {
     let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        known_drones: dronecine_profile::BUILTIN_NAMES,
         base_dir: None,
     };
     let checked = dronecine_grammar::check(text, &opts);

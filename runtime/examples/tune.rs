@@ -16,12 +16,14 @@
 
 use dronecine_compiler::camera::{Lens, Vec3};
 use dronecine_compiler::framing;
-use dronecine_compiler::profile::{Gimbal, Profile};
+use dronecine_flight::NoObserver;
 use dronecine_grammar::script::{Composition, Script, ShotContent};
-use dronecine_runtime::flight::{FlightSink, NoObserver};
-use dronecine_runtime::record::{ControllerSetup, Event, Phase, TickRecord};
-use dronecine_runtime::session::{fly_simulated, SimFlight};
-use dronecine_runtime::sim::{Effects, SimConfig};
+use dronecine_mcap::record::FlightSink;
+use dronecine_mcap::record::{Event, Phase, TickRecord};
+use dronecine_profile::{Gimbal, Profile};
+use dronecine_runtime::{fly_simulated, SimFlight};
+use dronecine_servo::setup::ControllerSetup;
+use dronecine_sim::{Effects, SimConfig};
 
 fn numbers<const N: usize>(arg: &str) -> Result<[f64; N], String> {
     let v: Vec<f64> = arg
@@ -163,7 +165,7 @@ fn run() -> Result<(), String> {
         .ok_or("usage: tune FILE.psl [each] [Q1,..,Q6 R1,R2,R3]")?;
     let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
     let opts = dronecine_grammar::Options {
-        known_drones: dronecine_compiler::profile::BUILTIN_NAMES,
+        known_drones: dronecine_profile::BUILTIN_NAMES,
         base_dir: None,
     };
     let checked = dronecine_grammar::check(&text, &opts);

@@ -1,0 +1,5 @@
+//! The compiler's tests: the manifolds and framings against their geometry, and steering that
+//! follows any feasible minimum-jerk flight.
+
+mod manifold;
+mod steering;

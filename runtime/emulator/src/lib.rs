@@ -1,0 +1,703 @@
+//! The AR.Drone 2.0 + OptiTrack emulator behind `dronecine emulate ardrone`: the embedded
+//! simulator (`sim`) run in real time behind the real wire protocols (protocols.md §1, §4.1),
+//! so the AR.Drone and NatNet backends (and any AR.Drone client) can fly it over UDP.
+//!
+//! [`Emulator::start`] binds the sockets (errors come back at once), then one thread owns the
+//! simulator (which is single-threaded) and the sockets, non-blocking, and loops every
+//! [`EmulatorConfig::step_s`] (5 ms) of wall time:
+//!
+//! 1. drain the AT port: each datagram goes to the emulated firmware ([`firmware`]);
+//! 2. drain the navdata port: a datagram of 1–4 bytes is the client's trigger (`01 00 00 00`,
+//!    or NAD's single `01`); its sender becomes the navdata destination, replied to from
+//!    the navdata port (§1.1: the source address of the trigger) — longer ones are counted
+//!    and dropped;
+//! 3. drain the NatNet command port ([`motive`]), answering each requester;
+//! 4. advance the simulator to the wall time since start (`SimClock::sleep_until`), times
+//!    [`EmulatorConfig::time_scale`] (1: real time);
+//! 5. send the newest mocap frame, if the simulator made one, to the data address (unicast
+//!    or a multicast group); several frames made in one step (a late step) send only the
+//!    newest, the frame-number gap showing the loss, as with a real network;
+//! 6. send navdata when due (15 Hz bootstrap and demo, 200 Hz full; no burst after a late
+//!    step);
+//! 7. publish the counters and the truth for [`EmulatorHandle::status`], then sleep to the
+//!    next step.
+//!
+//! An emergency toggled off (REF bit 8 in emergency) rebuilds the simulator where the drone
+//! stands (landed, same heading and battery; the simulator itself cannot leave its emergency
+//! state); its clock then restarts, so the actors' blocking restarts from the script's t = 0.
+//! Nothing on the network can panic the loop: every datagram is parsed by the codecs'
+//! error-returning decoders and a bad one is counted.
+
+pub mod firmware;
+pub mod motive;
+
+use std::fmt;
+use std::io;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use dronecine_grammar::script::Scene;
+use dronecine_profile::Profile;
+
+use dronecine_backend::{Clock, Mocap, MocapFrame};
+use dronecine_natnet::frame::{
+    NatNetError, UpAxis, Version, COMMAND_PORT, DATA_PORT, MULTICAST_GROUP,
+};
+use dronecine_sim::{SimClock, SimConfig, SimDrone, SimError, SimMocap, Simulator, Truth};
+
+pub use firmware::{AtCounters, Firmware, Limits, NavdataMode};
+pub use motive::{Motive, ACTOR_ID_BASE, DRONE_ID};
+
+/// The AR.Drone's AT command port (§1.1).
+pub const AT_PORT: u16 = 5556;
+/// The AR.Drone's navdata port (§1.1).
+pub const NAVDATA_PORT: u16 = 5554;
+
+/// Where NatNet frames go.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NatNetData {
+    /// To one address (a client's data socket).
+    Unicast(SocketAddr),
+    /// To a multicast group (Motive's default: 239.255.42.99:1511).
+    Multicast(SocketAddrV4),
+}
+
+impl NatNetData {
+    /// An address: multicast when its IP is a multicast address.
+    pub fn from_addr(addr: SocketAddr) -> NatNetData {
+        match addr {
+            SocketAddr::V4(a) if a.ip().is_multicast() => NatNetData::Multicast(a),
+            a => NatNetData::Unicast(a),
+        }
+    }
+
+    pub fn addr(&self) -> SocketAddr {
+        match *self {
+            NatNetData::Unicast(a) => a,
+            NatNetData::Multicast(a) => SocketAddr::V4(a),
+        }
+    }
+}
+
+/// The NatNet side: the command port bound on the emulator's host, the data destination,
+/// the NatNet version announced and streamed, and Motive's up axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NatNetConfig {
+    pub command_port: u16,
+    pub data: NatNetData,
+    pub version: Version,
+    pub up_axis: UpAxis,
+}
+
+impl Default for NatNetConfig {
+    /// Motive's defaults: command port 1510, multicast 239.255.42.99:1511, NatNet 4.1, Y-up.
+    fn default() -> Self {
+        NatNetConfig {
+            command_port: COMMAND_PORT,
+            data: NatNetData::Multicast(SocketAddrV4::new(
+                Ipv4Addr::from(MULTICAST_GROUP),
+                DATA_PORT,
+            )),
+            version: Version::V4_1,
+            up_axis: UpAxis::Y,
+        }
+    }
+}
+
+/// Everything [`Emulator::start`] needs.
+#[derive(Clone, Debug)]
+pub struct EmulatorConfig {
+    /// The address the AT, navdata and NatNet command sockets bind to.
+    pub host: IpAddr,
+    /// Port 0 binds an ephemeral port ([`EmulatorHandle::at_addr`] tells which).
+    pub at_port: u16,
+    pub navdata_port: u16,
+    /// `None`: no NatNet.
+    pub natnet: Option<NatNetConfig>,
+    /// The simulator's settings (seed, effects).
+    pub sim: SimConfig,
+    pub profile: Profile,
+    /// The actors come from its scene; an empty scene has none.
+    pub scene: Scene,
+    /// The loop's period (wall clock). Default 5 ms.
+    pub step_s: f64,
+    /// Simulated seconds per wall second. Default 1 (real time); tests fly faster. The
+    /// protocol timings (navdata rates, watchdog, sequence reset) stay on the wall clock.
+    pub time_scale: f64,
+}
+
+impl EmulatorConfig {
+    /// Standard ports (5556, 5554, NatNet 1510 → multicast 1511) on 127.0.0.1, all the
+    /// simulator's effects, seeded by `seed`.
+    pub fn new(profile: Profile, scene: Scene, seed: u64) -> Self {
+        EmulatorConfig {
+            host: IpAddr::V4(Ipv4Addr::LOCALHOST),
+            at_port: AT_PORT,
+            navdata_port: NAVDATA_PORT,
+            natnet: Some(NatNetConfig::default()),
+            sim: SimConfig::new(seed),
+            profile,
+            scene,
+            step_s: 0.005,
+            time_scale: 1.0,
+        }
+    }
+}
+
+/// A scene with no actors (the emulator without a script): an 8 × 8 × 3 m stage.
+pub fn empty_scene() -> Scene {
+    Scene {
+        stage: dronecine_grammar::script::Stage {
+            size_m: [8.0, 8.0, 3.0],
+        },
+        lens: None,
+        drone: None,
+        actors: Vec::new(),
+        blocking: Vec::new(),
+    }
+}
+
+/// Why the emulator could not start (or stopped).
+#[derive(Debug)]
+pub enum EmulatorError {
+    /// A socket could not be bound or set up.
+    Socket {
+        what: &'static str,
+        addr: SocketAddr,
+        error: io::Error,
+    },
+    Sim(SimError),
+    NatNet(NatNetError),
+    /// A bad setting (the step).
+    Config(String),
+    /// The emulator's thread died.
+    Thread(String),
+}
+
+impl fmt::Display for EmulatorError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EmulatorError::Socket { what, addr, error } => {
+                write!(f, "cannot set up the {what} socket on {addr}: {error}")
+            }
+            EmulatorError::Sim(e) => write!(f, "{e}"),
+            EmulatorError::NatNet(e) => write!(f, "NatNet: {e:?}"),
+            EmulatorError::Config(m) => write!(f, "{m}"),
+            EmulatorError::Thread(m) => write!(f, "the emulator's thread failed: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for EmulatorError {}
+
+/// What the emulator did so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    pub at: AtCounters,
+    /// Trigger packets received on the navdata port.
+    pub navdata_triggers: u64,
+    /// Datagrams on the navdata port that are not a trigger.
+    pub navdata_rejected: u64,
+    pub navdata_sent: u64,
+    /// NatNet command datagrams answered (or accepted, keep-alives).
+    pub natnet_requests: u64,
+    /// NatNet command datagrams that are not NatNet messages.
+    pub natnet_rejected: u64,
+    pub frames_sent: u64,
+    /// Sends that failed (the destination unreachable, …).
+    pub send_errors: u64,
+    /// Emergencies cleared (simulator rebuilt).
+    pub emergency_resets: u64,
+    /// Loop steps run.
+    pub steps: u64,
+}
+
+/// A snapshot of the emulator, refreshed every step.
+#[derive(Clone, Debug, Default)]
+pub struct Status {
+    pub counters: Counters,
+    /// The simulator's true state (world frame, `frames.rs`).
+    pub truth: Truth,
+    /// Whether the drone flies a progressive command (not its own hover).
+    pub commanded: bool,
+    pub navdata_mode: Option<NavdataMode>,
+    pub command_ack: bool,
+    pub com_watchdog: bool,
+    pub limits: Option<Limits>,
+    /// Where navdata goes (the last trigger's sender).
+    pub navdata_client: Option<SocketAddr>,
+    /// Seconds of wall time since the start.
+    pub uptime_s: f64,
+}
+
+/// The emulator: see the module docs.
+pub struct Emulator;
+
+/// The running emulator. Dropping it stops it.
+pub struct EmulatorHandle {
+    at_addr: SocketAddr,
+    navdata_addr: SocketAddr,
+    natnet_command_addr: Option<SocketAddr>,
+    natnet_data: Option<NatNetData>,
+    status: Arc<Mutex<Status>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl EmulatorHandle {
+    /// The bound AT command address.
+    pub fn at_addr(&self) -> SocketAddr {
+        self.at_addr
+    }
+
+    /// The bound navdata address (trigger to it; navdata comes from it).
+    pub fn navdata_addr(&self) -> SocketAddr {
+        self.navdata_addr
+    }
+
+    /// The bound NatNet command address.
+    pub fn natnet_command_addr(&self) -> Option<SocketAddr> {
+        self.natnet_command_addr
+    }
+
+    /// Where NatNet frames go.
+    pub fn natnet_data(&self) -> Option<NatNetData> {
+        self.natnet_data
+    }
+
+    pub fn status(&self) -> Status {
+        self.status.lock().map(|s| s.clone()).unwrap_or_default()
+    }
+
+    pub fn counters(&self) -> Counters {
+        self.status.lock().map(|s| s.counters).unwrap_or_default()
+    }
+
+    pub fn truth(&self) -> Truth {
+        self.status
+            .lock()
+            .map(|s| s.truth.clone())
+            .unwrap_or_default()
+    }
+
+    /// Whether the loop still runs.
+    pub fn is_running(&self) -> bool {
+        self.thread.as_ref().is_some_and(|t| !t.is_finished())
+    }
+
+    /// Stops the loop and waits for it.
+    pub fn stop(mut self) -> Result<(), EmulatorError> {
+        self.stop.store(true, Ordering::SeqCst);
+        self.join()
+    }
+
+    /// Waits until the loop ends (it runs until [`EmulatorHandle::stop`] or the process ends).
+    pub fn wait(mut self) -> Result<(), EmulatorError> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<(), EmulatorError> {
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| EmulatorError::Thread("it panicked".into())),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for EmulatorHandle {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        let _ = self.join();
+    }
+}
+
+fn bind(what: &'static str, addr: SocketAddr) -> Result<UdpSocket, EmulatorError> {
+    let err = |error| EmulatorError::Socket { what, addr, error };
+    let s = UdpSocket::bind(addr).map_err(err)?;
+    s.set_nonblocking(true).map_err(err)?;
+    Ok(s)
+}
+
+struct NatNetIo {
+    command: UdpSocket,
+    data: UdpSocket,
+    dest: SocketAddr,
+    motive: Motive,
+}
+
+impl Emulator {
+    /// Binds the sockets, builds the simulator and starts the loop.
+    pub fn start(config: EmulatorConfig) -> Result<EmulatorHandle, EmulatorError> {
+        if !(config.step_s.is_finite() && (1e-4..=0.05).contains(&config.step_s)) {
+            return Err(EmulatorError::Config(format!(
+                "the emulator's step {} s is outside 0.1–50 ms",
+                config.step_s
+            )));
+        }
+        if !(config.time_scale.is_finite() && config.time_scale > 0.0 && config.time_scale <= 100.0)
+        {
+            return Err(EmulatorError::Config(format!(
+                "the emulator's time scale {} is outside (0, 100]",
+                config.time_scale
+            )));
+        }
+        config.sim.validate().map_err(EmulatorError::Sim)?;
+        let at = bind("AT", SocketAddr::new(config.host, config.at_port))?;
+        let nav = bind("navdata", SocketAddr::new(config.host, config.navdata_port))?;
+        let local = |s: &UdpSocket, what| {
+            s.local_addr().map_err(|error| EmulatorError::Socket {
+                what,
+                addr: SocketAddr::new(config.host, 0),
+                error,
+            })
+        };
+        let at_addr = local(&at, "AT")?;
+        let navdata_addr = local(&nav, "navdata")?;
+        let natnet = match &config.natnet {
+            None => None,
+            Some(n) => {
+                let command = bind(
+                    "NatNet command",
+                    SocketAddr::new(config.host, n.command_port),
+                )?;
+                let dest = n.data.addr();
+                if dest.port() == 0 || dest.ip().is_unspecified() {
+                    return Err(EmulatorError::Config(format!(
+                        "NatNet frames cannot be sent to {dest}: give an address and a port"
+                    )));
+                }
+                let data_bind = match dest {
+                    SocketAddr::V4(_) => SocketAddr::new(
+                        if config.host.is_ipv4() {
+                            config.host
+                        } else {
+                            IpAddr::V4(Ipv4Addr::UNSPECIFIED)
+                        },
+                        0,
+                    ),
+                    SocketAddr::V6(_) => SocketAddr::new(
+                        if config.host.is_ipv6() {
+                            config.host
+                        } else {
+                            IpAddr::V6(std::net::Ipv6Addr::UNSPECIFIED)
+                        },
+                        0,
+                    ),
+                };
+                let data = bind("NatNet data", data_bind)?;
+                if let NatNetData::Multicast(_) = n.data {
+                    let _ = data.set_multicast_loop_v4(true);
+                }
+                let (multicast, group) = match n.data {
+                    NatNetData::Multicast(a) => (true, a.ip().octets()),
+                    NatNetData::Unicast(_) => (false, [0; 4]),
+                };
+                let motive = Motive::new(n.version, n.up_axis, dest.port(), multicast, group)
+                    .map_err(EmulatorError::NatNet)?;
+                Some(NatNetIo {
+                    command,
+                    data,
+                    dest,
+                    motive,
+                })
+            }
+        };
+        let natnet_command_addr = match &natnet {
+            Some(n) => Some(local(&n.command, "NatNet command")?),
+            None => None,
+        };
+        let natnet_data = config.natnet.map(|n| n.data);
+
+        let status = Arc::new(Mutex::new(Status::default()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (ready_tx, ready_rx) = mpsc::channel();
+        let (st, sp) = (Arc::clone(&status), Arc::clone(&stop));
+        let thread = std::thread::Builder::new()
+            .name("dronecine-emulator".into())
+            .spawn(move || {
+                let mut lp = match Loop::new(config, at, nav, natnet, st, sp) {
+                    Ok(mut lp) => {
+                        lp.publish(0.0);
+                        let _ = ready_tx.send(Ok(()));
+                        lp
+                    }
+                    Err(e) => {
+                        let _ = ready_tx.send(Err(e));
+                        return;
+                    }
+                };
+                lp.run();
+            })
+            .map_err(|e| EmulatorError::Thread(e.to_string()))?;
+        let ready = ready_rx
+            .recv()
+            .unwrap_or_else(|_| Err(EmulatorError::Thread("it ended before starting".into())));
+        let handle = EmulatorHandle {
+            at_addr,
+            navdata_addr,
+            natnet_command_addr,
+            natnet_data,
+            status,
+            stop,
+            thread: Some(thread),
+        };
+        ready.map(|()| handle)
+    }
+}
+
+/// The simulator and its handles (rebuilt when an emergency is cleared).
+struct World {
+    sim: Simulator,
+    drone: SimDrone,
+    mocap: SimMocap,
+    clock: SimClock,
+}
+
+impl World {
+    fn new(cfg: &SimConfig, profile: &Profile, scene: &Scene) -> Result<World, SimError> {
+        let sim = Simulator::new(cfg, profile, scene)?;
+        Ok(World {
+            drone: sim.drone(),
+            mocap: sim.mocap(),
+            clock: sim.clock(),
+            sim,
+        })
+    }
+}
+
+/// Largest datagram read.
+const RECV_BUF: usize = 65_536;
+/// At most this many datagrams per socket per step (the others wait for the next step).
+const MAX_DATAGRAMS_PER_STEP: usize = 512;
+
+struct Loop {
+    cfg: EmulatorConfig,
+    at: UdpSocket,
+    nav: UdpSocket,
+    natnet: Option<NatNetIo>,
+    fw: Firmware,
+    world: World,
+    /// Wall time at which the current simulator's t = 0 was.
+    sim_offset_s: f64,
+    /// Added to the current simulator's frame numbers.
+    frame_offset: u64,
+    last_frame_number: Option<u64>,
+    nav_dest: Option<SocketAddr>,
+    next_nav_s: f64,
+    truth: Truth,
+    frame: MocapFrame,
+    counters: Counters,
+    status: Arc<Mutex<Status>>,
+    stop: Arc<AtomicBool>,
+    start: Instant,
+    rx: Vec<u8>,
+    tx: Vec<u8>,
+}
+
+impl Loop {
+    fn new(
+        cfg: EmulatorConfig,
+        at: UdpSocket,
+        nav: UdpSocket,
+        natnet: Option<NatNetIo>,
+        status: Arc<Mutex<Status>>,
+        stop: Arc<AtomicBool>,
+    ) -> Result<Loop, EmulatorError> {
+        let world = World::new(&cfg.sim, &cfg.profile, &cfg.scene).map_err(EmulatorError::Sim)?;
+        let fw = Firmware::new(cfg.sim.battery_min_takeoff_percent);
+        Ok(Loop {
+            cfg,
+            at,
+            nav,
+            natnet,
+            fw,
+            world,
+            sim_offset_s: 0.0,
+            frame_offset: 0,
+            last_frame_number: None,
+            nav_dest: None,
+            next_nav_s: 0.0,
+            truth: Truth::default(),
+            frame: MocapFrame::default(),
+            counters: Counters::default(),
+            status,
+            stop,
+            start: Instant::now(),
+            rx: vec![0; RECV_BUF],
+            tx: vec![0; RECV_BUF],
+        })
+    }
+
+    fn now_s(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    fn run(&mut self) {
+        let step = self.cfg.step_s;
+        let mut k: u64 = 0;
+        while !self.stop.load(Ordering::SeqCst) {
+            self.step();
+            k += 1;
+            let now = self.now_s();
+            let mut next = k as f64 * step;
+            if next < now - 0.1 {
+                // Far behind (the process was suspended): skip ahead rather than spin.
+                k = (now / step).ceil() as u64;
+                next = k as f64 * step;
+            }
+            let wait = next - now;
+            if wait > 0.0 {
+                std::thread::sleep(Duration::from_secs_f64(wait));
+            }
+        }
+    }
+
+    fn step(&mut self) {
+        self.drain_at();
+        self.drain_navdata();
+        self.drain_natnet();
+        let now = self.now_s();
+        self.fw.tick(now);
+        self.world
+            .clock
+            .sleep_until((now - self.sim_offset_s) * self.cfg.time_scale);
+        self.world.sim.truth_into(&mut self.truth);
+        self.send_frame(now);
+        self.send_navdata(now);
+        self.counters.steps += 1;
+        self.publish(now);
+    }
+
+    fn drain_at(&mut self) {
+        for _ in 0..MAX_DATAGRAMS_PER_STEP {
+            let n = match self.at.recv_from(&mut self.rx) {
+                Ok((n, _)) => n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                Err(_) => continue,
+            };
+            let now = self.now_s();
+            let out = self.fw.datagram(&self.rx[..n], now, &mut self.world.drone);
+            if out.clear_emergency {
+                self.clear_emergency(now);
+            }
+        }
+    }
+
+    fn clear_emergency(&mut self, now: f64) {
+        let t = self.world.sim.truth();
+        let mut cfg = self.cfg.sim.clone();
+        cfg.start_position_m = t.position_m;
+        cfg.start_heading_rad = t.heading_rad;
+        cfg.battery_start_percent = t.battery_percent.clamp(0.0, 100.0);
+        if let Ok(w) = World::new(&cfg, &self.cfg.profile, &self.cfg.scene) {
+            self.world = w;
+            self.sim_offset_s = now;
+            self.frame_offset = self.last_frame_number.map_or(0, |n| n + 1);
+            self.counters.emergency_resets += 1;
+        }
+    }
+
+    fn drain_navdata(&mut self) {
+        for _ in 0..MAX_DATAGRAMS_PER_STEP {
+            let (n, from) = match self.nav.recv_from(&mut self.rx) {
+                Ok(r) => r,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                Err(_) => continue,
+            };
+            if (1..=4).contains(&n) {
+                self.counters.navdata_triggers += 1;
+                if self.nav_dest != Some(from) {
+                    self.nav_dest = Some(from);
+                    self.next_nav_s = 0.0; // at once
+                }
+            } else {
+                self.counters.navdata_rejected += 1;
+            }
+        }
+    }
+
+    fn drain_natnet(&mut self) {
+        let Some(io) = &mut self.natnet else { return };
+        for _ in 0..MAX_DATAGRAMS_PER_STEP {
+            let (n, from) = match io.command.recv_from(&mut self.rx) {
+                Ok(r) => r,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                Err(_) => continue,
+            };
+            match io.motive.command(&self.rx[..n], &mut self.tx) {
+                Ok(reply) => {
+                    self.counters.natnet_requests += 1;
+                    if let motive::Reply::Send(len) = reply {
+                        if io.command.send_to(&self.tx[..len], from).is_err() {
+                            self.counters.send_errors += 1;
+                        }
+                    }
+                }
+                Err(_) => self.counters.natnet_rejected += 1,
+            }
+        }
+    }
+
+    fn send_frame(&mut self, now: f64) {
+        if !matches!(self.world.mocap.poll(&mut self.frame), Ok(true)) {
+            return;
+        }
+        let number = self.frame_offset + self.frame.frame;
+        self.last_frame_number = Some(number);
+        let Some(io) = &mut self.natnet else { return };
+        let capture = self.sim_offset_s + self.frame.t_s / self.cfg.time_scale;
+        match io
+            .motive
+            .frame(&self.frame, number, capture, now, &mut self.tx)
+        {
+            Ok(len) => match io.data.send_to(&self.tx[..len], io.dest) {
+                Ok(_) => self.counters.frames_sent += 1,
+                Err(_) => self.counters.send_errors += 1,
+            },
+            Err(_) => self.counters.send_errors += 1,
+        }
+    }
+
+    fn send_navdata(&mut self, now: f64) {
+        let Some(dest) = self.nav_dest else { return };
+        if now < self.next_nav_s {
+            return;
+        }
+        let period = 1.0 / self.fw.navdata_mode().rate_hz();
+        self.next_nav_s = if self.next_nav_s + period < now {
+            now + period
+        } else {
+            self.next_nav_s + period
+        };
+        let commanded = self.world.sim.applied_command().is_some();
+        match self.fw.navdata(&self.truth, commanded, now, &mut self.tx) {
+            Ok(len) => match self.nav.send_to(&self.tx[..len], dest) {
+                Ok(_) => self.counters.navdata_sent += 1,
+                Err(_) => self.counters.send_errors += 1,
+            },
+            Err(_) => self.counters.send_errors += 1,
+        }
+    }
+
+    fn publish(&mut self, now: f64) {
+        let mut counters = self.counters;
+        counters.at = self.fw.counters();
+        let commanded = self.world.sim.applied_command().is_some();
+        if let Ok(mut s) = self.status.lock() {
+            s.counters = counters;
+            s.truth.clone_from(&self.truth);
+            s.commanded = commanded;
+            s.navdata_mode = Some(self.fw.navdata_mode());
+            s.command_ack = self.fw.command_ack();
+            s.com_watchdog = self.fw.com_watchdog();
+            s.limits = Some(self.fw.limits());
+            s.navdata_client = self.nav_dest;
+            s.uptime_s = now;
+        }
+    }
+}

@@ -1,0 +1,6 @@
+//! The servo's tests: the Riccati solver, the LQG servo and the PID baseline, their sign
+//! conventions and determinism, and a tick that allocates nothing.
+
+mod alloc;
+mod dare;
+mod servo;

@@ -1,0 +1,16 @@
+//! The `dronecine` command, end to end: every subcommand as a user runs it, the diagnostics
+//! corpus, the compiled shipped scripts, robustness against any input, and the architecture
+//! the build enforces.
+
+mod calibrate;
+mod cli;
+mod common;
+mod compile;
+mod diagnostics;
+mod e2e;
+mod fmt;
+mod gains;
+mod robustness;
+mod shoot;
+mod shots;
+mod status;

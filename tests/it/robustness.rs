@@ -1,0 +1,252 @@
+//! No input panics: arbitrary bytes, soups of PSL words, generated scripts, and the named
+//! pathological cases (empty, binary, 10 MB lines, thousands of nested or repeated tokens).
+//! Generated valid scripts also check the formatter: idempotent and meaning-preserving.
+
+use dronecine_diag as diag;
+use dronecine_grammar::PslCode;
+use dronecine_grammar::{check, decode, format, Options};
+use proptest::prelude::*;
+
+/// Everything a user-facing command does with a file's bytes.
+fn exercise(bytes: &[u8]) {
+    let (text, diags) = match decode(bytes) {
+        Ok(src) => {
+            let checked = check(src, &Options::default());
+            for d in &checked.diagnostics {
+                assert!(d.span.start <= d.span.end && d.span.end <= src.len());
+                assert!(src.is_char_boundary(d.span.start) && src.is_char_boundary(d.span.end));
+            }
+            if let Ok(once) = format(src) {
+                assert_eq!(
+                    format(&once).as_deref(),
+                    Ok(once.as_str()),
+                    "fmt not idempotent"
+                );
+            }
+            (src.to_string(), checked.diagnostics)
+        }
+        Err((lossy, diags)) => (lossy, diags),
+    };
+    let _ = diag::render("fuzz.psl", &text, &diags, false, 100);
+    let _ = diag::to_json("fuzz.psl", &text, &diags);
+}
+
+const WORDS: &[&str] = &[
+    "MS",
+    "CU",
+    "ECU",
+    "MLS",
+    "on",
+    "and",
+    "A",
+    "B",
+    "front",
+    "34backright",
+    "left",
+    "screen",
+    "center",
+    "cut",
+    "to",
+    "then",
+    "as",
+    "dolly",
+    "follow",
+    "hold",
+    "for",
+    "over",
+    "4s",
+    "0s",
+    "-1s",
+    "2m",
+    "90deg",
+    "(",
+    ")",
+    ",",
+    "(0, 0)",
+    "stage",
+    "8m",
+    "x",
+    "lens",
+    "drone",
+    "ardrone2",
+    "\"f.toml\"",
+    "actor",
+    "height",
+    "at",
+    "facing",
+    "walks",
+    "turns",
+    "path",
+    "square",
+    "helix",
+    "orbit",
+    "waypoints",
+    "side",
+    "radius",
+    "altitude",
+    "from",
+    "turns",
+    "2",
+    "around",
+    "looking",
+    "high",
+    "angle",
+    "eye",
+    "level",
+    "#",
+    "12",
+    "00:01:03",
+    "-->",
+    "00:01:60",
+    "\n",
+    "\r\n",
+    "\t",
+    "é",
+    "\u{0}",
+    "\u{feff}",
+    "1e999",
+    "9999999999999999999999",
+];
+
+fn soup() -> impl Strategy<Value = String> {
+    prop::collection::vec(prop::sample::select(WORDS), 0..60).prop_map(|w| w.join(" "))
+}
+
+/// A valid script from pieces, with random spacing and optional `on`.
+fn valid_script() -> impl Strategy<Value = String> {
+    let shot = (
+        prop::sample::select(&["MS", "CU", "MCU", "FS", "LS"][..]),
+        any::<bool>(),
+        prop::sample::select(&["A", "B", "A and B", "B and A"][..]),
+        prop::sample::select(&["", " front", " 34left", " back", " 34backright"][..]),
+        prop::sample::select(&["", " screen left", " screen (0.2, -0.1)"][..]),
+        1u32..20,
+        prop::sample::select(
+            &[
+                "cut to ",
+                "dissolve to ",
+                "then dolly to ",
+                "then as A sits pan to ",
+                "",
+            ][..],
+        ),
+    )
+        .prop_map(|(size, on, actors, profile, screen, secs, trans)| {
+            let on = if on { " on " } else { " " };
+            let actors = if actors.contains(" and ") {
+                actors.to_string()
+            } else {
+                format!("{actors}{profile}")
+            };
+            let kw = if trans.starts_with("then") {
+                "over"
+            } else {
+                "for"
+            };
+            format!("{trans}{size}{on}{actors}{screen} {kw} {secs}s")
+        });
+    (prop::collection::vec(shot, 1..12), prop::sample::select(&[" ", "  ", "\t"][..])).prop_map(|(shots, sp)| {
+        let mut s = format!("stage 8m{sp}x 6m x 3m\nactor A height 1.8m at (0, 0) facing 0deg  # A\nactor B height 1.6m at (2, 0) facing 180deg\n");
+        for (i, shot) in shots.iter().enumerate() {
+            let shot = if i == 0 { shot.replace("then dolly to ", "").replace("then as A sits pan to ", "") } else { shot.clone() };
+            let shot = if i == 0 { shot.replace(" over ", " for ") } else { shot };
+            s.push_str(&shot.replace(' ', sp));
+            s.push('\n');
+        }
+        s
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..512)) {
+        exercise(&bytes);
+    }
+
+    #[test]
+    fn arbitrary_text_never_panics(s in "\\PC{0,300}") {
+        exercise(s.as_bytes());
+    }
+
+    #[test]
+    fn word_soup_never_panics(s in soup()) {
+        exercise(s.as_bytes());
+    }
+
+    #[test]
+    fn generated_scripts_check_and_format_round_trip(src in valid_script()) {
+        let checked = check(&src, &Options::default());
+        prop_assert!(!checked.has_errors(), "{src}\n{:?}", checked.diagnostics);
+        let once = format(&src).expect("parses");
+        prop_assert_eq!(format(&once).expect("parses"), once.clone());
+        let again = check(&once, &Options::default());
+        prop_assert_eq!(
+            crate::common::without_spans(serde_json::to_value(checked.script).unwrap()),
+            crate::common::without_spans(serde_json::to_value(again.script).unwrap())
+        );
+    }
+}
+
+#[test]
+fn empty_and_blank_files() {
+    for src in ["", "\n", "   \n\t\n", "# only a comment\n", "\u{feff}"] {
+        let c = check(src, &Options::default());
+        assert!(!c.has_errors(), "{src:?}: {:?}", c.diagnostics);
+        exercise(src.as_bytes());
+    }
+}
+
+#[test]
+fn a_ten_megabyte_line() {
+    let mut s = String::from(
+        "stage 8m x 6m x 3m\nactor A height 1.8m at (0, 0) facing 0deg\nMS on A front for 4s ",
+    );
+    s.push_str(&"x".repeat(10 << 20));
+    let c = check(&s, &Options::default());
+    assert_eq!(c.diagnostics.len(), 1);
+    let out = diag::render("big.psl", &s, &c.diagnostics, false, 100);
+    assert!(
+        out.len() < 4_000,
+        "the rendering quotes a window, not 10 MB ({} bytes)",
+        out.len()
+    );
+
+    let digits = format!("MS on A front for {}s", "9".repeat(10 << 20));
+    exercise(digits.as_bytes());
+    let name = format!("actor {} height 1.8m at (0, 0)", "N".repeat(10 << 20));
+    exercise(name.as_bytes());
+}
+
+#[test]
+fn thousands_of_nested_or_repeated_tokens() {
+    let header = "stage 8m x 6m x 3m\nactor A height 1.8m at (0, 0) facing 0deg\nactor B height 1.8m at (1, 0) facing 0deg\n";
+    let nested = format!(
+        "{header}actor C height 1m at {}0, 0{} facing 0deg\n",
+        "(".repeat(50_000),
+        ")".repeat(50_000)
+    );
+    exercise(nested.as_bytes());
+    let ands = format!("{header}MS on A{} for 4s\n", " and B".repeat(50_000));
+    let c = check(&ands, &Options::default());
+    assert!(c.has_errors(), "B appears many times");
+    exercise(ands.as_bytes());
+    let framings = format!("{header}{} for 4s\n", "MS on A ".repeat(50_000));
+    exercise(framings.as_bytes());
+    let lines = format!("{header}{}", "then hold for 1s\n".repeat(50_000));
+    exercise(lines.as_bytes());
+    let thens = format!("{header}{}", "then as ".repeat(50_000));
+    exercise(thens.as_bytes());
+    let quotes = "\"".repeat(100_000);
+    exercise(quotes.as_bytes());
+}
+
+#[test]
+fn binary_input_is_reported_not_parsed() {
+    let bytes: Vec<u8> = (0..=255u8).cycle().take(4096).collect();
+    let err = decode(&bytes).unwrap_err();
+    assert!(!err.1.is_empty() && err.1.len() <= 10);
+    assert!(err.1.iter().all(|d| d.code == PslCode::InvalidUtf8));
+    exercise(&bytes);
+}
