@@ -33,7 +33,7 @@ pub fn angle(a: &Vec3, b: &Vec3) -> f64 {
 /// A pinhole lens: horizontal field of view and frame aspect (width over height).
 ///
 /// `Sx = 1/tan(fovX/2)` is computed once, in [`Lens::new`]: the director projects through
-/// the lens a dozen times a tick, and `tan` was a tenth of a simulated flight's loop.
+/// the lens a dozen times a tick, too often to take a `tan` each time.
 /// Serialised as its two fields (`fov_x_rad`, `aspect`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(from = "LensFields", into = "LensFields")]
@@ -198,8 +198,8 @@ pub struct Orientation {
     pub clamped: bool,
 }
 
-/// Heading and pitch that put `target_m`, seen from `position_m`, at `screen` (camera-math
-/// §4): `τ = asin(n·sin e / √(1 + y'²)) − atan(y')`, `ψ = b + atan2(x', cos τ − y'·sin τ)`.
+/// Heading and pitch that put `target_m`, seen from `position_m`, at `screen`:
+/// `τ = asin(n·sin e / √(1 + y'²)) − atan(y')`, `ψ = b + atan2(x', cos τ − y'·sin τ)`.
 pub fn orient(lens: &Lens, position_m: &Vec3, target_m: &Vec3, screen: [f64; 2]) -> Orientation {
     let d = target_m - position_m;
     let b = math::atan2(d.y, d.x);

@@ -309,9 +309,9 @@ mod tests {
     }
 
     /// A cut while the actor turns: the repositioning flight goes where the framing will be
-    /// when it arrives, and the shot starts on it. Planned to where the framing was when the
-    /// flight set off, it arrived mid-turn 3.5 m from where it had to be, and the shot was
-    /// refused ("needs 2.39 m/s²" as the framing swung round the turning actor).
+    /// when it arrives, and the shot starts on it. Planned to where the framing is when the
+    /// flight sets off, it would arrive mid-turn, metres from where it has to be, and the
+    /// framing would swing round the turning actor faster than the drone follows.
     #[test]
     fn a_cut_while_the_actor_turns_starts_on_the_framing() {
         let (c, first, framing, _) = last_shot_start(
@@ -357,9 +357,8 @@ mod tests {
 
     /// A cut to an actor seen from behind as they turn round: the flight's plans do not
     /// settle (the framing sweeps round with the turn), and it arrives at the first plan's
-    /// time, but no sooner than the drone can fly its way at its limits. Held to the first
-    /// plan's time (a 3.9 s flight; 4.8 s now), it fell 0.27 m behind the framing at the
-    /// shot's start and the script was refused.
+    /// time, but no sooner than the drone can fly its way at its limits: held to the first
+    /// plan's time, it would fall behind the framing at the shot's start.
     #[test]
     fn a_flight_that_does_not_settle_is_no_faster_than_the_drone() {
         let (c, first, framing, _) = last_shot_start(
@@ -380,10 +379,9 @@ mod tests {
 
     /// A cut while an actor walks across the short way to the next framing: the flight
     /// keeps clear of where the actor is as it passes, and the profile's distance from them
-    /// throughout. Planned against where they stood and where they would stop, it flew the
-    /// short arc (4.3 s) through their way, came within 0.37 m of them (the profile keeps
-    /// 0.50 m), and the script was refused. The long way round them takes 13.6 s; the flight
-    /// arrives sooner, after the actor has passed.
+    /// throughout. Planned against where they stand and where they stop, it would fly the
+    /// short arc through their way, inside the profile's distance. The flight arrives after
+    /// the actor has passed, sooner than the long way round them would.
     #[test]
     fn a_cut_keeps_clear_of_an_actor_who_walks_across_its_way() {
         let s = script(
@@ -555,7 +553,7 @@ impl FramingCheck {
             let off_in_height =
                 got.is_some_and(|g| (g[1] - want[1]).abs() > (g[0] - want[0]).abs());
             let help = if off_in_height {
-                // Camera-math §4: without roll, one actor's screen height is aimed exactly and
+                // Without roll, one actor's screen height is aimed exactly and
                 // the other's follows from the geometry. (Writing the height it lands at
                 // moves the solve's screen points and need not frame at all.) The same size
                 // for both is no fix over a shoulder: the camera keeps the background's size,
@@ -597,13 +595,13 @@ impl FramingCheck {
 /// The RMS screen distance (the frame spans 2 in x and y; the thirds are 1/3 from the centre)
 /// above which a hold's framing is reported as off. The shipped two-actor scenes hold 0.008
 /// (`two-actors.psl`) and 0.067 (`two-heights.psl`: actors of different heights under a level
-/// camera, camera-math §4).
+/// camera).
 pub const FRAMING_TOLERANCE: f64 = 0.1;
 
 /// The most one framed actor's miss counts, squared: the frame's diagonal (the frame spans 2
 /// in x and y). An actor off the frame is off it however far its projection lands (near the
-/// camera's plane it lands hundreds of frames away, and one such tick made a whole flight's
-/// RMS 10), and an actor behind the camera counts as much.
+/// camera's plane it lands hundreds of frames away, and one such tick would outweigh a whole
+/// flight's RMS), and an actor behind the camera counts as much.
 pub const FRAMING_MISS_MAX_SQ: f64 = 8.0;
 
 /// The squared screen distance that the framing error counts for an actor that lands at `got`

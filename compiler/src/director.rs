@@ -47,13 +47,81 @@ const PASSING_SAMPLES: usize = 16;
 /// …or more, so that no actor moves more than this between two steps…
 const PASSING_STEP_M: f64 = 0.3;
 /// …up to this many. A route is checked against each passing pose where the flight is then,
-/// give or take a step: at 16 steps of a 12 s flight an actor walking at 2.3 m/s moved 1.7 m
-/// between two, and random scene 223 (`runtime/tests/random_flights.rs`) flew a cut's
-/// straight route that B, walking the same way behind the drone and faster than it flies,
-/// caught up with between two checks; held off B, the reference came 0.14 m from A, and the
-/// drone 0.18 m from B. Checked every 0.3 m, that route intrudes deeper than the one round A,
-/// which the flight takes (no nearer than 0.59 m).
+/// give or take a step: at 16 steps of a 12 s flight an actor walking at 2.3 m/s moves 1.7 m
+/// between two, and one walking the same way behind the drone, faster than it flies, could
+/// catch up with it between two checks unseen.
 const PASSING_SAMPLES_MAX: usize = 128;
+
+/// Times closer than this are the same time: the end of a shot or a flight is reached at a
+/// tick that lands on it up to the rounding of the tick times.
+const SAME_TIME_S: f64 = 1e-9;
+
+/// A repositioning flight planned for the actors as they will be at its arrival has settled
+/// when it arrives within this of that time (and it fits when it arrives no later than
+/// this after it): a few milliseconds move a framing by millimetres.
+const ARRIVAL_SETTLED_S: f64 = 0.002;
+/// How many times a repositioning flight is planned again for when it arrives before the
+/// search for an earlier arrival takes over: enough for an arrival that settles to settle,
+/// few enough to leave the search most of [`REPOSITION_PLANS_MAX`].
+const REPOSITION_ROUNDS: usize = 6;
+/// The most plans of one repositioning flight, rounds and search together: bounds the work
+/// of a cut (each plan solves the framing and chooses a route) and leaves the search enough
+/// halvings to narrow a minute to [`SEARCH_RESOLUTION_S`].
+const REPOSITION_PLANS_MAX: usize = 24;
+/// The search for the earliest arrival stops when the latest arrival that does not fit and
+/// the earliest that does are this close: finer than the tenth of a second diagnostics tell.
+const SEARCH_RESOLUTION_S: f64 = 0.005;
+/// A framing that moves no faster than this share of the horizontal speed limit when the
+/// flight first planned arrives is one the drone can merge into, flying at the share of its
+/// limits it plans at ([`PLANNED_SHARE`]).
+const MERGEABLE_SPEED_SHARE: f64 = 0.8;
+/// How far past the first plan's arrival the search for an arrival that fits goes, where
+/// the framing moves slowly enough to merge into: a little later than planned is better than
+/// waiting for the actors to stand.
+const SEARCH_PAST_FIRST_S: f64 = 1.0;
+/// A flight arriving this close after the shot's pin arrives on it (the rounding of the sum
+/// of the flight's times).
+const PIN_TOLERANCE_S: f64 = 1e-6;
+
+/// A repositioning flight shorter than this…
+const IN_PLACE_M: f64 = 0.03;
+/// …that turns less than this…
+const IN_PLACE_RAD: f64 = 0.05;
+/// …from a camera slower than this takes no time: the camera is already in place, and the
+/// steering closes the rest.
+const IN_PLACE_MPS: f64 = 0.05;
+/// A minimum-jerk flight of length `L` over `T` peaks at this many times `L/T` in speed…
+const MIN_JERK_PEAK_SPEED: f64 = 1.875;
+/// …and at this many times `L/T²` in acceleration.
+const MIN_JERK_PEAK_ACCEL: f64 = 5.77;
+/// The shortest repositioning flight: a flight of no length still takes this long, and a turn
+/// that takes longer is said to set the flight's time.
+const MIN_FLIGHT_S: f64 = 0.5;
+/// The share of the profile's limits a repositioning flight is planned at: the rest is left
+/// for the steering to follow a framing that moves during the flight.
+const PLANNED_SHARE: f64 = 0.8;
+
+/// The share of the profile's vertical speed and yaw-rate limits the reference uses: the rest
+/// is left to the servo.
+const SERVO_SHARE: f64 = 0.9;
+/// The yaw-acceleration limit per rad/s of the profile's yaw-rate limit: the heading reaches
+/// its full rate in half a second.
+const YAW_ACCEL_PER_S: f64 = 2.0;
+/// The separation push's gain (m/s² at half the kept distance from an actor's body): a
+/// back-up to the goal kept clear of the bodies, strong enough to move a camera out.
+const SEPARATION_GAIN_MPS2: f64 = 3.0;
+/// The containment spring's stiffness (m/s² per metre outside the stage less its margin): a
+/// back-up to the goal kept inside that box.
+const CONTAINMENT_STIFFNESS_PER_S2: f64 = 4.0;
+
+/// A path's target moving slower than this has no direction of travel to look along…
+const PATH_MOVING_MPS: f64 = 1e-3;
+/// …and the camera looks toward where the path is this much later instead.
+const PATH_LOOK_AHEAD_S: f64 = 0.5;
+
+/// A framing told too close is told again with the closest it came when that is this much
+/// closer than first told: less is the same distance to two decimals.
+const CLOSER_TOLD_M: f64 = 0.005;
 
 /// Time step of the finite differences that give the target's velocity.
 const EPS_S: f64 = 1e-3;
@@ -62,8 +130,8 @@ const EPS_S: f64 = 1e-3;
 /// camera's velocity against ([`steering::step`]'s `trend_a`), and which it feeds forward
 /// against measured actors ([`Director::actors_measured`]; against the blocking, the
 /// acceleration as it is). Against live actors the difference of the target's velocity from
-/// tick to tick is mostly the motion capture's noise: on `two-actors.psl`'s hold at 100 Hz
-/// 1.0 m/s² RMS, where the blocking's own is 0.35 m/s².
+/// tick to tick is mostly the motion capture's noise, several times the blocking's own
+/// acceleration.
 const TREND_TAU_S: f64 = 0.03;
 
 /// How a shot is flown.
@@ -99,6 +167,22 @@ enum Phase {
         route: Route,
     },
     Done,
+}
+
+/// The timing of one [`Director::step`].
+#[derive(Clone, Copy, Debug)]
+struct Tick {
+    /// The time the step is given.
+    t_s: f64,
+    /// The script's clock: `t_s`, held at its start before 0 s.
+    clock_s: f64,
+    /// The time since the last step (0 on the first).
+    dt_s: f64,
+    /// The first step.
+    first: bool,
+    /// The first step of a camera the flight placed ([`Director::start_from`]): it stays
+    /// where it was placed, with its heading, and is steered from the next tick.
+    keep_placed: bool,
 }
 
 /// The evaluator. See the module documentation. A clone steps on as the original would,
@@ -224,16 +308,17 @@ impl Director {
         };
         let lim = &profile.limits;
         let limits = SteerLimits {
-            // The reference leaves a 10% margin under every limit for the servo.
+            // The reference leaves a margin under the vertical speed and yaw-rate limits for
+            // the servo ([`SERVO_SHARE`]).
             speed_h_mps: lim.speed_max_mps,
-            speed_v_mps: lim.vz_max_mps * 0.9,
+            speed_v_mps: lim.vz_max_mps * SERVO_SHARE,
             accel_h_mps2: lim.accel_max_mps2,
             accel_v_mps2: lim
                 .accel_max_mps2
                 .min(lim.vz_max_mps / profile.model.tau_vz_s),
             jerk_mps3: lim.jerk_max_mps3,
-            yaw_rate_radps: lim.yaw_rate_max_radps * 0.9,
-            yaw_accel_radps2: lim.yaw_rate_max_radps * 2.0,
+            yaw_rate_radps: lim.yaw_rate_max_radps * SERVO_SHARE,
+            yaw_accel_radps2: lim.yaw_rate_max_radps * YAW_ACCEL_PER_S,
         };
         let mut plans = Vec::with_capacity(script.timeline.len());
         let mut last_comp: Option<&Composition> = None;
@@ -371,9 +456,9 @@ impl Director {
     /// where the approach's glide left the drone, which is a real position: the camera is
     /// placed). The camera steers from there to the first framing instead of starting on it
     /// (the flight steps it before 0 s to settle, [`Director::step`]): against live actors
-    /// the framing has moved since the approach was planned, and on `scene.psl` the
-    /// reference once jumped up to 0.66 m at "action!". A first framing that does not solve
-    /// holds it there, instead of at the origin. No effect once stepped.
+    /// the framing has moved since the approach was planned, and starting on it would make
+    /// the reference jump at "action!". A first framing that does not solve holds it there,
+    /// instead of at the origin. No effect once stepped.
     pub fn start_from(&mut self, position_m: Vec3, velocity_mps: Vec3, heading_rad: f64) {
         if matches!(self.phase, Phase::NotStarted) {
             self.state = Kinematics {
@@ -393,21 +478,17 @@ impl Director {
     /// The actor poses it will be stepped with are measured (a motion capture's, tracked), not
     /// the script's blocking: the target's acceleration, mostly their noise differentiated, is
     /// fed forward as its trend (low-passed over 30 ms) instead of as it is (a path's, which is
-    /// the path's own, as it is). On set the acceleration
-    /// of a framing that follows an actor swings by up to ±18 m/s² from one tick to the next
-    /// (a close framing swings with the actor's facing, whose rate is the noise of the
-    /// measured heading differentiated); fed forward as it is, the steering clipped it to the
-    /// drone's limits, and the clipping carried the reference off its target by up to 0.37 m:
-    /// on `scene.psl`, into an actor's safety distance on each of seeds 1–40, down to 0.14 m
-    /// from Bob. Against the blocking the acceleration is exact, and fed forward as it is
-    /// (`compile` is unchanged).
+    /// the path's own, as it is). On set the acceleration of a framing that follows an actor
+    /// swings by metres a second squared from one tick to the next (a close framing swings
+    /// with the actor's facing, whose rate is the noise of the measured heading
+    /// differentiated); fed forward as it is, the steering would clip it to the drone's
+    /// limits, and the clipping would carry the reference off its target, into an actor's
+    /// safety distance. Against the blocking the acceleration is exact, and fed forward as it
+    /// is (`compile` does not call this).
     ///
     /// The steering also keeps the profile's tracking margin more from the actors than their
     /// safety distance: it is the drone that must keep that distance, and it flies a few
-    /// centimetres off its reference. On `scene.psl`, seeds 1–100, the drone (as measured)
-    /// came to 0.44 m of an actor with the reference kept at 0.50 m; with 0.08 m more, no
-    /// closer than 0.51 m (the margin is 0.10 m since: see the profile). A compiled
-    /// reference is a perfect drone's: no margin.
+    /// centimetres off its reference. A compiled reference is a perfect drone's: no margin.
     pub fn actors_measured(&mut self) {
         self.measured = true;
         self.keep_m = self.on_set_m;
@@ -564,6 +645,19 @@ impl Director {
     /// [`Director::start_from`], steers to the first framing as the actors stand, which a
     /// flight does while the drone settles before "action!" (`compile` starts at 0 s).
     pub fn step(&mut self, t_s: f64, actors: &[ActorPose]) -> Sample {
+        let tick = self.start_tick(t_s, actors);
+        let (target, v_t) = self.target_and_velocity(tick.clock_s, actors);
+        let (a_t, trend) = self.target_acceleration(t_s, v_t);
+        let goal = self.goal(target, v_t, a_t, trend, actors);
+        self.steer_position(&tick, &goal, v_t, &trend);
+        let heading_target = self.steer_orientation(&tick, actors);
+        self.last_target = (!self.failed_now).then_some((t_s, v_t, heading_target));
+        self.last_t_s = t_s;
+        self.sample_and_record(t_s, &goal, actors)
+    }
+
+    /// Starts the timeline on the first step and advances it to `t_s`: the tick's timing.
+    fn start_tick(&mut self, t_s: f64, actors: &[ActorPose]) -> Tick {
         let clock_s = t_s.max(0.0);
         let first = matches!(self.phase, Phase::NotStarted);
         if first {
@@ -583,8 +677,18 @@ impl Director {
         if !continuous {
             self.last_target = None;
         }
+        Tick {
+            t_s,
+            clock_s,
+            dt_s: dt,
+            first,
+            keep_placed,
+        }
+    }
 
-        // The target and its velocity (forward difference with the actors extrapolated).
+    /// The target at `clock_s` and its velocity (a forward difference with the actors
+    /// extrapolated); no velocity where a framing did not solve, now or a moment ahead.
+    fn target_and_velocity(&mut self, clock_s: f64, actors: &[ActorPose]) -> (Vec3, Vec3) {
         // A blend's two boxes are kept for the next tick's blend (no allocation per tick).
         if let Some(framing::Visual::Blend { from, to, .. }) = self.visual.take() {
             self.blend_spare = Some((from, to));
@@ -592,8 +696,8 @@ impl Director {
         self.failed_now = false;
         let target = self.target(clock_s, actors, true);
         let v_t = match self.held_one_actor() {
-            // A one-actor hold moves rigidly with its actor: the exact velocity (camera-math
-            // §2), no second solve.
+            // A one-actor hold moves rigidly with its actor: the exact velocity, no second
+            // solve.
             Some(v) => framing::velocity_mps(v, actors, &self.lens, &self.gimbal),
             None => {
                 // Reused buffers: the sampling loop allocates nothing per tick.
@@ -616,13 +720,17 @@ impl Director {
         };
         // A framing that did not solve, now or a moment ahead, holds the camera: no
         // feed-forward (its look-ahead difference would be the jump between where the camera
-        // is and a framing solved a millisecond later, hundreds of metres a second; on
-        // `scene.psl`'s reverse shot, against live actors, it carried the reference through the
-        // stage's wall). Nor on the tick after, whose difference would start from the hold.
+        // is and a framing solved a millisecond later, hundreds of metres a second, enough to
+        // carry the reference through the stage's wall). Nor on the tick after, whose
+        // difference would start from the hold.
         let v_t = if self.failed_now { Vec3::zeros() } else { v_t };
-        // Its acceleration (fed forward), and that low-passed (its trend, which the camera's
-        // velocity is predicted against).
-        let (a_t, trend) = match self.last_target {
+        (target, v_t)
+    }
+
+    /// The target's acceleration at `t_s` from its velocity `v_t` (fed forward), and that
+    /// low-passed (its trend, which the camera's velocity is predicted against).
+    fn target_acceleration(&mut self, t_s: f64, v_t: Vec3) -> (Vec3, Vec3) {
+        match self.last_target {
             Some((t0, v0, _)) if t_s > t0 && !self.failed_now => {
                 let a_t = (v_t - v0) / (t_s - t0);
                 let trend = match self.accel_trend {
@@ -636,12 +744,24 @@ impl Director {
                 self.accel_trend = None;
                 (Vec3::zeros(), Vec3::zeros())
             }
-        };
+        }
+    }
+
+    /// The goal the camera is steered to: the target as solved, kept inside the stage less
+    /// its margin and out of the actors' safety distance.
+    fn goal(
+        &mut self,
+        target: Vec3,
+        v_t: Vec3,
+        a_t: Vec3,
+        trend: Vec3,
+        actors: &[ActorPose],
+    ) -> Kinematics {
         // The target is kept inside the stage less its margin: containment's spring alone
-        // let a framing near a wall (or a solve that jumps there, or beyond, against live
-        // actors) take the reference to the wall, where a few centimetres of tracking error
-        // land the drone (the stage failsafe). The monitor sees the target as solved: a
-        // framing beyond the stage is still compile's error, and the pre-flight check's.
+        // would let a framing near a wall (or a solve that jumps there, or beyond, against
+        // live actors) take the reference to the wall, where a few centimetres of tracking
+        // error land the drone (the stage failsafe). The monitor sees the target as solved:
+        // a framing beyond the stage is still compile's error, and the pre-flight check's.
         // Nor does the target come inside an actor's safety distance: a framing that would
         // put the camera there (a live actor walking into it, a path or route grazing) is
         // held at that distance, on the line from the actor's body to the framing, until the
@@ -663,16 +783,21 @@ impl Director {
             clear_m: self.keep_m,
         };
         let (lo, hi) = (&self.stage_lo, &self.stage_hi);
-        let goal = contained(
+        contained(
             steering::kept_clear(contained(goal, lo, hi), bodies),
             lo,
             hi,
-        );
-        let target = goal.p;
+        )
+    }
 
-        if keep_placed {
+    /// Moves the camera toward `goal` over the tick (its velocity `v_t` as the target's,
+    /// `trend` the trend of its acceleration), or puts it on the goal where the tick starts
+    /// the camera framed.
+    fn steer_position(&mut self, tick: &Tick, goal: &Kinematics, v_t: Vec3, trend: &Vec3) {
+        let target = goal.p;
+        if tick.keep_placed {
             // Where the flight placed it, moving as it did: steered from the next tick.
-        } else if first || dt <= 0.0 || !self.placed {
+        } else if tick.first || tick.dt_s <= 0.0 || !self.placed {
             // The first shot starts framed: on its target, moving with it (never faster than
             // the camera may fly: live actors' velocities are estimates). So does a first
             // framing that solves only after a few ticks: the camera was never anywhere else.
@@ -684,33 +809,41 @@ impl Director {
         } else {
             // A tick longer than the steering's step is steered in sub-steps toward the goal
             // as it moved during the tick, so the camera is the same at any rate.
+            let bodies = steering::Bodies {
+                axes: &self.axes,
+                clear_m: self.keep_m,
+            };
             let (axes, safety_m) = (&self.axes, self.keep_m);
             let (lo, hi) = (&self.stage_lo, &self.stage_hi);
             self.state = steering::advance(
                 &self.state,
-                &goal,
-                &trend,
+                goal,
+                trend,
                 |p| {
-                    steering::separation(p, axes, safety_m, 3.0)
-                        + steering::containment(p, lo, hi, 4.0)
+                    steering::separation(p, axes, safety_m, SEPARATION_GAIN_MPS2)
+                        + steering::containment(p, lo, hi, CONTAINMENT_STIFFNESS_PER_S2)
                 },
                 (lo, hi),
                 bodies,
                 &self.limits,
                 &self.gains,
-                dt,
+                tick.dt_s,
             );
         }
+    }
 
-        // Orientation at the camera's actual position.
-        let (heading_target, pitch_target) = self.look(clock_s, actors, &self.state.p.clone());
+    /// Turns the camera toward the heading and pitch that frame the shot from the camera's
+    /// actual position; returns the heading it turns toward.
+    fn steer_orientation(&mut self, tick: &Tick, actors: &[ActorPose]) -> f64 {
+        let t_s = tick.t_s;
+        let (heading_target, pitch_target) = self.look(tick.clock_s, actors, &self.state.p.clone());
         let heading_rate_target = match self.last_target {
             Some((t0, _, h0)) if t_s > t0 => wrap_angle_rad(heading_target - h0) / (t_s - t0),
             _ => 0.0,
         };
-        if keep_placed {
+        if tick.keep_placed {
             // With the heading the flight placed it at.
-        } else if first || dt <= 0.0 {
+        } else if tick.first || tick.dt_s <= 0.0 {
             self.heading = HeadingState {
                 heading_rad: heading_target,
                 rate_radps: 0.0,
@@ -722,13 +855,16 @@ impl Director {
                 heading_rate_target,
                 &self.limits,
                 &self.gains,
-                dt,
+                tick.dt_s,
             );
         }
         self.pitch_rad = pitch_target;
-        self.last_target = (!self.failed_now).then_some((t_s, v_t, heading_target));
-        self.last_t_s = t_s;
+        heading_target
+    }
 
+    /// The sample at `t_s`, recorded by the monitor (with the `goal` it was steered to) once
+    /// the camera is placed.
+    fn sample_and_record(&mut self, t_s: f64, goal: &Kinematics, actors: &[ActorPose]) -> Sample {
         let sample = Sample {
             t_s,
             position_m: self.state.p.into(),
@@ -744,7 +880,7 @@ impl Director {
         if self.placed {
             let in_shot = matches!(self.phase, Phase::Shot { .. });
             self.monitor
-                .record(&sample, &goal, &self.raw_target, actors, in_shot);
+                .record(&sample, goal, &self.raw_target, actors, in_shot);
         }
         sample
     }
@@ -768,14 +904,14 @@ impl Director {
         let mut continuous = true;
         loop {
             match self.phase.clone() {
-                Phase::Shot { index, end_s, .. } if t_s >= end_s - 1e-9 => {
+                Phase::Shot { index, end_s, .. } if t_s >= end_s - SAME_TIME_S => {
                     if let Some(last) = self.timings.last_mut() {
                         last.end_s = end_s;
                     }
                     let next = index + 1;
                     if next >= self.shots.len() {
                         // The last sample sits exactly on the end; the one after is done.
-                        if t_s > end_s + 1e-9 {
+                        if t_s > end_s + SAME_TIME_S {
                             self.phase = Phase::Done;
                         }
                         return continuous;
@@ -788,7 +924,7 @@ impl Director {
                         continuous = false;
                     }
                 }
-                Phase::Reposition { to, end_s, .. } if t_s >= end_s - 1e-9 => {
+                Phase::Reposition { to, end_s, .. } if t_s >= end_s - SAME_TIME_S => {
                     self.begin_shot(to, end_s, actors);
                     continuous = false;
                 }
@@ -841,7 +977,7 @@ impl Director {
     /// flight arrives, until the arrival settles (to 2 ms; halfway steps after the first
     /// round, as an actor walking toward where the drone comes from shortens the flight the
     /// later it arrives). Where it does not settle, the earliest arrival the drone can make
-    /// is searched among those tried, the ends of the actors' movements, and halfway between
+    /// is searched among those planned, the ends of the actors' movements, and halfway between
     /// one that does not fit and one that does: at most a second past the first plan's
     /// arrival while the framing then moves slower than the drone can merge into it (else
     /// the flight arrives then, as soon as the drone can fly that way at its full limits, or
@@ -851,158 +987,205 @@ impl Director {
     /// size's distance). A flight that arrives while the framing moves merges into it
     /// ([`route::merge_m_per_mps`]).
     ///
-    /// Planned to the actors as they stood when it set off, a flight during which an actor
-    /// walked or turned arrived where the framing had been, and the shot started off it, by
-    /// up to 3 m: 10 of 400 random scripts were refused as lagging behind at the shot's
-    /// start (6 now).
+    /// Planned to the actors as they stand when it sets off, a flight during which an actor
+    /// walks or turns would arrive where the framing was, and the shot would start off it, by
+    /// metres.
     ///
     /// `actors` are the poses at `actors_s` (the tick's time, at or after `now_s`).
     fn begin_reposition(&mut self, to: usize, now_s: f64, actors_s: f64, actors: &[ActorPose]) {
         if matches!(self.plans[to], Plan::PathPending) {
             self.begin_shot_plan_only(to, actors);
         }
-        let (pinned, written) = {
+        let arrival = {
             let shot = &self.shots[to];
-            (shot.pinned, if shot.pinned { shot.start_s } else { now_s })
+            Arrival {
+                now_s,
+                written_s: if shot.pinned { shot.start_s } else { now_s },
+                pinned: shot.pinned,
+            }
         };
-        // When the flight arrives on the framing (see `Phase::Reposition::arrive_s`).
-        let arrives = |needed: f64| {
-            let end = (now_s + needed).max(written);
-            (now_s + needed - SETTLE_S).max(now_s).min(end)
-        };
-        let settled = |f: &RepositionFlight| (arrives(f.needed) - f.at_s).abs() < 0.002;
-        // A flight planned for `at_s` that is there by then (it flies slower, or waits).
-        let fits = |f: &RepositionFlight| arrives(f.needed) <= f.at_s + 0.002;
-        let mut flight = self.plan_reposition(to, now_s, actors_s, now_s, actors);
-        // The arrival as first planned: to the framing as it is now.
-        let first = flight.clone();
-        // The earliest arrival found that fits, and the latest before it that does not.
-        let mut best: Option<RepositionFlight> = None;
-        let mut short_s = now_s;
-        let mut round = 0;
-        let mut after_s = now_s;
-        // Past the rounds: a fit found, an earlier one is looked for.
-        let mut searching = false;
-        // Where the framing when first planned moves no faster than the drone can merge into
-        // it: the flight that arrives then, and how much later than that a search may go.
-        let mut on_time: Option<RepositionFlight> = None;
-        let mut limit_s = f64::INFINITY;
-        for _ in 0..24 {
-            if settled(&flight) && !searching {
-                break;
-            }
-            if round >= 6 && !searching && on_time.is_none() {
-                // The rounds did not settle. Where the framing moves no faster than the
-                // drone can merge into it when the flight first planned arrives, the search
-                // goes at most a second past that, and else the flight arrives then, to where
-                // the framing will be (it may start the shot a little behind, where the actors
-                // took the framing further than the flight was planned for). Unbounded, the
-                // search waited for the actors to stand and put the scene's two-shot after
-                // Bob's walk up to 5 s later on set, past its pinned orbit.
-                let a0 = arrives(first.needed);
-                let plan = self.plan_reposition(to, now_s, actors_s, a0, actors);
-                if plan.goal_speed_mps <= 0.8 * self.limits.speed_h_mps {
-                    limit_s = a0 + 1.0;
-                    // In the first plan's time, the goal where the framing will be then;
-                    // but another way (round an actor who walks across the first plan's way
-                    // then) takes the time it needs: flown in the first plan's time, a way
-                    // three times as long asked more speed than the drone has.
-                    let needed = if plan.way == first.way {
-                        plan.needed.min(first.needed).max(plan.needed_full)
-                    } else {
-                        // That way arrives later: any flight that arrives before it is
-                        // looked for (waiting for the actor to pass, the short way).
-                        limit_s = limit_s.max(arrives(plan.needed));
-                        plan.needed
-                    };
-                    on_time = Some(RepositionFlight { needed, ..plan });
-                }
-            }
-            if fits(&flight) {
-                if best.as_ref().is_none_or(|b| flight.at_s < b.at_s) {
-                    best = Some(flight.clone());
-                }
-            } else if best.as_ref().is_none_or(|b| flight.at_s < b.at_s) {
-                short_s = short_s.max(flight.at_s);
-            }
-            let at_s = if round < 6 && !searching {
-                // Planned again for when it arrives; halfway after the first round (an actor
-                // walking toward where the drone comes from shortens the flight the later
-                // it arrives, and the rounds would swing).
-                round += 1;
-                let next = arrives(flight.needed);
-                if round == 1 {
-                    next
-                } else {
-                    (flight.at_s + next) / 2.0
-                }
-            } else if let Some(b) = &best {
-                // Between the latest that does not fit and the earliest that does.
-                searching = true;
-                if b.at_s - short_s < 0.005 {
-                    break;
-                }
-                (short_s + b.at_s) / 2.0
-            } else if let Some(end_s) = self
-                .blocking
-                .next_movement_end_after(after_s)
-                .filter(|&e| e <= limit_s)
-            {
-                // The framing sweeps by faster than the drone can meet it (an actor turning
-                // round at the size's distance): the drone arrives when a movement ends, or
-                // later while the actors stand as they do then, and the earliest such arrival
-                // is looked for.
-                searching = true;
-                after_s = end_s;
-                let there = self.plan_reposition(to, now_s, actors_s, end_s, actors);
-                if fits(&there) {
-                    flight = there;
-                    continue;
-                }
-                arrives(there.needed)
-            } else {
-                break;
-            };
-            flight = self.plan_reposition(to, now_s, actors_s, at_s, actors);
-        }
-        if !settled(&flight) || searching {
-            if searching && fits(&flight) && best.as_ref().is_none_or(|b| flight.at_s < b.at_s) {
-                best = Some(flight.clone());
-            }
-            let best = match (best, on_time) {
-                (Some(b), _) if b.at_s <= limit_s => Some(b),
-                (_, on_time) => on_time,
-            };
-            if let Some(b) = best {
-                // Early: it flies there in the time it has (or waits, pinned).
-                let early_s = if fits(&b) {
-                    b.at_s - arrives(b.needed)
-                } else {
-                    0.0
-                };
-                flight = RepositionFlight {
-                    needed: b.needed + early_s.max(0.0),
-                    ..b
-                };
-            }
-        }
+        let flight = self.search_arrival(to, actors_s, actors, &arrival);
         let RepositionFlight {
             route,
-            mut needed,
+            needed,
             needed_full,
             flown,
             ..
         } = flight;
         let from = self.state.p;
-        let shot = &self.shots[to];
-        if pinned && now_s + needed > written + 1e-6 && now_s + needed_full <= written + 1e-6 {
-            // Late for its pin as planned (at 80 % of the profile's limits), in time at its
-            // full limits: flown in the time there is.
-            needed = written - now_s;
-        }
+        let needed = arrival.needed_for_pin(needed, needed_full);
         let arrive = now_s + needed;
-        let end = if pinned {
-            if arrive > written + 1e-6 {
+        let end = self.reposition_end_s(to, &arrival, needed, needed_full, &flown);
+        if end <= now_s + SAME_TIME_S {
+            self.begin_shot(to, now_s, actors);
+            return;
+        }
+        if !arrival.pinned && needed > 0.0 {
+            self.tell_reposition(to, needed, end, &flown);
+        }
+        self.route_turn = None;
+        self.phase = Phase::Reposition {
+            to,
+            start_s: now_s,
+            end_s: end,
+            arrive_s: (arrive - SETTLE_S).max(now_s).min(end),
+            from,
+            from_heading_rad: self.heading.heading_rad,
+            route,
+        };
+    }
+
+    /// The repositioning flight to shot `to` (see [`Director::begin_reposition`]): planned
+    /// again for when it arrives until the arrival settles, else the earliest arrival that
+    /// fits found by the search.
+    fn search_arrival(
+        &mut self,
+        to: usize,
+        actors_s: f64,
+        actors: &[ActorPose],
+        arrival: &Arrival,
+    ) -> RepositionFlight {
+        let now_s = arrival.now_s;
+        let flight = self.plan_reposition(to, now_s, actors_s, now_s, actors);
+        let mut search = ArrivalSearch {
+            first: flight.clone(),
+            flight,
+            best: None,
+            short_s: now_s,
+            round: 0,
+            after_s: now_s,
+            searching: false,
+            on_time: None,
+            limit_s: f64::INFINITY,
+        };
+        for _ in 0..REPOSITION_PLANS_MAX {
+            if arrival.settled(&search.flight) && !search.searching {
+                break;
+            }
+            if search.round >= REPOSITION_ROUNDS && !search.searching && search.on_time.is_none() {
+                if let Some((on_time, limit_s)) =
+                    self.on_time_flight(to, actors_s, actors, arrival, &search.first)
+                {
+                    search.on_time = Some(on_time);
+                    search.limit_s = limit_s;
+                }
+            }
+            search.record(arrival);
+            match self.next_arrival(to, actors_s, actors, arrival, &mut search) {
+                NextArrival::Plan(at_s) => {
+                    search.flight = self.plan_reposition(to, now_s, actors_s, at_s, actors);
+                }
+                NextArrival::Take(there) => search.flight = there,
+                NextArrival::Stop => break,
+            }
+        }
+        search.into_flight(arrival)
+    }
+
+    /// When the rounds did not settle: where the framing moves no faster than the drone can
+    /// merge into it when the flight first planned (`first`) arrives, the flight that
+    /// arrives then, to where the framing will be (it may start the shot a little behind,
+    /// where the actors took the framing further than the flight was planned for), and how
+    /// late the search may go (a second past that arrival, or as late as a flight another
+    /// way arrives); `None` where the framing moves faster.
+    fn on_time_flight(
+        &mut self,
+        to: usize,
+        actors_s: f64,
+        actors: &[ActorPose],
+        arrival: &Arrival,
+        first: &RepositionFlight,
+    ) -> Option<(RepositionFlight, f64)> {
+        // Unbounded, the search would wait for the actors to stand, and a shot after an
+        // actor's walk would start seconds later than needed, past a pin that follows it.
+        let a0 = arrival.at_s(first.needed);
+        let plan = self.plan_reposition(to, arrival.now_s, actors_s, a0, actors);
+        if plan.goal_speed_mps <= MERGEABLE_SPEED_SHARE * self.limits.speed_h_mps {
+            let mut limit_s = a0 + SEARCH_PAST_FIRST_S;
+            // In the first plan's time, the goal where the framing will be then; but another
+            // way (round an actor who walks across the first plan's way then) takes the time
+            // it needs: a way several times as long, flown in the first plan's time, would
+            // ask more speed than the drone has.
+            let needed = if plan.way == first.way {
+                plan.needed.min(first.needed).max(plan.needed_full)
+            } else {
+                // That way arrives later: any flight that arrives before it is looked for
+                // (waiting for the actor to pass, the short way).
+                limit_s = limit_s.max(arrival.at_s(plan.needed));
+                plan.needed
+            };
+            Some((RepositionFlight { needed, ..plan }, limit_s))
+        } else {
+            None
+        }
+    }
+
+    /// The next arrival the search plans for: again for when the last flight arrives (the
+    /// rounds), halfway between the latest that does not fit and the earliest that does, or
+    /// when an actor's movement ends; or a flight found that fits, or the end of the search.
+    fn next_arrival(
+        &mut self,
+        to: usize,
+        actors_s: f64,
+        actors: &[ActorPose],
+        arrival: &Arrival,
+        search: &mut ArrivalSearch,
+    ) -> NextArrival {
+        if search.round < REPOSITION_ROUNDS && !search.searching {
+            // Planned again for when it arrives; halfway after the first round (an actor
+            // walking toward where the drone comes from shortens the flight the later it
+            // arrives, and the rounds would swing).
+            search.round += 1;
+            let next = arrival.at_s(search.flight.needed);
+            NextArrival::Plan(if search.round == 1 {
+                next
+            } else {
+                (search.flight.at_s + next) / 2.0
+            })
+        } else if let Some(b) = &search.best {
+            // Between the latest that does not fit and the earliest that does.
+            search.searching = true;
+            if b.at_s - search.short_s < SEARCH_RESOLUTION_S {
+                return NextArrival::Stop;
+            }
+            NextArrival::Plan((search.short_s + b.at_s) / 2.0)
+        } else if let Some(end_s) = self
+            .blocking
+            .next_movement_end_after(search.after_s)
+            .filter(|&e| e <= search.limit_s)
+        {
+            // The framing sweeps by faster than the drone can meet it (an actor turning
+            // round at the size's distance): the drone arrives when a movement ends, or
+            // later while the actors stand as they do then, and the earliest such arrival
+            // is looked for.
+            search.searching = true;
+            search.after_s = end_s;
+            let there = self.plan_reposition(to, arrival.now_s, actors_s, end_s, actors);
+            if arrival.fits(&there) {
+                return NextArrival::Take(there);
+            }
+            NextArrival::Plan(arrival.at_s(there.needed))
+        } else {
+            NextArrival::Stop
+        }
+    }
+
+    /// When a repositioning flight to shot `to` that takes `needed` s (`needed_full` at the
+    /// profile's full limits) ends: when it arrives, or at the shot's pin; a flight that
+    /// cannot make its pin even at the full limits is an error, and arrives when it can.
+    fn reposition_end_s(
+        &mut self,
+        to: usize,
+        arrival: &Arrival,
+        needed: f64,
+        needed_full: f64,
+        flown: &Flown,
+    ) -> f64 {
+        let (now_s, written) = (arrival.now_s, arrival.written_s);
+        let shot = &self.shots[to];
+        let arrive = now_s + needed;
+        if arrival.pinned {
+            if arrive > written + PIN_TOLERANCE_S {
                 // Late even at the full limits: by how much, and the pin that it would make.
                 let soonest = now_s + needed_full;
                 let late = soonest - written;
@@ -1031,39 +1214,29 @@ impl Director {
             }
         } else {
             arrive
-        };
-        if end <= now_s + 1e-9 {
-            self.begin_shot(to, now_s, actors);
-            return;
         }
-        if !pinned && needed > 0.0 {
-            self.diagnostics.push(
-                Diagnostic::warning(
-                    CompileCode::Reposition,
-                    shot.span,
-                    format!(
-                        "a {needed:.1} s repositioning flight ({flown}) is inserted before \
-                         this shot: it starts at {end:.1} s instead of {:.1} s",
-                        shot.start_s
-                    ),
-                )
-                .with_label("the drone flies here first")
-                .with_help(
-                    "a single drone cannot jump between framings; pin the shot (`at Ns cut to \
-                     …`) or leave a gap to keep it on the script's clock",
+    }
+
+    /// Tells the `needed` s repositioning flight inserted before shot `to`, which now starts
+    /// at `end` s.
+    fn tell_reposition(&mut self, to: usize, needed: f64, end: f64, flown: &Flown) {
+        let shot = &self.shots[to];
+        self.diagnostics.push(
+            Diagnostic::warning(
+                CompileCode::Reposition,
+                shot.span,
+                format!(
+                    "a {needed:.1} s repositioning flight ({flown}) is inserted before \
+                     this shot: it starts at {end:.1} s instead of {:.1} s",
+                    shot.start_s
                 ),
-            );
-        }
-        self.route_turn = None;
-        self.phase = Phase::Reposition {
-            to,
-            start_s: now_s,
-            end_s: end,
-            arrive_s: (arrive - SETTLE_S).max(now_s).min(end),
-            from,
-            from_heading_rad: self.heading.heading_rad,
-            route,
-        };
+            )
+            .with_label("the drone flies here first")
+            .with_help(
+                "a single drone cannot jump between framings; pin the shot (`at Ns cut to \
+                 …`) or leave a gap to keep it on the script's clock",
+            ),
+        );
     }
 
     /// A repositioning flight setting off at `start_s` from where the camera is now to shot
@@ -1080,7 +1253,7 @@ impl Director {
     ) -> RepositionFlight {
         // Each plan solves from the same held two-actor solve (the flight's own solves start
         // from it too): else the plans of one search would each start from the last one's
-        // root, and which root the goal takes would depend on the order they were tried in.
+        // root, and which root the goal takes would depend on the order they were planned in.
         let held = self.held[to][0];
         let mut arriving = std::mem::take(&mut self.arriving);
         self.arriving_into(actors, actors_s, at_s, &mut arriving);
@@ -1152,25 +1325,27 @@ impl Director {
         let dz = (goal.z - from.z).abs();
         let dh = wrap_angle_rad(goal_heading - self.heading.heading_rad).abs();
         let speed = self.state.v.norm();
-        let (needed, needed_full, turn_sets_time) = if path_len < 0.03 && dh < 0.05 && speed < 0.05
-        {
+        let in_place = path_len < IN_PLACE_M && dh < IN_PLACE_RAD && speed < IN_PLACE_MPS;
+        let (needed, needed_full, turn_sets_time) = if in_place {
             (0.0, 0.0, false)
         } else {
             // A min-jerk flight peaks at 1.875·L/T in speed and 5.77·L/T² in
-            // acceleration; keep both under the share `m` of the limits (80% as planned),
-            // plus the time to stop from the current speed and half a second to settle.
+            // acceleration; keep both under the share `m` of the limits ([`PLANNED_SHARE`]
+            // as planned), plus the time to stop from the current speed and half a second to
+            // settle.
             let l = &self.limits;
             let t_stop = speed / l.accel_h_mps2;
             let flight_s = |m: f64| {
-                let t_speed = 1.875 * path_len / (m * l.speed_h_mps);
-                let t_accel = (5.77 * path_len / (m * l.accel_h_mps2)).sqrt();
-                let t_vz = 1.875 * dz / (m * l.speed_v_mps);
-                let t_yaw = 1.875 * dh / (m * l.yaw_rate_radps);
-                let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(0.5);
+                let t_speed = MIN_JERK_PEAK_SPEED * path_len / (m * l.speed_h_mps);
+                let t_accel = (MIN_JERK_PEAK_ACCEL * path_len / (m * l.accel_h_mps2)).sqrt();
+                let t_vz = MIN_JERK_PEAK_SPEED * dz / (m * l.speed_v_mps);
+                let t_yaw = MIN_JERK_PEAK_SPEED * dh / (m * l.yaw_rate_radps);
+                let t0 = t_speed.max(t_accel).max(t_vz).max(t_yaw).max(MIN_FLIGHT_S);
                 // The flight may curve round the pivot: measure its peaks (centripetal
-                // acceleration included) and stretch it until they fit (to 80% of the
-                // limits it is given: these, scaled to make that the share `m`).
-                let k = m / 0.8;
+                // acceleration included) and stretch it until they fit (to the share
+                // [`route::FIT_SHARE`] of the limits it is given: these, scaled to make that
+                // the share `m`).
+                let k = m / route::FIT_SHARE;
                 let scaled = SteerLimits {
                     speed_h_mps: l.speed_h_mps * k,
                     speed_v_mps: l.speed_v_mps * k,
@@ -1179,9 +1354,12 @@ impl Director {
                     ..*l
                 };
                 let t_fly = route.fit_duration_arriving(&from, &goal, &goal_v, t0, &scaled);
-                (t_fly + t_stop + SETTLE_S, t_yaw > 0.5 && t_yaw >= t0)
+                (
+                    t_fly + t_stop + SETTLE_S,
+                    t_yaw > MIN_FLIGHT_S && t_yaw >= t0,
+                )
             };
-            let (needed, turn_sets_time) = flight_s(0.8);
+            let (needed, turn_sets_time) = flight_s(PLANNED_SHARE);
             (needed, flight_s(1.0).0, turn_sets_time)
         };
         RepositionFlight {
@@ -1589,8 +1767,8 @@ impl Director {
     /// A framing whose camera position is inside an actor's safety distance: an error on the
     /// shot (once, when it first is: a flight tells it then), with the size to use instead.
     /// The closest it comes to that actor is followed to the end ([`Director::finish`] tells
-    /// it): an actor who walks through the camera's spot first comes 0.49 m from it, and the
-    /// error said no more than that.
+    /// it): an actor who walks through the camera's spot comes much closer than when the
+    /// error is first told.
     fn check_clearance(&mut self, index: usize, into_s: f64, p: &Vec3, actors: &[ActorPose]) {
         if let Some(c) = self.closest[index].as_mut() {
             if let Some(a) = actors.get(c.actor) {
@@ -1804,10 +1982,12 @@ impl Director {
                     None => {
                         // Along the path: the target's direction of travel.
                         let a = plan.at(into_s, actors);
-                        let v = if dronecine_math::norm_xy(a.v.x, a.v.y) > 1e-3 {
+                        let v = if dronecine_math::norm_xy(a.v.x, a.v.y) > PATH_MOVING_MPS {
                             a.v
                         } else {
-                            plan.at((into_s + 0.5).min(duration), actors).p - a.p
+                            plan.at((into_s + PATH_LOOK_AHEAD_S).min(duration), actors)
+                                .p
+                                - a.p
                         };
                         if dronecine_math::norm_xy(v.x, v.y) > 1e-6 {
                             (math::atan2(v.y, v.x), 0.0)
@@ -1857,7 +2037,7 @@ impl Director {
         let mut diags = std::mem::take(&mut self.diagnostics);
         // A framing too close: the closest it came, when it came closer than first told.
         for c in self.closest.iter().flatten() {
-            if c.closest_m > c.first_m - 0.005 {
+            if c.closest_m > c.first_m - CLOSER_TOLD_M {
                 continue;
             }
             let name = self.names.get(c.actor).map_or("an actor", String::as_str);
@@ -1896,7 +2076,7 @@ struct Closest {
 /// From how much larger than written an over-the-shoulder's background actor is framed (its
 /// size out of the toric circle's reach) `compile::beyond_reach` is told: 2 %, under which
 /// no one sees it, and which live actors standing at the edge of reach cross back and forth
-/// (`scene.psl`'s reverse shot: 0.3 % at moments on most seeds).
+/// by fractions of a percent.
 const REACH_TOLD: f64 = 1.02;
 
 /// `goal` held inside the box `[lo, hi]`: on an axis where its position is outside, the
@@ -2037,12 +2217,142 @@ struct RepositionFlight {
     way: Way,
     /// Its duration, settling included.
     needed: f64,
-    /// The same at the profile's full limits instead of 80% of them: the shortest it can
-    /// take.
+    /// The same at the profile's full limits instead of [`PLANNED_SHARE`] of them: the
+    /// shortest it can take.
     needed_full: f64,
     /// How fast the framing moves when it arrives.
     goal_speed_mps: f64,
     flown: Flown,
+}
+
+/// When a repositioning flight that sets off at `now_s` arrives and may end, for a flight of
+/// a given duration.
+#[derive(Clone, Copy, Debug)]
+struct Arrival {
+    now_s: f64,
+    /// When the shot is pinned to start, or `now_s` when it is not pinned.
+    written_s: f64,
+    pinned: bool,
+}
+
+impl Arrival {
+    /// When a flight that takes `needed` s reaches the framing (see
+    /// `Phase::Reposition::arrive_s`).
+    fn at_s(&self, needed: f64) -> f64 {
+        let end = (self.now_s + needed).max(self.written_s);
+        (self.now_s + needed - SETTLE_S).max(self.now_s).min(end)
+    }
+
+    /// Whether flight `f`, planned for the actors as they are at `f.at_s`, arrives then.
+    fn settled(&self, f: &RepositionFlight) -> bool {
+        (self.at_s(f.needed) - f.at_s).abs() < ARRIVAL_SETTLED_S
+    }
+
+    /// Whether flight `f`, planned for `f.at_s`, is there by then (it flies slower, or waits).
+    fn fits(&self, f: &RepositionFlight) -> bool {
+        self.at_s(f.needed) <= f.at_s + ARRIVAL_SETTLED_S
+    }
+
+    /// The duration of a flight that takes `needed` s as planned and `needed_full` s at the
+    /// profile's full limits: late for its pin as planned, in time at its full limits, it is
+    /// flown in the time there is.
+    fn needed_for_pin(&self, needed: f64, needed_full: f64) -> f64 {
+        let (now_s, written) = (self.now_s, self.written_s);
+        if self.pinned
+            && now_s + needed > written + PIN_TOLERANCE_S
+            && now_s + needed_full <= written + PIN_TOLERANCE_S
+        {
+            written - now_s
+        } else {
+            needed
+        }
+    }
+}
+
+/// Where the search for a repositioning flight's arrival is ([`Director::search_arrival`]).
+struct ArrivalSearch {
+    /// The flight planned last.
+    flight: RepositionFlight,
+    /// The arrival as first planned: to the framing as it is now.
+    first: RepositionFlight,
+    /// The earliest arrival found that fits…
+    best: Option<RepositionFlight>,
+    /// …and the latest before it that does not.
+    short_s: f64,
+    /// How many times the flight was planned again for when it arrives.
+    round: usize,
+    /// The end of the actors' movements the search last planned for.
+    after_s: f64,
+    /// Past the rounds: a fit found, an earlier one is looked for.
+    searching: bool,
+    /// Where the framing when first planned moves no faster than the drone can merge into
+    /// it: the flight that arrives then…
+    on_time: Option<RepositionFlight>,
+    /// …and how much later than that a search may go.
+    limit_s: f64,
+}
+
+impl ArrivalSearch {
+    /// Keeps the flight planned last as the earliest that fits, or its time as the latest
+    /// that does not fit before that.
+    fn record(&mut self, arrival: &Arrival) {
+        if arrival.fits(&self.flight) {
+            if self.best.as_ref().is_none_or(|b| self.flight.at_s < b.at_s) {
+                self.best = Some(self.flight.clone());
+            }
+        } else if self.best.as_ref().is_none_or(|b| self.flight.at_s < b.at_s) {
+            self.short_s = self.short_s.max(self.flight.at_s);
+        }
+    }
+
+    /// The flight the search comes to: the one planned last where it settled, else the
+    /// earliest that fits within the search's bound (or the one on time), flown in the time
+    /// it has.
+    fn into_flight(self, arrival: &Arrival) -> RepositionFlight {
+        let ArrivalSearch {
+            mut flight,
+            mut best,
+            searching,
+            on_time,
+            limit_s,
+            ..
+        } = self;
+        if !arrival.settled(&flight) || searching {
+            if searching
+                && arrival.fits(&flight)
+                && best.as_ref().is_none_or(|b| flight.at_s < b.at_s)
+            {
+                best = Some(flight.clone());
+            }
+            let best = match (best, on_time) {
+                (Some(b), _) if b.at_s <= limit_s => Some(b),
+                (_, on_time) => on_time,
+            };
+            if let Some(b) = best {
+                // Early: it flies there in the time it has (or waits, pinned).
+                let early_s = if arrival.fits(&b) {
+                    b.at_s - arrival.at_s(b.needed)
+                } else {
+                    0.0
+                };
+                flight = RepositionFlight {
+                    needed: b.needed + early_s.max(0.0),
+                    ..b
+                };
+            }
+        }
+        flight
+    }
+}
+
+/// What the search for a repositioning flight's arrival does next.
+enum NextArrival {
+    /// Plan a flight for this arrival.
+    Plan(f64),
+    /// Take this flight, planned already.
+    Take(RepositionFlight),
+    /// Stop: the search is over.
+    Stop,
 }
 
 /// Which way a repositioning flight goes: the way it goes unless something is in it (round
@@ -2087,14 +2397,18 @@ impl Flown {
     /// Smaller turns are mentioned only when they set the time: at the ardrone2's 100°/s such
     /// a turn fits in the half second that every repositioning flight takes at least.
     const TURN_TOLD_DEG: f64 = 15.0;
+    /// Turns smaller than this are never mentioned: they round to no turn at all.
+    const TURN_NEVER_TOLD_DEG: f64 = 0.5;
+    /// A flight shorter than this is a turn on the spot: its length rounds to nothing.
+    const ON_THE_SPOT_M: f64 = 0.05;
 }
 
 impl std::fmt::Display for Flown {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let deg = self.turn_rad.abs().to_degrees();
-        if (deg < Self::TURN_TOLD_DEG && !self.turn_sets_time) || deg < 0.5 {
+        if (deg < Self::TURN_TOLD_DEG && !self.turn_sets_time) || deg < Self::TURN_NEVER_TOLD_DEG {
             write!(f, "{:.1} m", self.path_m)
-        } else if self.path_m < 0.05 {
+        } else if self.path_m < Self::ON_THE_SPOT_M {
             write!(f, "a {deg:.0}° turn on the spot")
         } else {
             write!(f, "{:.1} m and a {deg:.0}° turn", self.path_m)

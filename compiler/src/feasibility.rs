@@ -84,9 +84,8 @@ struct ShotStats {
 /// A step of the solved target between two samples is a jump, not a fast framing, from this
 /// long and this many times the drone's top speed over the samples' interval: a framing that
 /// changes place at once (an over-the-shoulder's other camera, a two-shot's size passing to
-/// the other actor; a move's short way round the actors did, before moves kept their way,
-/// `framing::BlendWay`). Longer shots do not help such a shot, and the retiming help said to
-/// make a 12 s move last 9,902 s.
+/// the other actor). Longer shots do not help such a shot, so it is told as a jump, not with
+/// the retiming help, which would ask for an absurdly long shot.
 const JUMP_MIN_M: f64 = 0.3;
 const JUMP_SPEEDS: f64 = 10.0;
 
@@ -289,13 +288,12 @@ impl Monitor {
     }
 
     /// The actors it is fed are measured (a flight's director, `Director::actors_measured`):
-    /// the framing's own speed and acceleration are the live actors' noise differentiated,
-    /// and how far the reference is from it is mostly that noise smoothed away; neither is
-    /// told (on `scene.psl` on set, 8 to 12 shots a flight "needed" up to 33 m/s² or 30 m/s,
-    /// and the reference "fell" 0.27 m behind the LS that opens it, whose framing swings
-    /// with Bob's measured facing). The report's framing error says what the shot got. The
-    /// reference's own limits, the framing's jumps, the stage and the actors' distance are
-    /// told as in `compile`.
+    /// the framing's own speed and acceleration are the live actors' noise differentiated, and
+    /// how far the reference is from it is mostly that noise smoothed away; neither is told (a
+    /// framing that swings with an actor's measured facing would "need" many times what the
+    /// drone flies, and seem to leave the reference behind). The report's framing error says
+    /// what the shot got. The reference's own limits, the framing's jumps, the stage and the
+    /// actors' distance are told as in `compile`.
     pub fn actors_measured(&mut self) {
         self.measured = true;
     }
@@ -316,176 +314,264 @@ impl Monitor {
         is_held_off: impl Fn(usize) -> bool,
         out: &mut Vec<Diagnostic>,
     ) {
-        let (Some(st), Some(shot)) = (self.stats.get(i), shots.get(i)) else {
+        let Some(report) = ShotReport::new(self, i, shots, timings) else {
             return;
+        };
+        // One demand at most: a jump sets it, then what the script asks, then the lag, then
+        // the reference's own limits.
+        let demand = report
+            .jump()
+            .or_else(|| report.demand_speed())
+            .or_else(|| report.demand_accel())
+            .or_else(|| report.lag(&is_held_off))
+            .or_else(|| report.reference_limit());
+        out.extend(demand);
+        out.extend(report.too_close(&is_held_off));
+        out.extend(report.in_margin());
+        out.extend(report.leaves_stage());
+    }
+}
+
+/// One shot's peaks, with what its diagnostics say them with: when, how long, the fix.
+struct ShotReport<'m> {
+    monitor: &'m Monitor,
+    st: &'m ShotStats,
+    shot: &'m Shot,
+    i: usize,
+    duration: f64,
+    retimeable: bool,
+    /// The shot's start: its samples begin with the repositioning flight before it, if any.
+    start: f64,
+    /// How much longer a retimeable shot must be for both its speed and its acceleration to
+    /// fit (speed scales as 1/T, acceleration as 1/T²), with 5% margin.
+    retime: f64,
+}
+
+impl<'m> ShotReport<'m> {
+    /// Shot `i`'s peaks and timing, or `None` for a shot the monitor or the script lacks.
+    fn new(
+        monitor: &'m Monitor,
+        i: usize,
+        shots: &'m [Shot],
+        timings: &[ShotTiming],
+    ) -> Option<ShotReport<'m>> {
+        let (Some(st), Some(shot)) = (monitor.stats.get(i), shots.get(i)) else {
+            return None;
         };
         let duration = shot.end_s - shot.start_s;
         let retimeable = matches!(shot.content, ShotContent::Path(_))
             || dronecine_grammar::script::moves_camera(shots, i);
-        // When, said from the shot's start; a shot's samples begin with the repositioning
-        // flight inserted before it, if any.
         let start = timings
             .iter()
             .find(|x| x.index == i)
             .map(|x| x.start_s)
             .unwrap_or(shot.start_s);
-        let on_the_flight = |t: f64| t < start - 0.005;
-        let at = |t: f64| {
-            if on_the_flight(t) {
-                format!(
-                    "on the repositioning flight, {:.1} s before the shot starts",
-                    round_up_1(start - t)
-                )
-            } else {
-                format!("{:.1} s into the shot", (t - start).max(0.0))
-            }
-        };
-        // How much longer a retimeable shot must be for both its speed and its
-        // acceleration to fit (speed scales as 1/T, acceleration as 1/T²), with 5% margin.
-        let retime = (st.demand_speed.value / self.speed_max)
-            .max((st.demand_accel.value / self.accel_max).sqrt())
+        let retime = (st.demand_speed.value / monitor.speed_max)
+            .max((st.demand_accel.value / monitor.accel_max).sqrt())
             * 1.05;
-        // What the shot asks that the drone cannot give: an error on its line, with what
-        // the label points at and the fix.
-        let infeasible = |message: String, label: &str, help: String| {
-            Diagnostic::error(CompileCode::Infeasible, shot.span, message)
-                .with_label(label)
-                .with_help(help)
+        Some(ShotReport {
+            monitor,
+            st,
+            shot,
+            i,
+            duration,
+            retimeable,
+            start,
+            retime,
+        })
+    }
+
+    /// Time `t` is on the repositioning flight before the shot.
+    fn on_the_flight(&self, t: f64) -> bool {
+        t < self.start - 0.005
+    }
+
+    /// When `t` is, said from the shot's start.
+    fn at(&self, t: f64) -> String {
+        if self.on_the_flight(t) {
+            format!(
+                "on the repositioning flight, {:.1} s before the shot starts",
+                round_up_1(self.start - t)
+            )
+        } else {
+            format!("{:.1} s into the shot", (t - self.start).max(0.0))
+        }
+    }
+
+    /// What the shot asks that the drone cannot give: an error on its line, with what the
+    /// label points at and the fix.
+    fn infeasible(&self, message: String, label: &str, help: String) -> Diagnostic {
+        Diagnostic::error(CompileCode::Infeasible, self.shot.span, message)
+            .with_label(label)
+            .with_help(help)
+    }
+
+    /// A framing that jumps further between two samples than any drone flies, said as such
+    /// with what changes it.
+    fn jump(&self) -> Option<Diagnostic> {
+        let (st, m) = (self.st, self.monitor);
+        let jumps = st.jump.value > 0.0;
+        if !jumps {
+            return None;
+        }
+        let message = format!(
+            "the framing jumps {:.2} m from one sample to the next ({}): no drone follows \
+             that, {} flies {:.2} m/s",
+            st.jump.value,
+            self.at(st.jump.t_s),
+            m.profile,
+            m.speed_max
+        );
+        let help = "as the actors move, the framing's camera has to change place at once (an \
+                    over-the-shoulder's other camera frames the profile better, or a \
+                    two-shot's size passes to the other actor, who is now nearer): cut to the \
+                    framing as it is after the change, or block the actors so that it does \
+                    not happen"
+            .to_string();
+        Some(self.infeasible(message, "the framing jumps here", help))
+    }
+
+    /// A shot that asks more speed than the drone flies.
+    fn demand_speed(&self) -> Option<Diagnostic> {
+        let (st, m) = (self.st, self.monitor);
+        let over = st.demand_speed.value > m.speed_max * SLACK;
+        if m.measured || !over {
+            return None;
+        }
+        let need = st.demand_speed.value;
+        let help = if self.retimeable {
+            format!(
+                "make it at least {:.1} s",
+                round_up_1(self.duration * self.retime)
+            )
+        } else {
+            "the framing follows the actors: slow their movement (a longer `over`) or \
+             use a wider size"
+                .to_string()
         };
-        let mut demand_reported = false;
-        if st.jump.value > 0.0 {
-            // A jump sets the demand: said as such, with what changes it.
-            demand_reported = true;
-            out.push(infeasible(
-                format!(
-                    "the framing jumps {:.2} m from one sample to the next ({}): no drone \
-                     follows that, {} flies {:.2} m/s",
-                    st.jump.value,
-                    at(st.jump.t_s),
-                    self.profile,
-                    self.speed_max
-                ),
-                "the framing jumps here",
-                "as the actors move, the framing's camera has to change place at once (an \
-                 over-the-shoulder's other camera frames the profile better, or a two-shot's \
-                 size passes to the other actor, who is now nearer): cut to the framing as \
-                 it is after the change, or block the actors so that it does not happen"
-                    .to_string(),
-            ));
+        Some(self.infeasible(
+            format!(
+                "this shot needs {need:.2} m/s ({}); {} flies {:.2} m/s",
+                self.at(st.demand_speed.t_s),
+                m.profile,
+                m.speed_max
+            ),
+            "too fast for the drone",
+            help,
+        ))
+    }
+
+    /// A shot that asks more acceleration than the drone gives.
+    fn demand_accel(&self) -> Option<Diagnostic> {
+        let (st, m) = (self.st, self.monitor);
+        let over = st.demand_accel.value > m.accel_max * SLACK;
+        if m.measured || !over {
+            return None;
         }
-        if !self.measured && !demand_reported && st.demand_speed.value > self.speed_max * SLACK {
-            demand_reported = true;
-            let need = st.demand_speed.value;
-            let help = if retimeable {
-                format!("make it at least {:.1} s", round_up_1(duration * retime))
-            } else {
-                "the framing follows the actors: slow their movement (a longer `over`) or \
-                 use a wider size"
-                    .to_string()
-            };
-            out.push(infeasible(
-                format!(
-                    "this shot needs {need:.2} m/s ({}); {} flies {:.2} m/s",
-                    at(st.demand_speed.t_s),
-                    self.profile,
-                    self.speed_max
-                ),
-                "too fast for the drone",
-                help,
-            ));
-        }
-        if !self.measured && !demand_reported && st.demand_accel.value > self.accel_max * SLACK {
-            demand_reported = true;
-            let need = st.demand_accel.value;
-            let help = if retimeable {
-                format!("make it at least {:.1} s", round_up_1(duration * retime))
-            } else {
-                "the framing follows the actors: make their movements smoother (a longer \
-                 `over`) or use a wider size"
-                    .to_string()
-            };
-            out.push(infeasible(
-                format!(
-                    "this shot needs {need:.2} m/s² ({}); {} accelerates at most {:.2} m/s²",
-                    at(st.demand_accel.t_s),
-                    self.profile,
-                    self.accel_max
-                ),
-                "too abrupt for the drone",
-                help,
-            ));
-        }
-        // A shot that the one before left behind its framing (that one's error already)
-        // is told only for what it adds: the lag it starts with is not its doing, and its
-        // fix ("make it longer") did not fix it. (Found compiling random scripts: 79 of
-        // 384 lag errors over 1,500 scripts were such a shot, starting up to 4.3 m behind.)
+        let need = st.demand_accel.value;
+        let help = if self.retimeable {
+            format!(
+                "make it at least {:.1} s",
+                round_up_1(self.duration * self.retime)
+            )
+        } else {
+            "the framing follows the actors: make their movements smoother (a longer \
+             `over`) or use a wider size"
+                .to_string()
+        };
+        Some(self.infeasible(
+            format!(
+                "this shot needs {need:.2} m/s² ({}); {} accelerates at most {:.2} m/s²",
+                self.at(st.demand_accel.t_s),
+                m.profile,
+                m.accel_max
+            ),
+            "too abrupt for the drone",
+            help,
+        ))
+    }
+
+    /// The drone falling behind its framing within the drone's limits. A shot that the one
+    /// before left behind its framing (that one's error already) is told only for what it
+    /// adds: the lag it starts with is not its doing, and its fix ("make it longer") would
+    /// not fix it.
+    fn lag(&self, is_held_off: impl Fn(usize) -> bool) -> Option<Diagnostic> {
+        let (st, m) = (self.st, self.monitor);
         let entry_m = st.lag_carried.entry();
         let own = st.lag.value > TRACKING_TOLERANCE_M;
         let further = !own && st.lag_further.value > TRACKING_TOLERANCE_M;
-        if !self.measured && !demand_reported && !is_held_off(i) && (own || further) {
-            demand_reported = true;
-            out.push(infeasible(
-                if further {
-                    format!(
-                        "the drone falls a further {:.2} m behind the framing ({}), {:.2} m \
-                         in all, within {}'s limits (it starts {:.2} m behind, where the shot \
-                         before left it)",
-                        st.lag_further.value,
-                        at(st.lag_further.t_s),
-                        st.lag_further.value + entry_m,
-                        self.profile,
-                        entry_m
-                    )
-                } else {
-                    format!(
-                        "the drone falls {:.2} m behind the framing ({}) within {}'s limits",
-                        st.lag.value,
-                        at(st.lag.t_s),
-                        self.profile
-                    )
-                },
-                "the framing is lost here",
-                if retimeable {
-                    format!(
-                        "make it longer (at least {:.1} s)",
-                        round_up_1(duration * 1.5)
-                    )
-                } else {
-                    "slow the actors' movements or use a wider size".to_string()
-                },
-            ));
+        if m.measured || is_held_off(self.i) || !(own || further) {
+            return None;
         }
+        Some(self.infeasible(
+            if further {
+                format!(
+                    "the drone falls a further {:.2} m behind the framing ({}), {:.2} m \
+                     in all, within {}'s limits (it starts {:.2} m behind, where the shot \
+                     before left it)",
+                    st.lag_further.value,
+                    self.at(st.lag_further.t_s),
+                    st.lag_further.value + entry_m,
+                    m.profile,
+                    entry_m
+                )
+            } else {
+                format!(
+                    "the drone falls {:.2} m behind the framing ({}) within {}'s limits",
+                    st.lag.value,
+                    self.at(st.lag.t_s),
+                    m.profile
+                )
+            },
+            "the framing is lost here",
+            if self.retimeable {
+                format!(
+                    "make it longer (at least {:.1} s)",
+                    round_up_1(self.duration * 1.5)
+                )
+            } else {
+                "slow the actors' movements or use a wider size".to_string()
+            },
+        ))
+    }
+
+    /// The first of the reference's own limits (tilt, vertical speed, yaw rate, speed) that
+    /// it exceeds.
+    fn reference_limit(&self) -> Option<Diagnostic> {
+        let (st, m) = (self.st, self.monitor);
         let checks = [
-            (st.tilt, self.tilt_max, "tilt", "rad"),
-            (st.vz, self.vz_max, "vertical speed", "m/s"),
-            (st.yaw_rate, self.yaw_max, "yaw rate", "rad/s"),
-            (st.speed, self.speed_max, "speed", "m/s"),
+            (st.tilt, m.tilt_max, "tilt", "rad"),
+            (st.vz, m.vz_max, "vertical speed", "m/s"),
+            (st.yaw_rate, m.yaw_max, "yaw rate", "rad/s"),
+            (st.speed, m.speed_max, "speed", "m/s"),
         ];
-        if !demand_reported {
-            for (peak, max, what, unit) in checks {
-                if peak.value > max * SLACK {
-                    out.push(
-                        Diagnostic::error(
-                            CompileCode::Infeasible,
-                            shot.span,
-                            format!(
-                                "the reference needs a {what} of {:.2} {unit} ({}); {} allows {:.2} {unit}",
-                                peak.value,
-                                at(peak.t_s),
-                                self.profile,
-                                max
-                            ),
-                        )
-                        .with_label(format!("{what} over the limit"))
-                        .with_help(format!(
-                            "make the shot at least {:.1} s long",
-                            round_up_1(duration * peak.value / max)
-                        )),
-                    );
-                    break;
-                }
-            }
-        }
+        let (peak, max, what, unit) = checks
+            .into_iter()
+            .find(|(peak, max, _, _)| peak.value > max * SLACK)?;
+        Some(
+            Diagnostic::error(
+                CompileCode::Infeasible,
+                self.shot.span,
+                format!(
+                    "the reference needs a {what} of {:.2} {unit} ({}); {} allows {:.2} {unit}",
+                    peak.value,
+                    self.at(peak.t_s),
+                    m.profile,
+                    max
+                ),
+            )
+            .with_label(format!("{what} over the limit"))
+            .with_help(format!(
+                "make the shot at least {:.1} s long",
+                round_up_1(self.duration * peak.value / max)
+            )),
+        )
+    }
+
+    /// The deepest intrusion into an actor's safety distance, in the shot or on the
+    /// repositioning flight before it.
+    fn too_close(&self, is_held_off: impl Fn(usize) -> bool) -> Option<Diagnostic> {
+        let (st, m, i) = (self.st, self.monitor, self.i);
         let after_held_off = i > 0 && is_held_off(i - 1);
         let (intrusion, intruded) =
             if after_held_off || st.intrusion.value >= st.intrusion_on_the_way.value {
@@ -493,97 +579,114 @@ impl Monitor {
             } else {
                 (st.intrusion_on_the_way, st.intruded_on_the_way)
             };
-        if intrusion.value > INTRUSION_TOLD_M {
-            let who = intruded
-                .and_then(|i| self.names.get(i))
-                .map(String::as_str)
-                .unwrap_or("an actor");
-            out.push(
-                Diagnostic::error(
-                    CompileCode::TooClose,
-                    shot.span,
-                    format!(
-                        "the camera comes within {:.2} m of {who} ({}); {} keeps {:.2} m from actors",
-                        self.safety_m - intrusion.value,
-                        at(intrusion.t_s),
-                        self.profile,
-                        self.safety_m
-                    ),
-                )
-                .with_label(format!("too close to {who}"))
-                .with_help(if on_the_flight(intrusion.t_s) {
-                    // No way there clear of the actor (routes keep clear where one is).
-                    format!(
-                        "the drone passes {who} on its way to this framing: frame the shot \
-                         from the side of {who} it comes from, or use a wider size or a \
-                         longer lens (`lens …`), which stand the framing further off"
-                    )
-                } else {
-                    "use a wider size, a longer lens (`lens …`), or move the path away from \
-                     the actors"
-                        .to_string()
-                }),
-            );
+        let told = intrusion.value > INTRUSION_TOLD_M;
+        if !told {
+            return None;
         }
-        // Held at the margin: a warning (the shot is flown, a little off its framing) when
-        // the screen shows it (`IN_MARGIN_TOLD`), and the framing does not leave the stage
-        // (an error of its own).
-        if st.in_margin.value > IN_MARGIN_TOLD && st.outside.value <= OUTSIDE_TOLD_M {
-            let (p, by, when) = (st.in_margin_at, st.in_margin_m, at(st.in_margin.t_s));
-            let margin = self.margin_m;
-            let share = match st.in_margin_actor {
-                Some((i, d)) => format!(
-                    " ({:.0} % of its {d:.2} m to {})",
-                    st.in_margin.value * 100.0,
-                    self.names.get(i).map_or("the actor", String::as_str)
-                ),
-                None => String::new(),
-            };
-            out.push(
-                Diagnostic::warning(
-                    CompileCode::InMargin,
-                    shot.span,
-                    format!(
-                        "this framing puts the camera {by:.2} m into the stage's {margin:.2} m \
-                         margin at ({:.2}, {:.2}, {:.2}) ({when}); the drone is held at the \
-                         margin, up to {by:.2} m off its framing{share}",
-                        p[0], p[1], p[2]
-                    ),
-                )
-                .with_label("into the stage's margin")
-                .with_help(format!(
-                    "{} keeps {margin:.2} m from the stage's walls, floor and ceiling: make the \
-                     stage larger, or move the framing inward (a tighter size brings the \
-                     camera closer to the actors)",
-                    self.profile
-                )),
-            );
-        }
-        if st.outside.value > OUTSIDE_TOLD_M {
-            let (p, by, when) = (st.outside_at, st.outside.value, at(st.outside.t_s));
-            let at_p = format!("at ({:.2}, {:.2}, {:.2}) ({when})", p[0], p[1], p[2]);
-            let message = if st.outside_framing {
+        let who = intruded
+            .and_then(|i| m.names.get(i))
+            .map(String::as_str)
+            .unwrap_or("an actor");
+        Some(
+            Diagnostic::error(
+                CompileCode::TooClose,
+                self.shot.span,
                 format!(
-                    "this framing puts the camera {by:.2} m outside the stage {at_p}; the \
-                     drone would be held inside, off its framing"
+                    "the camera comes within {:.2} m of {who} ({}); {} keeps {:.2} m from actors",
+                    m.safety_m - intrusion.value,
+                    self.at(intrusion.t_s),
+                    m.profile,
+                    m.safety_m
+                ),
+            )
+            .with_label(format!("too close to {who}"))
+            .with_help(if self.on_the_flight(intrusion.t_s) {
+                // No way there clear of the actor (routes keep clear where one is).
+                format!(
+                    "the drone passes {who} on its way to this framing: frame the shot \
+                     from the side of {who} it comes from, or use a wider size or a \
+                     longer lens (`lens …`), which stand the framing further off"
                 )
             } else {
-                format!("the camera leaves the stage by {by:.2} m {at_p}")
-            };
-            out.push(
-                Diagnostic::error(CompileCode::LeavesStage, shot.span, message)
-                .with_label("outside the flight volume")
-                .with_help("make the stage larger, or move the path or the framing inside it (a tighter size brings the camera closer)"),
-            );
+                "use a wider size, a longer lens (`lens …`), or move the path away from \
+                 the actors"
+                    .to_string()
+            }),
+        )
+    }
+
+    /// Held at the margin: a warning (the shot is flown, a little off its framing) when the
+    /// screen shows it (`IN_MARGIN_TOLD`), and the framing does not leave the stage (an
+    /// error of its own).
+    fn in_margin(&self) -> Option<Diagnostic> {
+        let (st, m) = (self.st, self.monitor);
+        let told = st.in_margin.value > IN_MARGIN_TOLD && st.outside.value <= OUTSIDE_TOLD_M;
+        if !told {
+            return None;
         }
+        let (p, by, when) = (st.in_margin_at, st.in_margin_m, self.at(st.in_margin.t_s));
+        let margin = m.margin_m;
+        let share = match st.in_margin_actor {
+            Some((i, d)) => format!(
+                " ({:.0} % of its {d:.2} m to {})",
+                st.in_margin.value * 100.0,
+                m.names.get(i).map_or("the actor", String::as_str)
+            ),
+            None => String::new(),
+        };
+        Some(
+            Diagnostic::warning(
+                CompileCode::InMargin,
+                self.shot.span,
+                format!(
+                    "this framing puts the camera {by:.2} m into the stage's {margin:.2} m \
+                     margin at ({:.2}, {:.2}, {:.2}) ({when}); the drone is held at the \
+                     margin, up to {by:.2} m off its framing{share}",
+                    p[0], p[1], p[2]
+                ),
+            )
+            .with_label("into the stage's margin")
+            .with_help(format!(
+                "{} keeps {margin:.2} m from the stage's walls, floor and ceiling: make the \
+                 stage larger, or move the framing inward (a tighter size brings the \
+                 camera closer to the actors)",
+                m.profile
+            )),
+        )
+    }
+
+    /// The camera, or its framing, outside the stage.
+    fn leaves_stage(&self) -> Option<Diagnostic> {
+        let st = self.st;
+        let told = st.outside.value > OUTSIDE_TOLD_M;
+        if !told {
+            return None;
+        }
+        let (p, by, when) = (st.outside_at, st.outside.value, self.at(st.outside.t_s));
+        let at_p = format!("at ({:.2}, {:.2}, {:.2}) ({when})", p[0], p[1], p[2]);
+        let message = if st.outside_framing {
+            format!(
+                "this framing puts the camera {by:.2} m outside the stage {at_p}; the \
+                 drone would be held inside, off its framing"
+            )
+        } else {
+            format!("the camera leaves the stage by {by:.2} m {at_p}")
+        };
+        let help = "make the stage larger, or move the path or the framing inside it (a \
+                    tighter size brings the camera closer)";
+        Some(
+            Diagnostic::error(CompileCode::LeavesStage, self.shot.span, message)
+                .with_label("outside the flight volume")
+                .with_help(help),
+        )
     }
 }
 
 /// The share of its distance to the nearest actor that a framing's camera may be held off by
 /// the stage's margin before `compile::in_margin` is told: 8 % (a size that much off, about a
-/// quarter of the step between two named sizes, or an angle of 5°). `scene.psl`'s high-angle
-/// two-shot is held 0.07–0.08 m off at 1.3 m (6 %), its reverse over-the-shoulder 0.10 m off
-/// at 2.3 m (4 %): not told; an MS held 0.10 m off at 0.8 m (12 %) is.
+/// quarter of the step between two named sizes, or an angle of 5°). A camera held 0.08 m off
+/// at 1.3 m (6 %) or 0.10 m off at 2.3 m (4 %) is not told; an MS held 0.10 m off at 0.8 m
+/// (12 %) is.
 const IN_MARGIN_TOLD: f64 = 0.08;
 
 /// What a shot carries over from the shot before, which it continues (`then`): a lag behind

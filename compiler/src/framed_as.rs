@@ -2,17 +2,17 @@
 //! script names (`compile::size_off`, `compile::profile_off`).
 //!
 //! A composition of two framings (`MS on Bob 34backright LS on Alice 34left`) asks for two
-//! sizes and up to two profiles, but once the screen positions fix the angle between the
-//! actors the toric solve can meet only one of them (camera-math §3): the background's size,
-//! or a profile; the rest follows from where the actors stand. Usually it follows closely
-//! enough. When it does not, the shot is not the one written and nothing else says so:
+//! sizes and up to two profiles, but once the screen positions fix the angle between the actors
+//! the toric solve can meet only one of them: the background's size, or a profile; the rest
+//! follows from where the actors stand. Usually it follows closely enough. When it does not,
+//! the shot is not the one written and nothing else says so:
 //! `MS on Bob 34backright MS on Alice 34left`, actors 2 m apart, puts the camera at Alice's
 //! MS distance (0.7 m) with Bob 2.5 m away, seen from the front: over Alice's shoulder, not
 //! Bob's, with both actors on their screen points.
 //!
 //! Measured over each hold from the reference's camera, as [`crate::compile`]'s screen check
 //! is: the mean horizontal distance to each framed actor gives the size the camera really
-//! frames (the nearest of the table of camera-math §1 for that distance and lens), the mean
+//! frames (the nearest of the size table, `size.rs`, for that distance and lens), the mean
 //! bearing from the actor the profile. Reported when the size is two or more sizes off, or the
 //! profile more than one and a half profile steps (67.5°).
 

@@ -11,14 +11,15 @@
 //!   framing-error metric); [`body_axis_distances_m`] the camera's distance to each actor's
 //!   body axis (safety); [`velocity_mps`] the feed-forward camera velocity of a held `Visual`.
 //!
-//! Conventions (camera-math §1–§4):
-//! - **Aim points.** Each framed actor has a band (its size, §1) `[bottom, top]` above the
-//!   feet; the band centre M is the aim point of the sphere and torus. A requested screen point
-//!   `(x, y)` means: the band spans the frame height with its centre at `(x, y)` (default
-//!   `y = 0`: the band fills the frame; its ends land at `y ± 1`).
+//! Conventions:
+//! - **Aim points.** Each framed actor has a band (its size, [`size`]) `[bottom, top]` above
+//!   the feet; the band centre M is the aim point of the sphere and torus. A requested screen
+//!   point `(x, y)` means: the band spans the frame height with its centre at `(x, y)`
+//!   (default `y = 0`: the band fills the frame; its ends land at `y ± 1`).
 //! - **One actor** (`MS on A 34left screen right`): `C = M + d·û(h + θ, φ)`, θ the profile
 //!   azimuth (default front), φ the camera-angle elevation ([`sphere::elevation_rad`]), d the
-//!   exact distance of §1 (the band subtends the angle between the rays through `(x, y ± 1)`).
+//!   exact distance of [`size::exact_distance_m`] (the band subtends the angle between the
+//!   rays through `(x, y ± 1)`).
 //!   The camera aims the band's *bisector point* Q (the point of the band seen halfway between
 //!   its ends, [`size::bisector_point`]) at [`size::band_aim_screen`]; Q lands there exactly,
 //!   and for `x = 0` the band's top and bottom land exactly on `y ± 1` whatever the elevation.
@@ -32,7 +33,7 @@
 //! - **Two actors in one framing** (`MS on A and B`): A at x = −1/3, B at +1/3 unless screen
 //!   positions say otherwise; α from the two screen points; φ = elevation on the φ = 0 side
 //!   (A left) or π − elevation on the far side (A right); θ so that the *nearer* actor has its
-//!   size (§3 distance constraints, both actors tried, the root nearest the symmetric
+//!   size (toric distance constraints, both actors tried, the root nearest the symmetric
 //!   θ = π − α kept). If the first subject has a profile, the vantage formula gives (θ, φ)
 //!   instead and the size is not kept. Primary actor (aimed exactly) = the sized actor, or the
 //!   first subject when a profile was used.
@@ -46,11 +47,11 @@
 //!   tick ([`Prepared::solve_near`], as the director solves), the framing keeps its root until
 //!   the other frames the profile [`BRANCH_KEEP_RAD`] better: two roots that miss it alike
 //!   would otherwise trade places across the stage from one tick to the next.
-//! - **Two-actor orientation** (no roll, §4): the primary's aim point lands exactly at its
+//! - **Two-actor orientation** (no roll): the primary's aim point lands exactly at its
 //!   screen point (heading and pitch from [`orient`]); the other actor lands exactly too when
 //!   both aim points are at the camera's height (equal heights and φ = 0 or π, e.g. eye-level
-//!   two-shots of equal-height actors, any θ); otherwise its error is that of §4 (≈ 0.28 in
-//!   screen y at φ = 20°, θ = (π − α)/2 with a 43° lens). Default screen y's are 0.
+//!   two-shots of equal-height actors, any θ); otherwise it lands off by the roll-free error
+//!   (≈ 0.28 in screen y at φ = 20°, θ = (π − α)/2 with a 43° lens). Default screen y's are 0.
 //! - **Default screens** follow the side: when no screen x is given and the profile puts the
 //!   camera across the line of action, the defaults swap (A right, B left) so a roll-free
 //!   camera can show them; explicit screens that a roll-free camera cannot show from the
@@ -93,7 +94,7 @@ pub struct OneVisual {
     pub actor: usize,
     /// From the band centre to the camera (horizontal for a fixed-pitch camera).
     pub distance_m: f64,
-    /// θ, relative to the actor's facing, counter-clockwise (psl.md §3), in (−π, π].
+    /// θ, relative to the actor's facing, counter-clockwise, in (−π, π].
     pub azimuth_rad: f64,
     /// φ, the requested camera-angle elevation (not rendered by a fixed-pitch camera).
     pub elevation_rad: f64,
@@ -280,9 +281,9 @@ fn fixed_pitch(gimbal: &Gimbal) -> bool {
     matches!(gimbal, Gimbal::None)
 }
 
-/// Distance from the band centre that frames a band of half height `half_m` with its centre
-/// at `screen`: the exact variant of §1 for a gimbal camera at `elevation_rad`; for a
-/// fixed-pitch camera the horizontal distance `h·Sy·√(1 + x'²)`.
+/// Distance from the band centre that frames a band of half height `half_m` with its centre at
+/// `screen`: the exact variant of [`size::exact_distance_m`] for a gimbal camera at
+/// `elevation_rad`; for a fixed-pitch camera the horizontal distance `h·Sy·√(1 + x'²)`.
 fn band_distance_m(
     lens: &Lens,
     half_m: f64,
@@ -443,18 +444,17 @@ impl Prepared {
         self.solve_near(comp, actors, lens, gimbal, None, 0.0)
     }
 
-    /// [`Prepared::solve`] for a framing held tick after tick, `near` the visual it was
-    /// solved at last. An over-the-shoulder has up to two cameras that frame the background
-    /// actor at its size, and the solve keeps the one nearer the profile written; as live
-    /// actors move, the two can come to frame it equally badly, and the choice then flipped
-    /// from one to the other, across the stage in one tick (2.1 m, a target at 2,100 m/s,
-    /// found by flying random scripts through `dronecine emulate`). With `near`, the root
-    /// nearer the last solve is kept while the other frames the profile less than
-    /// [`BRANCH_KEEP_RAD`] better. And of the two, one whose camera comes within `clear_m` of
-    /// an actor's body axis is not chosen while the other is clear (a foreground actor walking
-    /// toward the other brings one camera onto their own shoulder: 0.00 m from them, the
-    /// other 2 m away framing the profile as well). Without `near` and with `clear_m` 0, or
-    /// for other compositions, as `solve`.
+    /// [`Prepared::solve`] for a framing held tick after tick, `near` the visual it was solved
+    /// at last. An over-the-shoulder has up to two cameras that frame the background actor at
+    /// its size, and the solve keeps the one nearer the profile written; as live actors move,
+    /// the two can come to frame it equally badly, and a choice made afresh would then flip
+    /// from one to the other, across the stage in one tick. With `near`, the root nearer the
+    /// last solve is kept while the other frames the profile less than [`BRANCH_KEEP_RAD`]
+    /// better. And of the two, one whose camera comes within `clear_m` of an actor's body axis
+    /// is not chosen while the other is clear (a foreground actor walking toward the other
+    /// brings one camera onto their own shoulder: 0.00 m from them, the other 2 m away framing
+    /// the profile as well). Without `near` and with `clear_m` 0, or for other compositions, as
+    /// `solve`.
     pub fn solve_near(
         &self,
         comp: &Composition,
@@ -698,8 +698,9 @@ impl Pair {
     }
 
     /// Refine θ so the sized actor's distance uses the camera's actual elevation seen from
-    /// that actor (the exact variant of §1 depends on it; φ turns about AB, so the elevation
-    /// is not φ): a few fixed-point steps, each keeping the root nearest the previous θ.
+    /// that actor (the exact variant of the size distance depends on it; φ turns about AB,
+    /// so the elevation is not φ): a few fixed-point steps, each keeping the root nearest
+    /// the previous θ.
     fn refine_theta(&self, lens: &Lens, theta: f64, phi: f64, sized: Primary) -> f64 {
         if self.level {
             return theta;
@@ -756,15 +757,14 @@ impl Pair {
 /// first's (radians of θ).
 const TIE_MARGIN_RAD: f64 = 0.02;
 
-/// A two-shot: a camera on the toric surface of the screen points where the nearer actor is
-/// at the size (psl.md), at the elevation. Of the up to four such θ, the one nearest the
-/// symmetric θ = π − α; held tick after tick (`near_theta_rad`, the last solve's θ), the one
-/// nearest the last. Unheld, as actors walk, another root came to be nearer the symmetric θ
-/// and the camera crossed the arc: in 3,000 random 4 s walks of two actors, 575 ticks moved
-/// it 0.3–10 m at once; held, 112. Those left are the nearer actor changing (at θ = π − α)
-/// between actors whose sizes are at different distances (different heights): the size
-/// moves to the other actor, and its distance with it. The profile-vantage two-shot has one
-/// camera, and no choice to hold.
+/// A two-shot: a camera on the toric surface of the screen points where the nearer actor is at
+/// the size, at the elevation. Of the up to four such θ, the one nearest the symmetric
+/// θ = π − α; held tick after tick (`near_theta_rad`, the last solve's θ), the one nearest the
+/// last: unheld, as actors walk, another root would come to be nearer the symmetric θ and the
+/// camera would cross the arc at once. A held two-shot still jumps when the nearer actor
+/// changes (at θ = π − α) between actors whose sizes are at different distances (different
+/// heights): the size moves to the other actor, and its distance with it. The profile-vantage
+/// two-shot has one camera, and no choice to hold.
 fn solve_together(
     mut pair: Pair,
     sa: &Subject,
@@ -851,10 +851,10 @@ fn solve_together(
 /// be asked to be framed (its size's distance over the circle's diameter) and still be framed,
 /// from the circle's farthest point: up to this, the background actor is framed a little
 /// larger than written (by at most this factor) with both actors on their screen points,
-/// instead of the composition failing. The scene's reverse shot is written at the edge of reach
-/// (distance 1.0000 of the diameter against its blocking); against the live actors, who stand
-/// a few centimetres closer at moments, it was out of reach by up to 10% (30 seeds of
-/// `scene.psl`), so 27 of 30 flights held the camera, unframed, for part of the shot.
+/// instead of the composition failing. A shot written at the edge of reach against its
+/// blocking (as `scene.psl`'s reverse shot is) comes out of reach against live actors, who
+/// stand a few centimetres closer at moments; without this allowance the drone would hold the
+/// camera, unframed, for part of the shot.
 pub const OVER_SHOULDER_REACH: f64 = 1.15;
 
 /// How much nearer its profile (radians) the other root of an over-the-shoulder must frame
@@ -1144,8 +1144,8 @@ pub fn position_m(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal
 /// toric blend's yaw about each of the two actors — goes the short way round on the move's
 /// first tick ([`BlendWay::default`]) and from then on the way nearest the last tick's
 /// ([`toric::nearest_turn_rad`]). When an end swings through the opposite side (an actor
-/// turning round during the move), the short way changes side: the camera's target crossed
-/// the actors in one tick (2.4 m), which no drone flies. The director keeps one per move.
+/// turning round during the move), the short way changes side, and the camera's target would
+/// cross the actors in one tick, which no drone flies. The director keeps one per move.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BlendWay {
     /// The cylindrical blend's turn about the actors' centroid.
@@ -1515,10 +1515,10 @@ pub fn swap_pair(t: &TwoVisual) -> TwoVisual {
 }
 
 /// The position of a blend of two two-actor visuals of the same pair (in either order): the
-/// §3 toric interpolation against the current poses, about the aim points of the interpolated
-/// bands (the midpoint of the two candidates is used as is: it is near, not on, the torus of
-/// the interpolated α, and never collapses onto an actor the way a projection onto the torus
-/// does when the move crosses the line of action). `None` for any other blend.
+/// toric interpolation ([`toric::interpolate`]) against the current poses, about the aim points
+/// of the interpolated bands (the midpoint of the two candidates is used as is: it is near, not
+/// on, the torus of the interpolated α, and never collapses onto an actor the way a projection
+/// onto the torus does when the move crosses the line of action). `None` for any other blend.
 fn toric_blend_position(
     from: &Visual,
     to: &Visual,
@@ -1560,7 +1560,7 @@ fn toric_blend_position(
 /// - Same single actor: linear in distance, band, elevation and screen, azimuth the short way
 ///   round (wrapped).
 /// - Otherwise a [`Visual::Blend`], evaluated by [`place`] against the current poses:
-///   - two visuals of the same pair (in either order): the position is the §3 toric
+///   - two visuals of the same pair (in either order): the position is the toric
 ///     interpolation (per-actor yaw/elevation/distance, pulled toward the torus of the linearly
 ///     interpolated α, midpoint of the two candidates), about the aim points of the linearly
 ///     interpolated bands;
@@ -1817,9 +1817,9 @@ pub fn two_shot_theta_rate(
 }
 
 /// Feed-forward velocity of [`place`]'s position for a held visual while the actors move with
-/// their velocities and turn rates: the §2 formula (`Ṗ + d·∂û/∂θ·ḣ`) for one actor, the exact
-/// derivative of the placement (central difference of the smooth map, actors extrapolated
-/// ±1 ms) otherwise.
+/// their velocities and turn rates: the sphere's formula (`Ṗ + d·∂û/∂θ·ḣ`,
+/// [`sphere::velocity`]) for one actor, the exact derivative of the placement (central
+/// difference of the smooth map, actors extrapolated ±1 ms) otherwise.
 pub fn velocity_mps(v: &Visual, actors: &[ActorPose], lens: &Lens, gimbal: &Gimbal) -> Vec3 {
     if !valid_indices(v, actors.len()) {
         return Vec3::zeros();

@@ -37,14 +37,35 @@ const MIN_TURN_FOR_LONG_WAY_RAD: f64 = 0.5;
 const CHECKS: usize = 64;
 /// Intrusions (into an actor's safety distance or through a wall) up to this count as clear: the
 /// steering's containment and separation push the camera back from a route that only grazes
-/// them (the short arcs of `shots/scene.psl` come 0.021 m into a wall or an actor's distance and are
-/// flown clear of both). A deeper intrusion is flown as is only when no other route is clearer.
+/// them (the short arcs of `shots/scene.psl` graze a wall or an actor's distance by a couple
+/// of centimetres and are flown clear of both). A deeper intrusion is flown as is only when no
+/// other route is clearer.
 const TOLERANCE_M: f64 = 0.1;
 /// The same for an actor's safety distance, where separation pushes back less than containment does
-/// from a wall: a straight flight that came 0.09 m into a walking actor's distance (counted
-/// clear at 0.1 m) was flown 0.43 m from them, where the profile keeps 0.50 m, and compile
-/// refused the script (random script 2145). The arcs of `shots/scene.psl` graze 0.021 m.
+/// from a wall: a flight that comes nearly [`TOLERANCE_M`] into a walking actor's distance is
+/// flown well inside it, and the arcs of `shots/scene.psl`, which graze it by a couple of
+/// centimetres, stay clear.
 const ACTOR_TOLERANCE_M: f64 = 0.03;
+
+/// Points at which a route's length is measured: its arcs' lengths to a fraction of a
+/// percent.
+const LENGTH_SAMPLES: usize = 32;
+/// The share of the profile's limits a route's duration is fitted under
+/// ([`Route::fit_duration`]): the rest is left for the steering to follow a moving framing.
+pub const FIT_SHARE: f64 = 0.8;
+/// How many times [`Route::fit_duration`] stretches a duration to fit: one stretch fits a
+/// flight that arrives at rest; a merge's offset changes with the duration, and the next
+/// stretches take that up.
+const FIT_ROUNDS: usize = 4;
+/// Each stretch of a duration to fit is this much longer than the excess asks, so that the
+/// next measure fits rather than falls just short.
+const FIT_STRETCH: f64 = 1.02;
+/// A merge's τ is at least this many times the time the profile's acceleration takes to
+/// reach the framing's speed: the merge's peak acceleration, 3.93·speed/τ, then stays within
+/// half the profile's.
+const MERGE_TAU_FACTOR: f64 = 7.9;
+/// The shortest merge: a framing that moves slowly is merged into gently all the same.
+const MERGE_TAU_MIN_S: f64 = 1.0;
 
 /// The shape of a repositioning flight.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,10 +99,9 @@ impl Route {
     /// last tick), and the turn it went. An arc's turn is taken the short (or long) way
     /// afresh at each point: an end near the far side of the pivot from `a` (a cut from
     /// behind an actor to their front) crosses from one way to the other with the noise of
-    /// the measured poses, and the target jumped from one side of the actor to the other
-    /// and back (the camera, between the two, went through the actor: 0.008 m from their
-    /// body's axis on set). `None` when the route does not turn (straight, or an end on the
-    /// pivot's vertical).
+    /// the measured poses, and the target would jump from one side of the actor to the other
+    /// and back, taking the camera, between the two, through the actor. `None` when the route
+    /// does not turn (straight, or an end on the pivot's vertical).
     pub fn at_turning(&self, a: &Vec3, b: &Vec3, s: f64, near: Option<f64>) -> (Vec3, Option<f64>) {
         if let Route::Around { pivot: c, long_way } = self {
             let (ra, ta, za) = cylindrical(a, c);
@@ -119,8 +139,8 @@ impl Route {
     pub fn length(&self, a: &Vec3, b: &Vec3) -> f64 {
         let mut len = 0.0;
         let mut prev = *a;
-        for k in 1..=32 {
-            let p = self.at(a, b, k as f64 / 32.0);
+        for k in 1..=LENGTH_SAMPLES {
+            let p = self.at(a, b, k as f64 / LENGTH_SAMPLES as f64);
             len += (p - prev).norm();
             prev = p;
         }
@@ -128,7 +148,8 @@ impl Route {
     }
 
     /// The shortest duration, from `t0` up, for which the minimum-jerk flight along the
-    /// route keeps its speed and acceleration (centripetal included) under 80% of the limits.
+    /// route keeps its speed and acceleration (centripetal included) under [`FIT_SHARE`] of
+    /// the limits.
     pub fn fit_duration(&self, a: &Vec3, b: &Vec3, t0: f64, limits: &SteerLimits) -> f64 {
         self.fit_duration_arriving(a, b, &Vec3::zeros(), t0, limits)
     }
@@ -143,10 +164,11 @@ impl Route {
         t0: f64,
         limits: &SteerLimits,
     ) -> f64 {
+        /// Steps of the flight's time at which its speed and acceleration are measured.
         const N: usize = 64;
         let speed = arrive_v.norm();
         let mut t = t0;
-        for _ in 0..4 {
+        for _ in 0..FIT_ROUNDS {
             let n = N as i64;
             let h = t / n as f64;
             // Before the start at rest; after the end moving on at `arrive_v`.
@@ -173,13 +195,13 @@ impl Route {
                 vz_max = vz_max.max(v.z.abs());
                 a_max = a_max.max(dronecine_math::norm_xy(acc.x, acc.y));
             }
-            let scale = (v_max / (0.8 * limits.speed_h_mps))
-                .max(vz_max / (0.8 * limits.speed_v_mps))
-                .max((a_max / (0.8 * limits.accel_h_mps2)).sqrt());
+            let scale = (v_max / (FIT_SHARE * limits.speed_h_mps))
+                .max(vz_max / (FIT_SHARE * limits.speed_v_mps))
+                .max((a_max / (FIT_SHARE * limits.accel_h_mps2)).sqrt());
             if scale <= 1.0 {
                 break;
             }
-            t *= scale * 1.02;
+            t *= scale * FIT_STRETCH;
         }
         t
     }
@@ -195,8 +217,8 @@ impl Route {
 /// least 1 s, at most the flight) is long enough that the merge's own acceleration,
 /// 3.93·speed/τ at most, stays within half the profile's.
 pub fn merge_m_per_mps(u: f64, duration_s: f64, speed_mps: f64, limits: &SteerLimits) -> f64 {
-    let tau_s = (7.9 * speed_mps / limits.accel_h_mps2)
-        .max(1.0)
+    let tau_s = (MERGE_TAU_FACTOR * speed_mps / limits.accel_h_mps2)
+        .max(MERGE_TAU_MIN_S)
         .min(duration_s);
     if tau_s <= 0.0 {
         return 0.0;
@@ -233,8 +255,7 @@ pub struct Keepout<'a> {
 /// The merge of a flight that arrives on a moving framing (see [`merge_m_per_mps`]): on the
 /// way, the drone flies its route plus `arrive_v · merge(u)`, an offset that falls behind
 /// along the framing's velocity by up to 0.2·τ·speed (metres, for a framing that moves fast:
-/// random script 2378's flight, planned clear on its route alone, swung 0.19 m into an
-/// actor's distance).
+/// a flight planned clear on its route alone can swing into an actor's distance).
 #[derive(Clone, Copy, Debug)]
 pub struct Merge<'a> {
     /// The framing's velocity on arrival.
@@ -502,8 +523,8 @@ mod tests {
     /// One measure of an actor's distance, the segment from their feet to the top of their
     /// head: the routes, the monitor (both [`body_intrusion_m`]) and the steering's
     /// separation agree with `framing::body_axis_distance_m`, above the head's corner too
-    /// (where the flat-topped cylinder they used before reached 0.5 m above the head at
-    /// any horizontal distance under 0.5 m).
+    /// (where a flat-topped cylinder would reach 0.5 m above the head at any horizontal
+    /// distance under 0.5 m).
     #[test]
     fn an_actors_distance_is_measured_one_way() {
         use crate::framing::body_axis_distance_m;
@@ -518,7 +539,7 @@ mod tests {
             (0.3, -0.5, true),  // beside the body
             (0.6, -0.5, false), // beside, clear
             (0.3, 0.3, true),   // over the head's corner: 0.42 m
-            (0.4, 0.45, false), // over the corner: 0.60 m (inside the old cylinder)
+            (0.4, 0.45, false), // over the corner: 0.60 m (inside a flat-topped cylinder)
             (0.0, 0.45, true),  // right over the head
         ] {
             let p = Vec3::new(1.0 + out_m, -1.0, top + up_m);
@@ -681,9 +702,8 @@ mod tests {
     /// From 0.63 m in front of an actor to 0.68 m behind their shoulder, the pivot between
     /// them and a second actor 2 m away (the over-the-shoulder shot after a close single in
     /// `shots/scene.psl`, rewritten `MS … MS …`): the straight line and both arcs round the
-    /// pivot cut into the actor's distance (they came 0.16 m into it, and compile refused the
-    /// script with a help to "move the path away from the actors", which a director cannot
-    /// do). Round the actor, the flight keeps clear.
+    /// pivot cut into the actor's distance, which a director cannot fix by moving a path.
+    /// Round the actor, the flight keeps clear.
     #[test]
     fn round_the_actor_in_the_way() {
         let (lo, hi) = stage();
@@ -760,8 +780,8 @@ mod tests {
 
     /// A route that grazes a wall by less than `TOLERANCE_M` is clear (containment pushes
     /// the camera back); one that comes as far into an actor's distance is not (separation
-    /// pushed back less: flown, such a route came within 0.43 m of an actor where the profile
-    /// keeps 0.50 m).
+    /// pushes back less: flown, such a route comes well inside the distance the profile
+    /// keeps).
     #[test]
     fn an_actor_is_grazed_less_than_a_wall() {
         // The short arc round the origin from -30° to +30° at 2 m: its middle, (2, 0), bulges

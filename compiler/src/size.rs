@@ -1,4 +1,4 @@
-//! Shot size → framed band → camera distance (camera-math.md §1).
+//! Shot size → framed band → camera distance.
 //!
 //! A shot size names a vertical band of the actor's body (as fractions of stature H) that the
 //! frame height shows. The camera distance follows from the lens: centred and level,
@@ -77,7 +77,7 @@ pub fn bisector_point(camera_m: &Vec3, top_m: &Vec3, bottom_m: &Vec3) -> Vec3 {
     (top_m * cb + bottom_m * ct) / (ct + cb)
 }
 
-/// Exact variant of §1: distance `d` along a unit direction of elevation `asin(sin_elevation)`
+/// The exact variant: distance `d` along a unit direction of elevation `asin(sin_elevation)`
 /// from the band centre at which a vertical band of half height `half_band_m` subtends
 /// `band_angle_rad`. With `s = sin(elevation)`, `c = cos²α` and `D = d²`:
 /// `(1 − c)·D² − 2h²(1 + c − 2c·s²)·D + (1 − c)·h⁴ = 0`; the roots multiply to h⁴ and the one

@@ -1,20 +1,20 @@
-//! One actor: the sphere manifold (camera-math.md §2).
+//! One actor: the sphere manifold.
 //!
 //! `C = P + d·û`, `û = cos φ (cos θ f̂ + sin θ l̂) + sin φ ẑ`, with P the aim point (centre of
 //! the framed band), f̂ = (cos h, sin h, 0) the actor's facing, `l̂ = ẑ × f̂` the actor's left,
-//! θ the profile azimuth (psl.md §3: counter-clockwise toward the actor's left, front 0) and φ
-//! the elevation (camera angle, [`elevation_rad`]). Since `cos θ f̂ + sin θ l̂` is the
-//! horizontal unit vector at angle `h + θ`, the sphere direction depends on h and θ only
-//! through their sum: an actor who turns swings the camera round.
+//! θ the profile azimuth (counter-clockwise toward the actor's left, front 0) and φ the
+//! elevation (camera angle, [`elevation_rad`]). Since `cos θ f̂ + sin θ l̂` is the horizontal
+//! unit vector at angle `h + θ`, the sphere direction depends on h and θ only through their
+//! sum: an actor who turns swings the camera round.
 
 use crate::camera::Vec3;
 use dronecine_grammar::vocab::CameraAngle;
 use dronecine_math as math;
 use dronecine_math::wrap_angle_rad;
 
-/// Elevation of `high angle` (project convention, camera-math §2).
+/// Elevation of `high angle` (project convention).
 pub const HIGH_ANGLE_ELEVATION_RAD: f64 = 20.0 * std::f64::consts::PI / 180.0;
-/// Elevation of `low angle` (project convention, camera-math §2).
+/// Elevation of `low angle` (project convention).
 pub const LOW_ANGLE_ELEVATION_RAD: f64 = -15.0 * std::f64::consts::PI / 180.0;
 /// Elevation of `eye level`.
 pub const EYE_LEVEL_ELEVATION_RAD: f64 = 0.0;
@@ -90,8 +90,8 @@ pub struct Rates {
     pub elevation_rate_radps: f64,
 }
 
-/// Camera velocity `Ċ = Ṗ + ḋ·û + d·(∂û/∂θ·(θ̇ + ḣ) + ∂û/∂φ·φ̇)` (camera-math §2). The actor
-/// terms Ṗ and ḣ are the feed-forward that keeps the camera with a walking or turning actor.
+/// Camera velocity `Ċ = Ṗ + ḋ·û + d·(∂û/∂θ·(θ̇ + ḣ) + ∂û/∂φ·φ̇)`. The actor terms Ṗ and ḣ are
+/// the feed-forward that keeps the camera with a walking or turning actor.
 pub fn velocity(facing_rad: f64, s: &Spherical, r: &Rates) -> Vec3 {
     let u = direction(facing_rad, s.azimuth_rad, s.elevation_rad);
     let du_dt = d_direction_d_azimuth(facing_rad, s.azimuth_rad, s.elevation_rad);

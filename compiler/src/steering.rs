@@ -1,5 +1,5 @@
-//! Steering behaviours (camera-math §5): the camera is a point mass pushed toward its manifold
-//! target, within the profile's limits, kept inside the stage and away from the actors.
+//! Steering behaviours: the camera is a point mass pushed toward its manifold target, within
+//! the profile's limits, kept inside the stage and away from the actors.
 //!
 //! The state is position, velocity and acceleration; each tick chooses a jerk (bounded) and
 //! integrates it exactly, so velocity and acceleration are the derivatives of position by
@@ -53,8 +53,8 @@ pub struct SteerGains {
 impl Default for SteerGains {
     fn default() -> SteerGains {
         // Unsaturated, the loop is p̈ = k_v·(k_p·e − ṗ): ω² = k_p·k_v, ζ = √(k_v/k_p)/2 ≈ 1.2.
-        // Chosen by sweeping step responses under the ardrone2 limits (no overshoot from
-        // 0.3 m to 6 m steps with the jerk limit on).
+        // With these, under the ardrone2 limits and the jerk limit on, steps from 0.3 m to
+        // 6 m arrive without overshoot.
         SteerGains {
             k_p: 1.0,
             k_v: 6.0,
@@ -126,7 +126,7 @@ impl Bodies<'_> {
 /// inward, are dropped. Bodies are taken in turn, twice, so that a goal between two actors
 /// standing close settles outside both where it can.
 pub fn kept_clear(mut goal: Kinematics, bodies: Bodies) -> Kinematics {
-    for _ in 0..2 {
+    for _ in 0..CLEAR_PASSES {
         let mut moved = false;
         for b in bodies.axes {
             let axis = b.nearest_m(&goal.p);
@@ -155,6 +155,10 @@ pub fn kept_clear(mut goal: Kinematics, bodies: Bodies) -> Kinematics {
     }
     goal
 }
+
+/// How many times [`kept_clear`] takes the bodies in turn: a goal pushed out of one actor's
+/// distance into another's is pushed out of that one on the second pass.
+const CLEAR_PASSES: usize = 2;
 
 /// Heading and its rate.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -191,11 +195,15 @@ pub const MAX_STEP_S: f64 = 0.01;
 /// longer than [`MAX_STEP_S`]).
 const MAX_SUBSTEPS: usize = 1000;
 
+/// The share by which a tick may exceed a whole number of [`MAX_STEP_S`] and still take no
+/// more steps: a rate's period rounded to a float is a little longer than its true value.
+const PERIOD_ALLOWANCE: f64 = 1e-6;
+
 /// How many equal steps of at most [`MAX_STEP_S`] integrate a tick of `dt_s` (1 for a tick
 /// of 10 ms or less, with a part-per-million allowance for a rate's rounded period, and for
 /// a time step that is not a positive number).
 pub fn substeps(dt_s: f64) -> usize {
-    let n = (dt_s / MAX_STEP_S * (1.0 - 1e-6)).ceil();
+    let n = (dt_s / MAX_STEP_S * (1.0 - PERIOD_ALLOWANCE)).ceil();
     if n.is_finite() && n > 1.0 {
         (n as usize).min(MAX_SUBSTEPS)
     } else {
@@ -235,8 +243,8 @@ pub fn step(
     // Arrival: the closing speed falls linearly near the target and never exceeds what
     // the camera can still brake from (√(2·a·d), with a margin for the jerk ramp).
     // The target is where the camera should be at the end of the step: compared with where
-    // the camera is then if it keeps its acceleration (against where it is now, it was held
-    // one step's travel ahead of a moving target: 1.4 cm at 1.4 m/s at 100 Hz).
+    // the camera is then if it keeps its acceleration (compared with where it is now, the
+    // camera would be held one step's travel ahead of a moving target).
     let (dt2, dt3) = (dt_s * dt_s, dt_s * dt_s * dt_s);
     let e = target.p - (state.p + state.v * dt_s + state.a * (dt2 / 2.0));
     let d = e.norm();
@@ -252,16 +260,15 @@ pub fn step(
     // jerk: steering on it instead of on v keeps a jerk-limited camera from overshooting.
     // Relative to the target's acceleration, so that a camera on a target that speeds up or
     // slows down is steered on its own velocity, and stays on the target: predicted to zero
-    // acceleration, it was held a·|a|/(2·jerk·k_p) behind a target speeding up and as far
-    // ahead of one slowing down (0.06 m at 0.8 m/s², which took a flight to a close-up
-    // 0.04 m past its framing, into the actor's distance).
+    // acceleration, it would be held a·|a|/(2·jerk·k_p) behind a target speeding up and as
+    // far ahead of one slowing down, enough to take a flight to a close-up past its framing,
+    // into the actor's distance.
     // The target's acceleration is taken as it trends (against live actors, the tick's own
     // is mostly their motion capture's noise differentiated twice, which the prediction's
-    // square would rectify: `two-actors.psl` flown at 200 Hz, where every other tick has no
-    // new frame, measured a framing error of 0.027 against 0.017 at 100 Hz), toward a wall
-    // as the walls allow, and as far as the camera can follow it (a target that jumps or
-    // sweeps faster than the drone can fly must not make the camera predict itself tens of
-    // metres a second slow).
+    // square would rectify, the more so at rates where some ticks have no new frame),
+    // toward a wall as the walls allow, and as far as the camera can follow it (a target
+    // that jumps or sweeps faster than the drone can fly must not make the camera predict
+    // itself tens of metres a second slow).
     for i in 0..3 {
         if capped[i] {
             trend[i] = a_ff[i];
@@ -287,10 +294,9 @@ pub fn step(
 /// desired velocity `want` was capped at the speed limits (to `des`): without the part that
 /// would speed the camera up beyond them, along the capped horizontal velocity and on a capped
 /// vertical one. The velocity loop balances a fed-forward acceleration with a velocity error
-/// of `a/k_v`: a camera chasing a target that sped up past the limit (a repositioning
-/// flight re-planned against live actors, 0.7 m/s²) ran 4 % over it, 1.92 m/s where
-/// `ardrone2` flies 1.84. The rest of the acceleration (the turn of a curving target) is
-/// kept.
+/// of `a/k_v`: a camera chasing a target that speeds up past the limit (a repositioning
+/// flight re-planned against live actors) would run over the limit by that much. The rest
+/// of the acceleration (the turn of a curving target) is kept.
 pub fn at_speed_limit(want: &Vec3, des: &Vec3, mut a: Vec3, trend: &mut Vec3) -> Vec3 {
     let (h_want, h_des) = (
         dronecine_math::norm_xy(want.x, want.y),
@@ -332,14 +338,13 @@ fn axis_accel_mps2(limits: &SteerLimits, i: usize) -> f64 {
 
 /// The desired velocity `v` and the target's acceleration `a` (the feed-forward) near the
 /// faces of the box `walls` (`[lo, hi]`): the speed toward each face is capped at what the
-/// camera can still brake from before it (the arrival law's `√(2·0.4·a·d)`, `d` the
+/// camera can still brake from before it (the arrival law's `√(2·BRAKE_SHARE·a·d)`, `d` the
 /// distance to that face; zero on or beyond it), and where the cap binds, the target's
 /// acceleration toward that face is dropped; the third value marks the axes where it binds.
 /// Arrival brakes on the distance to the target, which along a wall can be metres while the
 /// wall is centimetres away, and follows the target's acceleration wherever it goes: a camera
-/// chasing a target that slides toward the stage's margin at 0.7 m/s and stops there
-/// (`scene.psl`'s reverse shot, seeds 4 and 12) reached the margin at 0.8 m/s and coasted
-/// out of the stage.
+/// chasing a target that slides toward the stage's margin and stops there would reach the
+/// margin at speed and coast out of the stage.
 pub fn brake_for_walls(
     mut v: Vec3,
     mut a: Vec3,
@@ -377,9 +382,9 @@ pub fn brake_for_walls(
 /// rushed at the face, or the camera's own momentum), at least the deceleration that stops it
 /// before the face, the jerk ramp's distance allowed for; those axes are marked braking. The
 /// cap's law alone brakes in proportion to how far over the cap the camera is, which near
-/// the face is little: a camera coming at the margin at 1.9 m/s (a repositioning flight
-/// whose end the director held on the margin) ran 0.25 m into it, and the drone, a few
-/// centimetres behind its reference, out of the stage.
+/// the face is little: a camera coming fast at the margin (a repositioning flight whose end
+/// the director holds on the margin) would run into it, and the drone, a few centimetres
+/// behind its reference, out of the stage.
 fn stop_before_walls(
     mut a: Vec3,
     mut capped: [bool; 3],
@@ -403,7 +408,7 @@ fn stop_before_walls(
         // While the deceleration ramps up at the jerk limit, the camera goes on at about its
         // speed for half the ramp.
         let ramp_m = speed * accel / (2.0 * limits.jerk_mps3);
-        let need = speed * speed / (2.0 * (room - ramp_m).max(1e-3));
+        let need = speed * speed / (2.0 * (room - ramp_m).max(MIN_ROOM_M));
         if need > BRAKE_SHARE * accel {
             a[i] = if sign > 0.0 {
                 a[i].min(-need)
@@ -415,6 +420,10 @@ fn stop_before_walls(
     }
     (a, capped)
 }
+
+/// The least room a camera is taken to have before a wall when it brakes: on the face or past
+/// it, the deceleration asked is large but finite.
+const MIN_ROOM_M: f64 = 1e-3;
 
 /// The most acceleration the camera has along the unit vector `n` within its horizontal
 /// and vertical limits.
@@ -437,8 +446,8 @@ fn accel_along_mps2(n: &Vec3, limits: &SteerLimits) -> f64 {
 /// actor's distance (`bodies.clear_m` from the body's axis): relative to the body, it
 /// moves out at `k_p` times its depth at least, and the target's acceleration inward is
 /// dropped; along the body it goes on as the arrival law wants. A camera whose goal lies
-/// across an actor otherwise sat where the separation's push balanced the arrival's pull,
-/// inside the distance (0.40 m from A on random script 3015, sliding round them).
+/// across an actor would otherwise sit where the separation's push balances the arrival's
+/// pull, inside the distance.
 fn out_of_bodies(
     mut v: Vec3,
     mut a: Vec3,
@@ -479,21 +488,19 @@ fn out_of_bodies(
 /// Called on an acceleration already within the limits.
 ///
 /// The course matters: judged on the straight line, or braking without an exact stopping
-/// distance, a camera following a framing that curves away or slows by itself was held
-/// back (0.13 m behind `scene.psl`'s shot 2, compiled, whose framing heads for Bob at
-/// 0.9 m/s and stops 0.66 m from him; 0.15 m behind a crane swinging past an actor at 2 m/s,
-/// random script 3049). The director holds its goal outside the distance; without this the
+/// distance, a camera following a framing that curves away or slows by itself (one that
+/// heads for an actor and stops short of them, a crane swinging past an actor) would be held
+/// back behind it. The director holds its goal outside the distance; without this the
 /// camera, a jerk-limited point mass chasing a framing that stops where an actor's distance
-/// holds it, ran on past the goal: `scene.psl`'s shot 2 on set (seed 9) took the reference
-/// 0.18 m inside Bob's distance.
+/// holds it, would run on past the goal, into the actor's distance.
 fn stop_before_bodies(a: Vec3, state: &Kinematics, bodies: Bodies, limits: &SteerLimits) -> Vec3 {
     let jerk = limits.jerk_mps3;
     // The most the camera can brake with along any line (for the quick test below).
     let most = limits.accel_h_mps2.max(limits.accel_v_mps2);
     let least_brake = BRAKE_SHARE * limits.accel_h_mps2.min(limits.accel_v_mps2);
     // Each body's brake, outward, summed: a camera squeezed between two actors brakes for
-    // both (braking for the second alone undid the first's: random script 2331 went on
-    // between two actors 0.56 m apart, to 0.17 m from one).
+    // both (braking for the second alone would undo the first's, and the camera would go on
+    // between them).
     let mut brakes = Vec3::zeros();
     for b in bodies.axes {
         let out = state.p - b.nearest_m(&state.p);
@@ -535,7 +542,7 @@ fn stop_before_bodies(a: Vec3, state: &Kinematics, bodies: Bodies, limits: &Stee
             accel
         } else {
             let (mut lo, mut hi) = (brake, accel);
-            for _ in 0..12 {
+            for _ in 0..BRAKE_BISECTIONS {
                 let mid = (lo + hi) / 2.0;
                 if stopping_m(speed, speeding_up, mid, jerk) >= room_m {
                     lo = mid;
@@ -582,10 +589,15 @@ fn stopping_m(speed: f64, speeding_up: f64, brake: f64, jerk: f64) -> f64 {
 /// How many points of its course [`stop_before_bodies`] checks against a body.
 const COURSE_POINTS: usize = 8;
 
+/// How many halvings [`stop_before_bodies`] searches the deceleration that stops a camera at
+/// an actor's distance in: to a 4096th of the range between its share of the limit and the
+/// limit.
+const BRAKE_BISECTIONS: usize = 12;
+
 /// [`truncate_hv`] for an acceleration, except that when exactly one horizontal axis is
 /// braking for a wall (`capped`, from [`brake_for_walls`]) that axis has the first call on
-/// the horizontal limit and the other gets what is left. Scaling both alike let a camera
-/// speeding up along a wall brake from it at a third of its limit.
+/// the horizontal limit and the other gets what is left. Scaling both alike would let a
+/// camera speeding up along a wall brake from it at a fraction of its limit.
 fn truncate_accel(a: Vec3, capped: [bool; 3], limits: &SteerLimits) -> Vec3 {
     let h = limits.accel_h_mps2;
     let z = a.z.clamp(-limits.accel_v_mps2, limits.accel_v_mps2);
@@ -685,7 +697,7 @@ pub fn step_heading(
     dt_s: f64,
 ) -> HeadingState {
     // As for the position: against the heading at the step's end (against the one at its
-    // start, a turning target was led by one step's turn).
+    // start, a turning target would be led by one step's turn).
     let err = wrap_angle_rad(target_rad - (state.heading_rad + state.rate_radps * dt_s));
     let rate_des = (target_rate_radps + gains.k_heading * err)
         .clamp(-limits.yaw_rate_radps, limits.yaw_rate_radps);
@@ -699,7 +711,7 @@ pub fn step_heading(
     }
 }
 
-/// Separation from actors (camera-math §5): a push away from each actor's body axis (the
+/// Separation from actors: a push away from each actor's body axis (the
 /// segment from their feet to the top of their head, [`Body::nearest_m`]) when the camera
 /// is closer than `radius_m` to it, growing as `gain·(radius − d)/d` (m/s²; `gain` at
 /// d = radius/2). Beside the body it pushes level; above the head, up and out.
@@ -811,9 +823,7 @@ mod tests {
         // A camera catching up with a target that accelerates along x past an actor: at
         // 10 Hz in one step (the actor's push held for the whole step) it is more than 1.2 cm
         // off the camera stepped at 100 Hz; in sub-steps, within 6 mm (the target's
-        // acceleration steps at 2 s, which the sub-steps' goals do not see coming). Before the
-        // steering compared the target with where the camera is at the end of a step, one
-        // step at 10 Hz fell more than 5 cm behind on the same target without the actor.
+        // acceleration steps at 2 s, which the sub-steps' goals do not see coming).
         let lim = limits();
         let gains = SteerGains::default();
         let target_at = |t: f64| {
@@ -878,8 +888,8 @@ mod tests {
     fn a_target_that_outruns_the_speed_limit_is_chased_at_the_limit() {
         // A target speeding up at 0.7 m/s² along a gentle curve, past the 1.8 m/s limit (a
         // repositioning flight re-planned against live actors). Its acceleration fed forward
-        // whole held the camera over the limit (2.05 m/s where 1.8 is allowed); now only the
-        // part across its velocity is, the curve's turn.
+        // whole would hold the camera over the limit; only the part across its velocity is,
+        // the curve's turn.
         let lim = limits();
         let gains = SteerGains::default();
         let (dt, acc, w) = (0.01, 0.7, 0.05);
@@ -1048,9 +1058,8 @@ mod tests {
     }
 
     /// A camera that comes at the face fast (a repositioning flight's route whose end the
-    /// director holds on the margin, found on set: the drone left the stage) stops before it,
-    /// with the outdoor AR.Drone's limits: the cap's law alone let it run 5–11 cm past at
-    /// 1–2.5 m/s, 0.77 m at 3 m/s, while the target turned along the face.
+    /// director holds on the margin) stops before it, with the outdoor AR.Drone's limits,
+    /// while the target turns along the face: the cap's law alone would let it run past.
     #[test]
     fn a_camera_that_comes_at_a_wall_fast_stops_before_it() {
         let outdoor = SteerLimits {
@@ -1085,7 +1094,7 @@ mod tests {
         // 5 cm with these limits (a jerk of 2 m/s³; 2 cm at the AR.Drone's 5 m/s³)…
         assert!(braked < 0.06, "{braked}");
         // …where braking on the distance to the target alone (metres ahead along the wall)
-        // ran 0.42 m on.
+        // runs more than 0.3 m on.
         assert!(free > 0.3, "{free}");
         // Away from the walls nothing changes.
         let v = Vec3::new(0.9, -0.4, 0.2);
@@ -1125,8 +1134,8 @@ mod tests {
     }
 
     /// A target turning at a steady 0.8 rad/s across ±π: the camera's heading, started on
-    /// it, stays on it (compared with the heading at the step's start, it was held one step's
-    /// turn ahead, 8 mrad at 100 Hz).
+    /// it, stays on it (compared with the heading at the step's start, it would be held one
+    /// step's turn ahead).
     #[test]
     fn a_heading_on_a_steadily_turning_target_stays_on_it() {
         let lim = limits();
@@ -1248,8 +1257,9 @@ mod tests {
     }
 
     /// A framing that comes at an actor at 0.6 m/s and stops 0.3 m from them is held on
-    /// their distance, where it stops at once: the camera, a jerk-limited point mass on its
-    /// heels, ran on past it, 0.3 m into the distance, before it braked for the body.
+    /// their distance, where it stops at once, and so does the camera; without braking for the
+    /// body, the camera, a jerk-limited point mass on its heels, runs on past it into the
+    /// distance.
     #[test]
     fn a_camera_whose_goal_stops_at_an_actors_distance_stops_there_too() {
         let axes = [body(Vec3::zeros(), 1.8)];
@@ -1289,8 +1299,8 @@ mod tests {
     }
 
     /// A camera that starts inside an actor's distance with its goal across them moves out
-    /// and round them to the goal. With the separation's push alone it sat inside, where
-    /// that push balanced the arrival's pull through the actor.
+    /// and round them to the goal. With the separation's push alone it sits inside, where
+    /// that push balances the arrival's pull through the actor.
     #[test]
     fn a_camera_inside_an_actors_distance_goes_out_and_round() {
         let axes = [body(Vec3::zeros(), 1.8)];

@@ -1,5 +1,4 @@
-//! Two actors: the toric manifold of Lino & Christie (SCA 2012; ACM TOG 34(4) 2015), exactly
-//! as camera-math.md §3 states it.
+//! Two actors: the toric manifold of Lino & Christie (SCA 2012; ACM TOG 34(4) 2015).
 //!
 //! α is the angle ∠ACB under which the camera C sees the two aim points A and B (it fixes
 //! their screen positions up to a rotation of the camera); θ ∈ (0, 2(π − α)) runs along the
@@ -57,7 +56,7 @@ pub fn radius_m(ab_m: f64, alpha_rad: f64) -> f64 {
     ab_m / (2.0 * math::sin(alpha_rad))
 }
 
-/// The frame of step 2: `z = normalize(AB_y, −AB_x, 0)`, `n = normalize(A − B)`, `t = z × n`.
+/// The toric frame: `z = normalize(AB_y, −AB_x, 0)`, `n = normalize(A − B)`, `t = z × n`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
     pub z: Vec3,
@@ -97,7 +96,7 @@ fn check_alpha(alpha_rad: f64) -> Result<(), ToricError> {
     }
 }
 
-/// Camera position from (α, θ, φ), steps 1–3 of §3:
+/// Camera position from (α, θ, φ):
 /// `C = A + (|AC|/|AB|)·Rot(n, φ)·Rot(t, β)·(B − A)`, `|AC| = |AB|·sin(α + θ/2)/sin α`.
 pub fn position(a_m: &Vec3, b_m: &Vec3, v: &Toric) -> Result<Vec3, ToricError> {
     check_alpha(v.alpha_rad)?;
@@ -274,18 +273,17 @@ pub fn vantage_position(a_m: &Vec3, b_m: &Vec3, alpha_rad: f64, u: &Vec3) -> Opt
 /// distance out, so that the interpolated position stays continuous.
 pub const PULL_FADE_RAD: f64 = 0.2;
 
-/// Interpolation between two toric viewpoints `c0` (angle `alpha0_rad`) and `c1`
-/// (`alpha1_rad`) of the same actors A and B at parameter `s` ∈ [0, 1] (§3, Lino & Christie
-/// 2015): for each actor X, the yaw of C − X is interpolated the short way round (or, given
-/// `last_turns_rad` — the turn from `c0`'s yaw to `c1`'s about A and about B on the tick
-/// before —, the way nearest it: see [`nearest_turn_rad`]), its elevation and length
-/// linearly; α is linear in s; the length is then pulled toward the toric distance for the
-/// current α along that direction (fully, except within [`PULL_FADE_RAD`] of
-/// the edge of the torus, where the pull fades linearly to none so the path stays continuous;
-/// the linear length beyond the edge); the result is the midpoint of the two candidates, from
-/// A and from B. The endpoints are `c0` and `c1` exactly when they lie on
-/// their tori. Returns the position and the two turns taken (about A, about B), for the next
-/// tick's `last_turns_rad`.
+/// Interpolation between two toric viewpoints `c0` (angle `alpha0_rad`) and `c1` (`alpha1_rad`)
+/// of the same actors A and B at parameter `s` ∈ [0, 1] (Lino & Christie 2015): for each actor
+/// X, the yaw of C − X is interpolated the short way round (or, given `last_turns_rad` — the
+/// turn from `c0`'s yaw to `c1`'s about A and about B on the tick before —, the way nearest it:
+/// see [`nearest_turn_rad`]), its elevation and length linearly; α is linear in s; the length
+/// is then pulled toward the toric distance for the current α along that direction (fully,
+/// except within [`PULL_FADE_RAD`] of the edge of the torus, where the pull fades linearly to
+/// none so the path stays continuous; the linear length beyond the edge); the result is the
+/// midpoint of the two candidates, from A and from B. The endpoints are `c0` and `c1` exactly
+/// when they lie on their tori. Returns the position and the two turns taken (about A, about
+/// B), for the next tick's `last_turns_rad`.
 #[allow(clippy::too_many_arguments)]
 pub fn interpolate(
     a_m: &Vec3,
@@ -380,7 +378,7 @@ mod tests {
     }
 
     /// `position`'s closed form is `A + |AC|/|AB|·Rot(n, φ)·Rot(t, β)·(B − A)` with the
-    /// rotations as matrices (camera-math §3), over the whole (θ, φ) range and tilted pairs.
+    /// rotations as matrices, over the whole (θ, φ) range and tilted pairs.
     #[test]
     fn the_closed_form_position_is_the_two_rotations() {
         use nalgebra::{Rotation3, Unit};

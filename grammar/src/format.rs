@@ -4,7 +4,7 @@
 //! that starts a new shot after the first, actor attributes and path parameters in their
 //! documented order, `looking at` last. Numbers, names and comments are kept exactly as
 //! written; runs of blank lines shrink to one. Formatting never changes what a script means
-//! (`tests/fmt.rs` checks that the resolved script is the same) and is idempotent.
+//! (`tests/it/fmt.rs` checks that the resolved script is the same) and is idempotent.
 
 use std::fmt::Write as _;
 

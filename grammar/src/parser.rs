@@ -12,7 +12,7 @@ use pest::Parser as _;
 use dronecine_diag::{Diagnostic, Span};
 
 use crate::ast::*;
-use crate::code::internal;
+use crate::code;
 use crate::rules::{PslParser, Rule};
 use crate::syntax;
 use crate::vocab::{CameraAngle, MoveKind, Profile, ScreenThird, Size};
@@ -92,7 +92,7 @@ fn parse_line<'a>(
                 _ => match b.statement(child) {
                     Ok(st) => line.statement = Some(st),
                     Err(d) => {
-                        diagnostics.push(d);
+                        diagnostics.push(*d);
                         line.error = true;
                     }
                 },
@@ -102,7 +102,14 @@ fn parse_line<'a>(
     line
 }
 
-type Result<T> = std::result::Result<T, Diagnostic>;
+/// What the tree builder returns: the node, or the one diagnostic of its line, boxed so that
+/// the node's result stays small.
+type Result<T> = std::result::Result<T, Box<Diagnostic>>;
+
+/// [`code::internal`], boxed for the tree builder's [`Result`].
+fn internal(span: Span, what: String) -> Box<Diagnostic> {
+    Box::new(code::internal(span, what))
+}
 
 struct Builder {
     offset: usize,
@@ -121,7 +128,7 @@ impl Builder {
         }
     }
 
-    fn bug(&self, p: &Pair<'_, Rule>, what: &str) -> Diagnostic {
+    fn bug(&self, p: &Pair<'_, Rule>, what: &str) -> Box<Diagnostic> {
         internal(
             self.span(p),
             format!("the parser met {:?} where it expected {what}", p.as_rule()),

@@ -116,6 +116,21 @@ struct Pending {
     is_move: bool,
 }
 
+/// Where the shots placed so far end, and the line of the last one.
+#[derive(Clone, Copy)]
+struct Clock {
+    now_s: f64,
+    last: Option<Span>,
+}
+
+/// Where a shot goes on the clock: its start, whether that start is pinned, and how long it
+/// lasts (`None` when that is unknown or wrong, and the shot is left off the timeline).
+struct Placement {
+    start_s: f64,
+    pinned: bool,
+    duration_s: Option<f64>,
+}
+
 struct Resolver<'o, 'a> {
     opts: &'o Options<'o>,
     diags: Vec<Diagnostic>,
@@ -400,9 +415,66 @@ impl<'o, 'a> Resolver<'o, 'a> {
         let has_scene_lines = statements.iter().any(|s| !matches!(s, Statement::Timed(_)));
         let annotation = has_timed && !has_scene_lines;
 
-        // Set-up after the first shot.
+        self.setup_after_shots(&statements);
+
+        // Settings.
+        let stage = self.stage(&statements);
+        let lens = self.lens(&statements);
+        let drone = self.drone(&statements);
+
+        let (declared, actors) = self.actors(&statements, stage.as_ref());
+        self.actors_apart(&actors);
+
+        // Blocking.
+        let blocking = self.blocking(&statements, &declared, stage.as_ref());
+
+        // Timeline.
+        let mut cast: Vec<String> = actors.iter().map(|a| a.name.clone()).collect();
+        let timeline = self.timeline(
+            &statements,
+            &declared,
+            stage.as_ref(),
+            annotation,
+            &mut cast,
+        );
+
+        let duration_s = timeline.last().map(|s| s.end_s).unwrap_or(0.0);
+        if timeline.is_empty() && !any_syntax_error && !self.diags.iter().any(Diagnostic::is_error)
+        {
+            self.empty_script(&statements, &actors);
+        }
+
+        let scene = if annotation || statements.is_empty() {
+            None
+        } else {
+            match stage {
+                Some(stage) => Some(Scene {
+                    stage,
+                    lens,
+                    drone,
+                    actors,
+                    blocking,
+                }),
+                None => {
+                    self.missing_stage(&statements);
+                    None
+                }
+            }
+        };
+
+        Script {
+            scene,
+            cast,
+            timeline,
+            duration_s,
+        }
+    }
+
+    /// Report every scene set-up line (stage, lens, drone, actor) that comes after the first
+    /// shot.
+    fn setup_after_shots(&mut self, statements: &[&Statement<'_>]) {
         let mut seen_shot: Option<Span> = None;
-        for s in &statements {
+        for s in statements {
             match s {
                 Statement::Shot(sh) => {
                     seen_shot.get_or_insert(sh.span);
@@ -436,16 +508,17 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 Statement::Blocking(_) => {}
             }
         }
+    }
 
-        // Settings.
-        let stage = self.stage(&statements);
-        let lens = self.lens(&statements);
-        let drone = self.drone(&statements);
-
-        // Actors.
+    /// The actors declared (each name once, with where), and those that resolved.
+    fn actors<'s>(
+        &mut self,
+        statements: &[&'s Statement<'_>],
+        stage: Option<&Stage>,
+    ) -> (HashMap<&'s str, Span>, Vec<Actor>) {
         let mut declared: HashMap<&str, Span> = HashMap::new();
         let mut actors = Vec::new();
-        for s in &statements {
+        for s in statements {
             if let Statement::Actor(a) = s {
                 if let Some(first) = declared.get(a.name.text) {
                     self.err(
@@ -461,13 +534,16 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     continue;
                 }
                 declared.insert(a.name.text, a.name.span);
-                if let Some(actor) = self.actor(a, stage.as_ref()) {
+                if let Some(actor) = self.actor(a, stage) {
                     actors.push(actor);
                 }
             }
         }
+        (declared, actors)
+    }
 
-        // Two actors on one spot: no one stands there, and no framing can tell them apart.
+    /// Two actors on one spot: no one stands there, and no framing can tell them apart.
+    fn actors_apart(&mut self, actors: &[Actor]) {
         for (j, b) in actors.iter().enumerate() {
             let apart_m = |a: &Actor| {
                 let (dx, dy) = (
@@ -499,74 +575,31 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 );
             }
         }
+    }
 
-        // Blocking.
-        let blocking = self.blocking(&statements, &declared, stage.as_ref());
-
-        // Timeline.
-        let mut cast: Vec<String> = actors.iter().map(|a| a.name.clone()).collect();
-        let timeline = self.timeline(
-            &statements,
-            &declared,
-            stage.as_ref(),
-            annotation,
-            &mut cast,
+    /// Warn of a script without shots, where the first shot would go: after the last line.
+    fn empty_script(&mut self, statements: &[&Statement<'_>], actors: &[Actor]) {
+        let end = statements.last().map_or(0, |s| s.span().end);
+        let actor = actors.first().map_or("A", |a| a.name.as_str());
+        self.err(
+            Diagnostic::warning(
+                PslCode::EmptyScript,
+                Span::new(end, end),
+                "the script has no shots",
+            )
+            .with_help(format!("add a shot such as `MS on {actor} front for 4s`")),
         );
+    }
 
-        let duration_s = timeline.last().map(|s| s.end_s).unwrap_or(0.0);
-        if timeline.is_empty() && !any_syntax_error && !self.diags.iter().any(Diagnostic::is_error)
-        {
-            // Where the first shot would go: after the last line.
-            let end = statements.last().map_or(0, |s| s.span().end);
-            let actor = actors.first().map_or("A", |a| a.name.as_str());
+    /// Report a scene without a stage, unless its `stage` line is there and failed to parse.
+    fn missing_stage(&mut self, statements: &[&Statement<'_>]) {
+        if !self.failed_stage && !statements.iter().any(|s| matches!(s, Statement::Stage(_))) {
+            let first = statements.first().map(|s| s.span()).unwrap_or_default();
             self.err(
-                Diagnostic::warning(
-                    PslCode::EmptyScript,
-                    Span::new(end, end),
-                    "the script has no shots",
-                )
-                .with_help(format!("add a shot such as `MS on {actor} front for 4s`")),
+                Diagnostic::error(PslCode::MissingStage, first, "the scene has no stage")
+                    .with_label("a scene needs a stage before its shots")
+                    .with_help("add the flight volume above the shots, e.g. `stage 8m x 6m x 3m`"),
             );
-        }
-
-        let scene = if annotation || statements.is_empty() {
-            None
-        } else {
-            match stage {
-                Some(stage) => Some(Scene {
-                    stage,
-                    lens,
-                    drone,
-                    actors,
-                    blocking,
-                }),
-                None => {
-                    if !self.failed_stage
-                        && !statements.iter().any(|s| matches!(s, Statement::Stage(_)))
-                    {
-                        let first = statements.first().map(|s| s.span()).unwrap_or_default();
-                        self.err(
-                            Diagnostic::error(
-                                PslCode::MissingStage,
-                                first,
-                                "the scene has no stage",
-                            )
-                            .with_label("a scene needs a stage before its shots")
-                            .with_help(
-                                "add the flight volume above the shots, e.g. `stage 8m x 6m x 3m`",
-                            ),
-                        );
-                    }
-                    None
-                }
-            }
-        };
-
-        Script {
-            scene,
-            cast,
-            timeline,
-            duration_s,
         }
     }
 
@@ -959,8 +992,10 @@ impl<'o, 'a> Resolver<'o, 'a> {
         cast: &mut Vec<String>,
     ) -> Vec<Shot> {
         let mut timeline: Vec<Shot> = Vec::new();
-        let mut clock = 0.0_f64;
-        let mut prev_end_span: Option<Span> = None;
+        let mut clock = Clock {
+            now_s: 0.0,
+            last: None,
+        };
         // What a `then` continues: the previous shot's content, if it resolved.
         let mut prev: Option<(Span, Option<ShotContent>)> = None;
         let mut first_untimed: Option<Span> = None;
@@ -989,125 +1024,162 @@ impl<'o, 'a> Resolver<'o, 'a> {
             let content_ok = pending.content.is_some();
 
             // Place it on the clock.
-            let mut start = clock;
-            let mut pinned = false;
-            let mut duration = pending.duration_s;
-            if let Some(t) = timecodes {
-                if let Some(d) = body.duration() {
-                    self.err(
-                        Diagnostic::error(
-                            PslCode::DurationInTimedEntry,
-                            d.span,
-                            "a timed entry takes its duration from its timecodes",
-                        )
-                        .with_help("remove the duration, or change the timecodes"),
-                    );
-                }
-                let a = self.timecode(&t.start);
-                let b = self.timecode(&t.end);
-                if let (Some(a), Some(b)) = (a, b) {
-                    if b <= a {
-                        self.err(
-                            Diagnostic::error(
-                                PslCode::TimecodeOrder,
-                                t.start.span.to(t.end.span),
-                                format!(
-                                    "this entry ends at {} before it starts at {}",
-                                    t.end.text, t.start.text
-                                ),
-                            )
-                            .with_help(
-                                "the second timecode is the end; it must come after the first",
-                            ),
-                        );
-                        duration = None;
-                    } else {
-                        if a < clock - EPS_S {
-                            let mut d = Diagnostic::error(
-                                PslCode::TimecodeOrder,
-                                t.start.span,
-                                format!(
-                                    "this entry starts at {} while the previous one runs until {}s",
-                                    t.start.text,
-                                    fmt_num(clock)
-                                ),
-                            )
-                            .with_help(
-                                "entries must follow each other in time; fix either timecode",
-                            );
-                            if let Some(p) = prev_end_span {
-                                d = d.with_related(p, "the previous entry");
-                            }
-                            self.err(d);
-                        }
-                        start = a;
-                        pinned = true;
-                        duration = Some(b - a);
-                    }
-                } else {
-                    duration = None;
-                }
+            let placed = if let Some(t) = timecodes {
+                self.place_timed(t, body, clock)
             } else if let Some(p) = pin {
-                if let Some(at) = self.time(p, "the start time") {
-                    if at < clock - EPS_S {
-                        let mut d = Diagnostic::error(
-                            PslCode::PinnedStartOverlaps,
-                            p.span,
-                            format!(
-                                "this shot is pinned at {}s but the shots before it run until {}s",
-                                fmt_num(at),
-                                fmt_num(clock)
-                            ),
-                        )
-                        .with_label("starts too early")
-                        .with_help(format!(
-                            "pin it `at {}s` or later, or shorten the shots before it",
-                            fmt_num(clock)
-                        ));
-                        if let Some(p) = prev_end_span {
-                            d = d.with_related(p, "the previous shot");
-                        }
-                        self.err(d);
-                    } else {
-                        start = at;
-                        pinned = true;
-                    }
+                self.place_pinned(p, clock, pending.duration_s)
+            } else {
+                if body.duration().is_none() {
+                    self.missing_shot_duration(body, pending.is_move);
                 }
-            } else if body.duration().is_none() {
-                let end = body.span().end;
-                self.err(
-                    Diagnostic::error(
-                        PslCode::MissingDuration,
-                        Span::new(end, end),
-                        "this shot has no duration",
-                    )
-                    .with_label("add how long it lasts")
-                    .with_help(if pending.is_move {
-                        "end the line with `over 6s`: how long the move takes"
-                    } else {
-                        "end the line with `for 4s`: how long the shot lasts"
-                    }),
-                );
-            }
+                Placement {
+                    start_s: clock.now_s,
+                    pinned: false,
+                    duration_s: pending.duration_s,
+                }
+            };
 
-            if let Some(d) = duration {
-                let end = start + d;
+            if let Some(d) = placed.duration_s {
+                let end = placed.start_s + d;
                 if content_ok {
                     timeline.push(Shot {
-                        start_s: start,
+                        start_s: placed.start_s,
                         end_s: end,
-                        pinned,
+                        pinned: placed.pinned,
                         transition: pending.transition,
                         content: pending.content.clone().expect("checked above"),
                         span,
                     });
                 }
-                clock = end;
+                clock.now_s = end;
             }
-            prev_end_span = Some(span);
+            clock.last = Some(span);
             prev = Some((span, pending.content));
         }
         timeline
+    }
+
+    /// Place a timed (subtitle) entry on the clock by its timecodes: it starts at the first
+    /// and lasts until the second.
+    fn place_timed(
+        &mut self,
+        t: &ast::TimedEntry<'_>,
+        body: &ShotBody<'_>,
+        clock: Clock,
+    ) -> Placement {
+        let mut placed = Placement {
+            start_s: clock.now_s,
+            pinned: false,
+            duration_s: None,
+        };
+        if let Some(d) = body.duration() {
+            self.err(
+                Diagnostic::error(
+                    PslCode::DurationInTimedEntry,
+                    d.span,
+                    "a timed entry takes its duration from its timecodes",
+                )
+                .with_help("remove the duration, or change the timecodes"),
+            );
+        }
+        let a = self.timecode(&t.start);
+        let b = self.timecode(&t.end);
+        let (Some(a), Some(b)) = (a, b) else {
+            return placed;
+        };
+        if b <= a {
+            self.err(
+                Diagnostic::error(
+                    PslCode::TimecodeOrder,
+                    t.start.span.to(t.end.span),
+                    format!(
+                        "this entry ends at {} before it starts at {}",
+                        t.end.text, t.start.text
+                    ),
+                )
+                .with_help("the second timecode is the end; it must come after the first"),
+            );
+            return placed;
+        }
+        if a < clock.now_s - EPS_S {
+            let mut d = Diagnostic::error(
+                PslCode::TimecodeOrder,
+                t.start.span,
+                format!(
+                    "this entry starts at {} while the previous one runs until {}s",
+                    t.start.text,
+                    fmt_num(clock.now_s)
+                ),
+            )
+            .with_help("entries must follow each other in time; fix either timecode");
+            if let Some(p) = clock.last {
+                d = d.with_related(p, "the previous entry");
+            }
+            self.err(d);
+        }
+        placed.start_s = a;
+        placed.pinned = true;
+        placed.duration_s = Some(b - a);
+        placed
+    }
+
+    /// Place a shot pinned with `at` on the clock: at its time, unless the shots before it
+    /// run past it.
+    fn place_pinned(
+        &mut self,
+        p: &Quantity<'_>,
+        clock: Clock,
+        duration_s: Option<f64>,
+    ) -> Placement {
+        let mut placed = Placement {
+            start_s: clock.now_s,
+            pinned: false,
+            duration_s,
+        };
+        if let Some(at) = self.time(p, "the start time") {
+            if at < clock.now_s - EPS_S {
+                let mut d = Diagnostic::error(
+                    PslCode::PinnedStartOverlaps,
+                    p.span,
+                    format!(
+                        "this shot is pinned at {}s but the shots before it run until {}s",
+                        fmt_num(at),
+                        fmt_num(clock.now_s)
+                    ),
+                )
+                .with_label("starts too early")
+                .with_help(format!(
+                    "pin it `at {}s` or later, or shorten the shots before it",
+                    fmt_num(clock.now_s)
+                ));
+                if let Some(p) = clock.last {
+                    d = d.with_related(p, "the previous shot");
+                }
+                self.err(d);
+            } else {
+                placed.start_s = at;
+                placed.pinned = true;
+            }
+        }
+        placed
+    }
+
+    /// Report a shot without a duration, at the end of its line.
+    fn missing_shot_duration(&mut self, body: &ShotBody<'_>, is_move: bool) {
+        let end = body.span().end;
+        self.err(
+            Diagnostic::error(
+                PslCode::MissingDuration,
+                Span::new(end, end),
+                "this shot has no duration",
+            )
+            .with_label("add how long it lasts")
+            .with_help(if is_move {
+                "end the line with `over 6s`: how long the move takes"
+            } else {
+                "end the line with `for 4s`: how long the shot lasts"
+            }),
+        );
     }
 
     fn mixed(&mut self, span: Span, other: Span) {
@@ -1435,8 +1507,62 @@ impl<'o, 'a> Resolver<'o, 'a> {
         declared: &HashMap<&str, Span>,
         stage: Option<&Stage>,
     ) -> Option<Path> {
-        let (kind_span, kind) = (&p.kind.0, &p.kind.1);
-        let shape_name = kind.name();
+        let kind = &p.kind.1;
+        let (given, mut ok) = self.path_params(p);
+        ok &= self.unexpected_path_params(p);
+        let params = PathParams {
+            given,
+            kind_span: p.kind.0,
+            shape_name: kind.name(),
+            span: p.span,
+        };
+        let clockwise = matches!(
+            params.given.get("clockwise"),
+            Some((_, PathValue::Clockwise(true)))
+        );
+        let looking_at = match params.given.get("looking at").copied() {
+            Some((_, PathValue::LookingAt(n))) => {
+                if self.actor_ref(n, declared, false) {
+                    Some(n.text.to_string())
+                } else {
+                    ok = false;
+                    None
+                }
+            }
+            _ => None,
+        };
+
+        let shape = match kind {
+            ast::PathKind::Square => {
+                let (shape, corners_inside) = self.square(&params, stage, clockwise);
+                ok &= corners_inside;
+                shape
+            }
+            ast::PathKind::Helix => self.helix(&params, stage, clockwise),
+            ast::PathKind::Orbit => self.orbit(&params, declared, stage, clockwise),
+            ast::PathKind::Waypoints(file) => {
+                self.waypoints(file, stage)
+                    .map(|points_m| PathShape::Waypoints {
+                        file: file.text.to_string(),
+                        points_m,
+                    })
+            }
+        };
+        if !ok {
+            return None;
+        }
+        Some(Path {
+            shape: shape?,
+            looking_at,
+        })
+    }
+
+    /// A path's parameters by keyword, each given once (a second one is reported), and
+    /// whether none was given twice.
+    fn path_params<'p, 'v>(
+        &mut self,
+        p: &'p ast::PathShot<'v>,
+    ) -> (HashMap<&'static str, (Span, &'p PathValue<'v>)>, bool) {
         let mut ok = true;
         let mut given: HashMap<&'static str, (Span, &PathValue<'_>)> = HashMap::new();
         for param in &p.params {
@@ -1456,6 +1582,14 @@ impl<'o, 'a> Resolver<'o, 'a> {
             }
             given.insert(key, (param.span, &param.value));
         }
+        (given, ok)
+    }
+
+    /// Report every parameter that the path's shape does not take; whether there was none.
+    fn unexpected_path_params(&mut self, p: &ast::PathShot<'_>) -> bool {
+        let kind = &p.kind.1;
+        let shape_name = kind.name();
+        let mut ok = true;
         let accepted: &[&str] = match kind {
             ast::PathKind::Square => &["side", "center", "altitude", "clockwise", "looking at"],
             ast::PathKind::Helix => &[
@@ -1500,199 +1634,152 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 ok = false;
             }
         }
-        let need = |this: &mut Self, key: &str, example: &str| -> bool {
-            if given.contains_key(key) {
-                return true;
-            }
-            this.err(
-                Diagnostic::error(
-                    PslCode::MissingPathParameter,
-                    *kind_span,
-                    format!("a {shape_name} path needs `{key}`"),
-                )
-                .with_label(format!("`{key}` missing"))
-                .with_help(format!("add `{example}`")),
-            );
-            false
-        };
-        let length = |this: &mut Self, key: &str, what: &str, positive: bool| -> Option<f64> {
-            let Some((_, PathValue::Side(q) | PathValue::Altitude(q) | PathValue::Radius(q))) =
-                given.get(key).copied()
-            else {
-                return None;
-            };
-            let v = this.quantity(q, Dim::Length, what, false)?;
-            if positive {
-                this.range(v, q.span, what, Bounds::above(0.0, 1000.0, "m"))
-            } else {
-                Some(v)
-            }
-        };
-        let center = |this: &mut Self| -> Option<[f64; 2]> {
-            match given.get("center").copied() {
-                Some((_, PathValue::Center(pt))) => this.point(pt, "the centre"),
-                _ => Some([0.0, 0.0]),
-            }
-        };
-        let turns = |this: &mut Self| -> Option<f64> {
-            match given.get("turns").copied() {
-                Some((_, PathValue::Turns(q))) => {
-                    this.plain(q, "the number of turns").and_then(|v| {
-                        this.range(
-                            v,
-                            q.span,
-                            "the number of turns",
-                            Bounds::above(0.0, 100.0, ""),
-                        )
-                    })
+        ok
+    }
+
+    /// A square path from its side, altitude and centre, and whether its corners lie inside
+    /// the stage.
+    fn square(
+        &mut self,
+        params: &PathParams<'_, '_>,
+        stage: Option<&Stage>,
+        clockwise: bool,
+    ) -> (Option<PathShape>, bool) {
+        let has =
+            params.need(self, "side", "side 2m") & params.need(self, "altitude", "altitude 1.5m");
+        let side = params.length(self, "side", "the side", true);
+        let alt = params.length(self, "altitude", "the altitude", true);
+        let c = params.center(self);
+        let mut corners_inside = true;
+        let shape = match (has, side, alt, c) {
+            (true, Some(side), Some(alt), Some(c)) => {
+                let h = side / 2.0;
+                let corners = [[c[0] - h, c[1] - h], [c[0] + h, c[1] + h]];
+                if corners
+                    .iter()
+                    .any(|p| stage.is_some_and(|s| !s.contains_xy(*p)))
+                {
+                    self.inside(stage, corners[0], params.span, "a corner of the square");
+                    self.inside(stage, corners[1], params.span, "a corner of the square");
+                    corners_inside = false;
                 }
-                _ => Some(1.0),
-            }
-        };
-        let clockwise = matches!(
-            given.get("clockwise"),
-            Some((_, PathValue::Clockwise(true)))
-        );
-        let looking_at = match given.get("looking at").copied() {
-            Some((_, PathValue::LookingAt(n))) => {
-                if self.actor_ref(n, declared, false) {
-                    Some(n.text.to_string())
-                } else {
-                    ok = false;
-                    None
-                }
+                self.inside_height(stage, alt, params.given["altitude"].0, "the altitude");
+                Some(PathShape::Square {
+                    side_m: side,
+                    center_m: c,
+                    altitude_m: alt,
+                    clockwise,
+                })
             }
             _ => None,
         };
+        (shape, corners_inside)
+    }
 
-        let shape = match kind {
-            ast::PathKind::Square => {
-                let has = need(self, "side", "side 2m") & need(self, "altitude", "altitude 1.5m");
-                let side = length(self, "side", "the side", true);
-                let alt = length(self, "altitude", "the altitude", true);
-                let c = center(self);
-                match (has, side, alt, c) {
-                    (true, Some(side), Some(alt), Some(c)) => {
-                        let h = side / 2.0;
-                        let corners = [[c[0] - h, c[1] - h], [c[0] + h, c[1] + h]];
-                        if corners
-                            .iter()
-                            .any(|p| stage.is_some_and(|s| !s.contains_xy(*p)))
-                        {
-                            self.inside(stage, corners[0], p.span, "a corner of the square");
-                            self.inside(stage, corners[1], p.span, "a corner of the square");
-                            ok = false;
-                        }
-                        self.inside_height(stage, alt, given["altitude"].0, "the altitude");
-                        Some(PathShape::Square {
-                            side_m: side,
-                            center_m: c,
-                            altitude_m: alt,
-                            clockwise,
-                        })
-                    }
-                    _ => None,
+    /// A helix path from its radius, centre, turns and heights.
+    fn helix(
+        &mut self,
+        params: &PathParams<'_, '_>,
+        stage: Option<&Stage>,
+        clockwise: bool,
+    ) -> Option<PathShape> {
+        let has = params.need(self, "radius", "radius 1.5m")
+            & params.need(self, "from", "from 1m to 2.5m");
+        let radius = params.length(self, "radius", "the radius", true);
+        let c = params.center(self);
+        let t = params.turns(self);
+        let from_to = match params.given.get("from").copied() {
+            Some((span, PathValue::FromTo(a, b))) => {
+                let a = self.quantity(a, Dim::Length, "the start height", false);
+                let b = self.quantity(b, Dim::Length, "the end height", false);
+                if let (Some(a), Some(b)) = (a, b) {
+                    self.inside_height(stage, a, span, "the start height");
+                    self.inside_height(stage, b, span, "the end height");
                 }
+                a.zip(b)
             }
-            ast::PathKind::Helix => {
-                let has =
-                    need(self, "radius", "radius 1.5m") & need(self, "from", "from 1m to 2.5m");
-                let radius = length(self, "radius", "the radius", true);
-                let c = center(self);
-                let t = turns(self);
-                let from_to = match given.get("from").copied() {
-                    Some((span, PathValue::FromTo(a, b))) => {
-                        let a = self.quantity(a, Dim::Length, "the start height", false);
-                        let b = self.quantity(b, Dim::Length, "the end height", false);
-                        if let (Some(a), Some(b)) = (a, b) {
-                            self.inside_height(stage, a, span, "the start height");
-                            self.inside_height(stage, b, span, "the end height");
-                        }
-                        a.zip(b)
-                    }
-                    _ => None,
-                };
-                match (has, radius, c, t, from_to) {
-                    (true, Some(r), Some(c), Some(t), Some((a, b))) => {
-                        self.circle_inside(stage, c, r, p.span, "helix");
-                        Some(PathShape::Helix {
-                            radius_m: r,
-                            center_m: c,
-                            from_m: a,
-                            to_m: b,
-                            turns: t,
-                            clockwise,
-                        })
-                    }
-                    _ => None,
-                }
+            _ => None,
+        };
+        match (has, radius, c, t, from_to) {
+            (true, Some(r), Some(c), Some(t), Some((a, b))) => {
+                self.circle_inside(stage, c, r, params.span, "helix");
+                Some(PathShape::Helix {
+                    radius_m: r,
+                    center_m: c,
+                    from_m: a,
+                    to_m: b,
+                    turns: t,
+                    clockwise,
+                })
             }
-            ast::PathKind::Orbit => {
-                let has =
-                    need(self, "radius", "radius 2m") & need(self, "altitude", "altitude 1.5m");
-                let radius = length(self, "radius", "the radius", true);
-                let alt = length(self, "altitude", "the altitude", true);
-                let t = turns(self);
-                let center = match (given.get("around").copied(), given.get("center").copied()) {
-                    (Some((_, PathValue::Around(n))), None) => self
-                        .actor_ref(n, declared, false)
-                        .then(|| OrbitCenter::Actor {
-                            name: n.text.to_string(),
-                        }),
-                    (None, Some((_, PathValue::Center(pt)))) => {
-                        self.point(pt, "the centre").map(|at| {
-                            if let Some(r) = radius {
-                                self.circle_inside(stage, at, r, p.span, "orbit");
-                            }
-                            OrbitCenter::Point { at_m: at }
-                        })
-                    }
-                    (Some((a, _)), Some((c, _))) => {
-                        self.err(
-                            Diagnostic::error(PslCode::UnexpectedPathParameter, c, "an orbit goes `around` an actor or about a `center`, not both")
-                                .with_related(a, "`around` given here")
-                                .with_help("remove `center (x, y)` to orbit the actor, or `around` to orbit a fixed point"),
-                        );
-                        None
-                    }
-                    _ => {
-                        self.err(
-                            Diagnostic::error(PslCode::MissingPathParameter, *kind_span, "an orbit needs `around A` or `center (x, y)`")
-                                .with_label("what to orbit?")
-                                .with_help("add `around A` to circle an actor, or `center (0, 0)` for a fixed point"),
-                        );
-                        None
-                    }
-                };
-                if let Some(alt) = alt {
-                    self.inside_height(stage, alt, given["altitude"].0, "the altitude");
-                }
-                match (has, radius, alt, t, center) {
-                    (true, Some(r), Some(alt), Some(t), Some(center)) => Some(PathShape::Orbit {
-                        center,
-                        radius_m: r,
-                        altitude_m: alt,
-                        turns: t,
-                        clockwise,
-                    }),
-                    _ => None,
-                }
-            }
-            ast::PathKind::Waypoints(file) => {
-                self.waypoints(file, stage)
-                    .map(|points_m| PathShape::Waypoints {
-                        file: file.text.to_string(),
-                        points_m,
+            _ => None,
+        }
+    }
+
+    /// An orbit path from its radius, altitude, turns and what it goes round: an actor or a
+    /// fixed centre.
+    fn orbit(
+        &mut self,
+        params: &PathParams<'_, '_>,
+        declared: &HashMap<&str, Span>,
+        stage: Option<&Stage>,
+        clockwise: bool,
+    ) -> Option<PathShape> {
+        let given = &params.given;
+        let has = params.need(self, "radius", "radius 2m")
+            & params.need(self, "altitude", "altitude 1.5m");
+        let radius = params.length(self, "radius", "the radius", true);
+        let alt = params.length(self, "altitude", "the altitude", true);
+        let t = params.turns(self);
+        let center = match (given.get("around").copied(), given.get("center").copied()) {
+            (Some((_, PathValue::Around(n))), None) => {
+                self.actor_ref(n, declared, false)
+                    .then(|| OrbitCenter::Actor {
+                        name: n.text.to_string(),
                     })
             }
+            (None, Some((_, PathValue::Center(pt)))) => self.point(pt, "the centre").map(|at| {
+                if let Some(r) = radius {
+                    self.circle_inside(stage, at, r, params.span, "orbit");
+                }
+                OrbitCenter::Point { at_m: at }
+            }),
+            (Some((a, _)), Some((c, _))) => {
+                self.err(
+                    Diagnostic::error(PslCode::UnexpectedPathParameter, c, "an orbit goes `around` an actor or about a `center`, not both")
+                        .with_related(a, "`around` given here")
+                        .with_help("remove `center (x, y)` to orbit the actor, or `around` to orbit a fixed point"),
+                );
+                None
+            }
+            _ => {
+                self.err(
+                    Diagnostic::error(
+                        PslCode::MissingPathParameter,
+                        params.kind_span,
+                        "an orbit needs `around A` or `center (x, y)`",
+                    )
+                    .with_label("what to orbit?")
+                    .with_help(
+                        "add `around A` to circle an actor, or `center (0, 0)` for a fixed point",
+                    ),
+                );
+                None
+            }
         };
-        if !ok {
-            return None;
+        if let Some(alt) = alt {
+            self.inside_height(stage, alt, given["altitude"].0, "the altitude");
         }
-        Some(Path {
-            shape: shape?,
-            looking_at,
-        })
+        match (has, radius, alt, t, center) {
+            (true, Some(r), Some(alt), Some(t), Some(center)) => Some(PathShape::Orbit {
+                center,
+                radius_m: r,
+                altitude_m: alt,
+                turns: t,
+                clockwise,
+            }),
+            _ => None,
+        }
     }
 
     fn circle_inside(
@@ -1834,6 +1921,80 @@ impl<'o, 'a> Resolver<'o, 'a> {
             return None;
         }
         Some(points)
+    }
+}
+
+/// A path's parameters by keyword, with what their shape's checks report against: the
+/// shape's name and keyword, and the path's line.
+struct PathParams<'p, 'v> {
+    given: HashMap<&'static str, (Span, &'p PathValue<'v>)>,
+    kind_span: Span,
+    shape_name: &'static str,
+    span: Span,
+}
+
+impl PathParams<'_, '_> {
+    /// Whether `key` is given; if not, report it missing with `example`.
+    fn need(&self, r: &mut Resolver<'_, '_>, key: &str, example: &str) -> bool {
+        if self.given.contains_key(key) {
+            return true;
+        }
+        let shape_name = self.shape_name;
+        r.err(
+            Diagnostic::error(
+                PslCode::MissingPathParameter,
+                self.kind_span,
+                format!("a {shape_name} path needs `{key}`"),
+            )
+            .with_label(format!("`{key}` missing"))
+            .with_help(format!("add `{example}`")),
+        );
+        false
+    }
+
+    /// The length given as `key` in metres, if given and valid; `positive`: at most 1000 m
+    /// and more than 0.
+    fn length(
+        &self,
+        r: &mut Resolver<'_, '_>,
+        key: &str,
+        what: &str,
+        positive: bool,
+    ) -> Option<f64> {
+        let Some((_, PathValue::Side(q) | PathValue::Altitude(q) | PathValue::Radius(q))) =
+            self.given.get(key).copied()
+        else {
+            return None;
+        };
+        let v = r.quantity(q, Dim::Length, what, false)?;
+        if positive {
+            r.range(v, q.span, what, Bounds::above(0.0, 1000.0, "m"))
+        } else {
+            Some(v)
+        }
+    }
+
+    /// The `center` given, or the stage's centre (0, 0).
+    fn center(&self, r: &mut Resolver<'_, '_>) -> Option<[f64; 2]> {
+        match self.given.get("center").copied() {
+            Some((_, PathValue::Center(pt))) => r.point(pt, "the centre"),
+            _ => Some([0.0, 0.0]),
+        }
+    }
+
+    /// The number of `turns` given, or 1.
+    fn turns(&self, r: &mut Resolver<'_, '_>) -> Option<f64> {
+        match self.given.get("turns").copied() {
+            Some((_, PathValue::Turns(q))) => r.plain(q, "the number of turns").and_then(|v| {
+                r.range(
+                    v,
+                    q.span,
+                    "the number of turns",
+                    Bounds::above(0.0, 100.0, ""),
+                )
+            }),
+            _ => Some(1.0),
+        }
     }
 }
 

@@ -36,9 +36,9 @@ impl Script {
 
 /// Whether shot `index` of `timeline` is a camera move: a `then … to` another composition than
 /// the framing before it, which it reaches over its duration, the visual parameters
-/// interpolated (psl.md). `hold` is one of those moves: `then hold to MS on A` after another
-/// framing moves there as `then dolly to` does (it stepped to it at once, and the drone,
-/// metres off its framing, flew a straight line to it through whatever stood between).
+/// interpolated. `hold` is one of those moves: `then hold to MS on A` after another framing
+/// moves there as `then dolly to` does (a step to it at once would leave the drone metres off
+/// its framing, flying a straight line to it through whatever stands between).
 /// `then hold for` and a `then hold to` the same composition hold the framing; so does a
 /// `then` after a path, which has no framing to move from.
 pub fn moves_camera(timeline: &[Shot], index: usize) -> bool {
@@ -216,7 +216,8 @@ pub struct Subject {
     pub actor: String,
     /// `None`: the compiler chooses (front for one actor; the toric default for two).
     pub profile: Option<Profile>,
-    /// Requested screen x in [−1, 1]; `None`: the default placement (psl.md §2).
+    /// Requested screen x in [−1, 1]; `None`: the default placement (the centre for one
+    /// actor; for two, the thirds at −1/3 and +1/3, or the other side of a written one).
     pub screen_x: Option<f64>,
     /// Requested screen y in [−1, 1]; `None`: from the shot size.
     pub screen_y: Option<f64>,

@@ -1,14 +1,14 @@
 //! The PSL vocabulary: shot sizes, profile angles, camera angles, screen thirds, camera moves.
 //!
 //! This module is the single source of truth for the words of the language and for the
-//! conventions of `psl.md` §3 that belong to the language itself: the camera azimuth of each
-//! profile angle and the screen x of each third. The grammar (`psl.pest`) spells the same
-//! words; `tests::keywords_match_grammar` keeps the two in step.
+//! conventions that belong to the language itself: the camera azimuth of each profile angle and
+//! the screen x of each third. The grammar (`psl.pest`) spells the same words;
+//! `tests::keywords_match_grammar` keeps the two in step.
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
-/// Shot size, tightest first (psl.md §1).
+/// Shot size, tightest first.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Size {
     ECU,
@@ -60,7 +60,7 @@ impl Size {
     }
 }
 
-/// Profile angle: the side of the actor the camera is on (psl.md §1, §3).
+/// Profile angle: the side of the actor the camera is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Profile {
@@ -99,7 +99,7 @@ impl Profile {
     }
 
     /// Camera azimuth around the actor in radians, measured from the actor's facing
-    /// direction, counter-clockwise seen from above (psl.md §3), in (−π, π].
+    /// direction, counter-clockwise seen from above, in (−π, π].
     pub fn azimuth_rad(self) -> f64 {
         match self {
             Profile::Front => 0.0,
@@ -114,7 +114,7 @@ impl Profile {
     }
 }
 
-/// Camera angle of a composition; eye level is the default (psl.md §1).
+/// Camera angle of a composition; eye level is the default.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CameraAngle {
@@ -134,7 +134,7 @@ impl CameraAngle {
     }
 }
 
-/// A third of the frame (psl.md §3).
+/// A third of the frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ScreenThird {
@@ -161,7 +161,7 @@ impl ScreenThird {
         }
     }
 
-    /// Screen x in [−1, 1], left to right: the thirds sit at −1/3, 0, +1/3 (psl.md §3).
+    /// Screen x in [−1, 1], left to right: the thirds sit at −1/3, 0, +1/3.
     pub fn screen_x(self) -> f64 {
         match self {
             ScreenThird::Left => -1.0 / 3.0,
@@ -340,7 +340,7 @@ mod tests {
 
     #[test]
     fn wrap_keeps_in_range_angles_bit_for_bit() {
-        // Through 2π and back, −1e-20 used to come out as 0 and −0.3 two ulps off.
+        // A wrap through 2π and back would turn −1e-20 into 0 and −0.3 two ulps off.
         for a in [-1e-20, -0.3, -FRAC_PI_2, -PI + 1e-15, 1e-300, -0.0, 3.0, PI] {
             assert_eq!(wrap_angle_rad(a).to_bits(), a.to_bits(), "{a}");
         }

@@ -1,7 +1,7 @@
 //! An actor as the camera sees it: the pure geometry behind the storyboard frames.
 //!
-//! A figure is built in the world from the actor's pose and stature (body proportions of
-//! camera-math.md §1: hip 0.530 H, shoulder 0.818 H, chin 0.870 H) and projected
+//! A figure is built in the world from the actor's pose and stature (body proportions:
+//! hip 0.530 H, shoulder 0.818 H, chin 0.870 H) and projected
 //! through [`CameraPose::project`], so its size on screen follows the distance exactly as the
 //! compiler's framing does (an MS reads as an MS). It has legs and a torso (outlines of two
 //! boxes, which are wide seen from the front and narrow seen from the side), a head (a sphere:

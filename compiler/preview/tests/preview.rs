@@ -404,7 +404,7 @@ fn screen_extent(outline: &[[f64; 2]], axis: usize) -> (f64, f64) {
 
 #[test]
 fn a_medium_shot_is_cut_at_the_waist() {
-    // MS (camera-math §1): band 0.60–1.05 H, W = 0.45 H. H = 1.80, lens 84° 16:9:
+    // MS: band 0.60–1.05 H, W = 0.45 H. H = 1.80, lens 84° 16:9:
     // tan(fovY/2) = tan 42° / (16/9) = 0.506477, d = 0.81 / (2·0.506477) = 0.799641 m, camera
     // at the band centre 0.825·1.80 = 1.485 m. The crown (1.80 m) is at
     // y = 0.315 / (d·tan(fovY/2)) = 0.315 / 0.405 = 0.777778 and the hips are below the frame.
@@ -425,8 +425,8 @@ fn a_medium_shot_is_cut_at_the_waist() {
     assert!(legs_hi < -1.0, "no legs in an MS: {legs_hi}");
 }
 
-/// The figure seen from azimuth `theta` around the actor (psl.md §3: from the facing,
-/// counter-clockwise), 3 m away at head height, the camera looking at the head.
+/// The figure seen from azimuth `theta` around the actor (as a script's angles are: from the
+/// facing, counter-clockwise), 3 m away at head height, the camera looking at the head.
 fn seen_from(theta: f64) -> Figure {
     let h = 1.8;
     let z = 0.935 * h;
@@ -455,7 +455,7 @@ fn the_profile_reads_from_eyes_nose_and_width() {
     assert!(front.nose_in_front);
     assert!(nose_dx(&front).abs() < 0.1 * front.head_radius);
 
-    // psl.md §3: from 34left the actor faces toward screen left.
+    // From 34left the actor faces toward screen left.
     assert_eq!(three_quarter_left.eyes.len(), 2);
     assert!(nose_dx(&three_quarter_left) < -0.5 * three_quarter_left.head_radius / 1.7778);
 

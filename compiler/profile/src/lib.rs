@@ -55,8 +55,7 @@ pub struct Profile {
     pub servo: Servo,
 }
 
-/// The servo's plant model (control.md §2–3): per axis `v̇ = (K·u − v)/τ`, heading
-/// `ċ = K_ψ·ψ̇`.
+/// The servo's plant model: per axis `v̇ = (K·u − v)/τ`, heading `ċ = K_ψ·ψ̇`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Model {
     /// K_φ: lateral speed per radian of roll, m/s per rad.
@@ -128,7 +127,7 @@ impl Safety {
     }
 }
 
-/// Settings of the runtime's LQG servo and Kalman filters (control.md §4).
+/// Settings of the runtime's LQG servo and Kalman filters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Servo {
     /// Diagonal of Q on the state [vx, vy, vz, x, y, z].
@@ -150,8 +149,9 @@ pub struct Servo {
 /// The share of the tilt the reference may use for cruising speed when a profile names none.
 pub const DEFAULT_AUTHORITY: f64 = 0.5;
 
-/// The tracking margin of a profile that names none ([`Safety::tracking_margin_m`]): no less
-/// than the built-in AR.Drone profiles' measured 0.10 m (indoor limits) and 0.15 m (outdoor).
+/// The tracking margin of a profile that names none ([`Safety::tracking_margin_m`]): the
+/// larger of the built-in AR.Drone profiles' (0.10 m with the indoor limits, 0.15 m with the
+/// outdoor ones).
 pub const DEFAULT_TRACKING_MARGIN_M: f64 = 0.15;
 
 const ARDRONE2_TOML: &str = include_str!("../profiles/ardrone2.toml");
@@ -2017,8 +2017,8 @@ mod tests {
     use super::*;
 
     /// Every example a help line gives as the AR.Drone 2.0's value is the built-in
-    /// profile's value (they had drifted: the help quoted `q = [1, 1, 1, 10, 10, 10]`
-    /// against the profile's 30s); keys the profile leaves out are given "for example".
+    /// profile's value, so that the two cannot drift apart; keys the profile leaves out are
+    /// given "for example".
     #[test]
     fn the_help_quotes_the_built_in_profile() {
         let builtin: toml::Table = toml::from_str(ARDRONE2_TOML).unwrap();
@@ -2070,7 +2070,8 @@ mod tests {
         assert!(Profile::builtin("ardrone3").is_none());
     }
 
-    /// The numbers of control.md §5 (firmware limits, tum_ardrone priors) and the lens.
+    /// The built-in profiles' numbers: the firmware's limits, tum_ardrone's model priors and
+    /// the lens.
     #[test]
     fn builtins_carry_the_documented_numbers() {
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs().max(1.0);

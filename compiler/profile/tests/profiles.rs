@@ -175,9 +175,9 @@ fn builtins_parse_and_default_is_one() {
     }
 }
 
-/// camera-math.md §1: an MS frames 0.45·H, seen from `d = W/(2·tan(fovY/2))`. The paper flew
-/// MS shots with the AR.Drone's own lens (≈ 92° diagonal, 16:9), so the built-in safety
-/// distance must leave them possible — computed here from the lens alone, not the profile.
+/// An MS frames 0.45·H, seen from `d = W/(2·tan(fovY/2))`. The built-in profiles fly the
+/// AR.Drone's own lens (≈ 92° diagonal, 16:9), and their safety distance must leave an MS
+/// possible with it — computed here from the lens alone, not the profile.
 #[test]
 fn builtin_safety_distance_allows_an_ms_of_a_180_cm_actor() {
     let half_diag = (92f64.to_radians() / 2.0).tan();

@@ -1,4 +1,4 @@
-//! Properties of the framing math (camera-math.md §1–§4): placed cameras reproject the actors
+//! Properties of the framing math: placed cameras reproject the actors
 //! where the composition asks, sizes hold, mirror profiles mirror, the toric formulas agree
 //! with the triangle they describe, velocities are derivatives, interpolation ends at its
 //! inputs.
@@ -459,7 +459,7 @@ fn two_shot_scene() -> [ActorPose; 3] {
     ]
 }
 
-/// psl.md §2: `MS on A and B` puts A on the left third and B on the right third.
+/// `MS on A and B` puts A on the left third and B on the right third.
 #[test]
 fn two_shot_defaults_to_thirds() {
     let l = lens(84.0);
@@ -519,7 +519,7 @@ fn over_b_shoulder(background: Size) -> Composition {
     )
 }
 
-/// Over the shoulder (psl.md §2 example): the background actor's size and screen position
+/// Over the shoulder: the background actor's size and screen position
 /// are exact, the foreground actor lands close to its third, the profile is near.
 #[test]
 fn over_the_shoulder() {
@@ -553,7 +553,7 @@ fn over_the_shoulder() {
         let s = cam.project(&l, &target.point_m).unwrap();
         let err = (s[0] - target.screen[0]).hypot(s[1] - target.screen[1]);
         // The foreground actor, 0.3 m from the camera and 0.08 m lower than A's aim point,
-        // carries the roll-free error (measured 0.19 in screen y).
+        // carries the roll-free error (about 0.19 in screen y).
         let bound = if target.actor == 0 { 1e-6 } else { 0.25 };
         assert!(
             err < bound,
@@ -574,8 +574,8 @@ fn over_the_shoulder() {
 /// actor's size is out of the toric circle's reach: up to `OVER_SHOULDER_REACH` beyond it the
 /// camera frames from the circle's farthest point, both actors still on their screen points
 /// and the background actor a little larger than written (never by more than the reach);
-/// beyond that, the composition is refused. Against live actors a few centimetres closer
-/// than blocked, `scene.psl`'s reverse shot failed (and held the camera) in 27 of 30 flights.
+/// beyond that, the composition is refused. Refused at the edge of reach, a shot whose live
+/// actors stand a few centimetres closer than blocked would fail and hold the camera.
 #[test]
 fn over_the_shoulder_just_out_of_reach_frames_from_the_farthest_point() {
     let l = lens(84.0);
@@ -924,7 +924,7 @@ fn body_axis_distance_is_to_the_segment() {
     );
 }
 
-/// `high angle MLS on B 34left MLS on A 34backright`, as a random script wrote it.
+/// `high angle MLS on B 34left MLS on A 34backright`, the actors written across each other.
 fn ots_written_across() -> Composition {
     comp(
         CameraAngle::High,
@@ -988,11 +988,10 @@ fn plain_and_held_steps_m(
 }
 
 /// An over-the-shoulder has up to two cameras that frame the background actor at its size;
-/// the solve keeps the one nearer the profile. With B walking toward A, the two came to miss
-/// the profile equally (by 47°), and the solve flipped from one to the other: the camera
-/// target crossed 2.1 m of stage in one 10 ms tick (compile refused the script with "this
-/// shot needs 2122 m/s"; on set, through `dronecine emulate`, the camera was sent next to B).
-/// Held tick after tick (`solve_near`, as the director does), the framing keeps its camera.
+/// the solve keeps the one nearer the profile. With B walking toward A, the two come to miss
+/// the profile equally, and a fresh solve flips from one to the other: the camera target
+/// crosses more than a metre of stage in one 10 ms tick. Held tick after tick (`solve_near`,
+/// as the director does), the framing keeps its camera.
 #[test]
 fn a_held_over_the_shoulder_keeps_its_camera_when_both_frame_alike() {
     let (l, g, c, prepared) = ots_written_across_prepared();
@@ -1057,8 +1056,8 @@ fn a_held_over_the_shoulder_changes_camera_when_the_other_is_clearly_better() {
 
 /// Of an over-the-shoulder's two cameras, one standing inside an actor's distance gives way
 /// to one that does not: with the foreground actor walked up toward the other, the camera
-/// nearer the profile stood on their shoulder (the director said "0.00 m from B" on set,
-/// through `dronecine emulate`), while the other, 2 m away, framed it as well.
+/// nearer the profile stands on their shoulder, while the other, 2 m away, frames it as
+/// well.
 #[test]
 fn an_over_the_shoulder_camera_inside_an_actor_gives_way_to_one_clear_of_both() {
     let (l, g, c, prepared) = ots_written_across_prepared();
@@ -1146,9 +1145,9 @@ fn move_steps_while_turning(from: &Composition, to: &Composition, s: f64) -> [f6
 
 /// A move from one actor's framing to another's (cylindrical blend about the actors): with
 /// A turning round, its end swings through the far side of the centroid, and the short way
-/// round flipped the camera across the actors in one tick (`tests/compile.rs` has the script
-/// a random generator wrote). Carried from tick to tick, the way round keeps going: the
-/// target moves a few centimetres a tick, as A's end does.
+/// round would flip the camera across the actors in one tick (`tests/it/compile.rs` flies
+/// such a script). Carried from tick to tick, the way round keeps going: the target moves a
+/// few centimetres a tick, as A's end does.
 #[test]
 fn a_move_between_actors_keeps_its_way_round_while_one_turns() {
     let from = comp(
@@ -1213,9 +1212,9 @@ fn the_toric_blend_keeps_its_way_round_while_one_end_circles() {
     );
 }
 
-/// A two-shot of two actors walking apart (found among random walks): of its roots (θ where
-/// the nearer actor is at the size), the one nearest the symmetric θ changed sides of the arc
-/// as they walked, and the camera crossed 7.3 m in one 10 ms tick. Held tick after tick
+/// A two-shot of two actors walking apart: of its roots (θ where the nearer actor is at the
+/// size), the one nearest the symmetric θ changes sides of the arc as they walk, and the
+/// camera unheld crosses more than 5 m in one 10 ms tick. Held tick after tick
 /// (`solve_near` with the last solve, as the director does), the camera follows its root,
 /// 2 mm a tick, both actors on their screen points throughout.
 #[test]

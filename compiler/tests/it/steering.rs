@@ -1,4 +1,4 @@
-//! Properties of the steering law (camera-math §5, `steering.rs`) under the built-in
+//! Properties of the steering law (`steering.rs`) under the built-in
 //! `ardrone2` profile's limits: a camera on a smooth, feasible target stays on it, wherever
 //! the target goes; a camera sent to a target that stands still arrives without passing it,
 //! within every limit.
@@ -42,9 +42,9 @@ proptest! {
     /// A repositioning flight's clock, any direction and length, no faster than 80 % of the
     /// limits (as the director plans them; minimum jerk peaks at 1.875·d/T and 5.77·d/T²):
     /// the camera, started on it, stays on it within a millimetre and does not pass its end.
-    /// (Steered on its velocity predicted to zero acceleration, it was held a·|a|/(2·jerk·k_p)
-    /// off: up to 7 cm behind or ahead at the 0.86 m/s² these flights reach; the shrunk case
-    /// of that law was a 0.2 m flight, 7.6 mm off.)
+    /// (Steered on its velocity predicted to zero acceleration, it would be held
+    /// a·|a|/(2·jerk·k_p) off: up to 7 cm behind or ahead at the 0.86 m/s² these flights
+    /// reach.)
     #[test]
     fn a_camera_on_a_feasible_flight_stays_on_it(
         heading in -std::f64::consts::PI..std::f64::consts::PI,

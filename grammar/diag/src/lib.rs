@@ -296,8 +296,12 @@ pub fn to_json(file: &str, src: &str, diagnostics: &[Diagnostic]) -> Vec<JsonDia
     diagnostics
         .iter()
         .map(|d| {
-            let (line, column) = index.line_col(src, d.span.start);
-            let (end_line, end_column) = index.line_col(src, d.span.end);
+            let place = |offset: usize| match d.span.is_placed() {
+                true => index.line_col(src, offset),
+                false => (0, 0),
+            };
+            let (line, column) = place(d.span.start);
+            let (end_line, end_column) = place(d.span.end);
             JsonDiagnostic {
                 file: file.to_string(),
                 code: d.code.as_str(),
@@ -385,11 +389,17 @@ impl miette::Diagnostic for Report {
     }
 
     fn source_code(&self) -> Option<&dyn miette::SourceCode> {
-        Some(&self.source)
+        self.diagnostic
+            .span
+            .is_placed()
+            .then_some(&self.source as &dyn miette::SourceCode)
     }
 
     fn labels(&self) -> Option<Box<dyn Iterator<Item = miette::LabeledSpan> + '_>> {
         let d = &self.diagnostic;
+        if !d.span.is_placed() {
+            return None;
+        }
         let main = miette::LabeledSpan::new_primary_with_span(
             Some(d.label.clone().unwrap_or_else(|| d.message.clone())),
             (d.span.start, d.span.len()),
@@ -408,6 +418,12 @@ impl miette::Diagnostic for Report {
 /// out of that line (the file name then carries the true line and column).
 fn windowed(file: &str, shown: &Arc<String>, index: &LineIndex, d: &Diagnostic) -> Report {
     let src = shown.as_str();
+    if !d.span.is_placed() {
+        return Report {
+            diagnostic: d.clone(),
+            source: miette::NamedSource::new(file, Arc::clone(shown)),
+        };
+    }
     let (line, col) = index.line_col(src, d.span.start);
     let line_span = index.line_span(src, line);
     let related_elsewhere = d
@@ -499,6 +515,26 @@ mod tests {
         let s = "a\u{0}b\u{1b}[31m\u{85}c";
         assert_eq!(display_safe(s).len(), s.len());
         assert!(!display_safe(s).contains('\u{1b}'));
+    }
+
+    #[test]
+    fn a_diagnostic_without_a_place_is_rendered_without_a_quote() {
+        let d = Diagnostic::error(TestCode::Second, Span::NOWHERE, "the battery is flat")
+            .with_help("charge it");
+        let out = render(
+            "x.psl",
+            "stage 8m x 6m x 3m\n",
+            std::slice::from_ref(&d),
+            false,
+            100,
+        );
+        assert!(
+            out.contains("the battery is flat") && out.contains("charge it"),
+            "{out}"
+        );
+        assert!(!out.contains("stage"), "{out}");
+        let json = to_json("x.psl", "stage 8m x 6m x 3m\n", &[d]);
+        assert_eq!((json[0].line, json[0].column), (0, 0));
     }
 
     #[test]

@@ -10,8 +10,20 @@ pub struct Span {
 }
 
 impl Span {
+    /// No place in the text: a diagnostic about the world, not the file (a flat battery, an
+    /// untracked drone). It is rendered without a quote, and at line 0 in JSON.
+    pub const NOWHERE: Span = Span {
+        start: usize::MAX,
+        end: usize::MAX,
+    };
+
     pub fn new(start: usize, end: usize) -> Span {
         Span { start, end }
+    }
+
+    /// Whether the span points into a text (see [`Span::NOWHERE`]).
+    pub fn is_placed(self) -> bool {
+        self != Span::NOWHERE
     }
 
     pub fn len(self) -> usize {

@@ -207,7 +207,7 @@ fn diagnostics_come_in_source_order() {
 }
 
 /// Which shots move the camera (`script::moves_camera`): every `then … to` another
-/// composition, `hold` included (psl.md: `then <move> to <composition> over Ns` interpolates);
+/// composition, `hold` included (`then <move> to <composition> over Ns` interpolates);
 /// `then hold for`, a `then hold to` the same composition, cuts and the first shot hold. The
 /// duration keyword follows: a `then hold to` another composition is timed with `over`.
 #[test]
