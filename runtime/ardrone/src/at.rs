@@ -1,6 +1,6 @@
-//! AR.Drone 2.0 AT commands (protocols.md §1.2–1.5, §1.10): the encoder, the mapping of the
-//! generic [`Command`] to `AT*PCMD` values, the start-up `AT*CONFIG` lines carrying a
-//! profile's limits, and a tolerant parser (for the emulator).
+//! AR.Drone 2.0 AT commands: the encoder, the mapping of the generic [`Command`] to `AT*PCMD`
+//! values, the start-up `AT*CONFIG` lines carrying a profile's limits, and a tolerant parser
+//! (for the emulator).
 //!
 //! Wire format: `AT*<NAME>=<seq>[,<arg>...]\r`, several lines per UDP datagram, each line
 //! at most [`MAX_LINE_LEN`] bytes (the `\r` included). Integers in decimal; floats as the
@@ -20,8 +20,8 @@ use dronecine_profile::Limits;
 
 use dronecine_backend::frames::Command;
 
-/// Longest accepted command line, its terminating `\r` included (DG §6.1: longer lines are
-/// rejected by the drone).
+/// Longest accepted command line, its terminating `\r` included (the drone rejects longer
+/// lines).
 pub const MAX_LINE_LEN: usize = 1024;
 
 /// `AT*REF` input with only the legacy "always set" bits 18, 20, 22, 24 and 28: land / idle.
@@ -45,18 +45,18 @@ pub const CTRL_ACK: i32 = 5;
 /// `AT*CTRL` mode 6: custom configuration ids.
 pub const CTRL_CUSTOM_CFG: i32 = 6;
 
-/// The configuration keys the generic limits are written to (§1.10).
+/// The configuration keys the generic limits are written to.
 pub const KEY_EULER_ANGLE_MAX: &str = "control:euler_angle_max";
 pub const KEY_CONTROL_VZ_MAX: &str = "control:control_vz_max";
 pub const KEY_CONTROL_YAW: &str = "control:control_yaw";
 
-/// The ranges the Developer Guide recommends for the three limits (§1.10), in SI units.
+/// The ranges the Developer Guide recommends for the three limits, in SI units.
 pub const EULER_ANGLE_MAX_RANGE_RAD: (f64, f64) = (0.0, 0.52);
 pub const CONTROL_VZ_MAX_RANGE_MPS: (f64, f64) = (0.2, 2.0);
 pub const CONTROL_YAW_RANGE_RADPS: (f64, f64) = (0.7, 6.11);
 
 /// The arguments of `AT*PCMD` (and the first five of `AT*PCMD_MAG`): the flag and four
-/// normalised values in −1..1, in the AR.Drone's signs (§1.4): roll + = tilt right,
+/// normalised values in −1..1, in the AR.Drone's signs: roll + = tilt right,
 /// pitch + = nose up (moves backward), gaz + = climb, yaw + = clockwise seen from above.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pcmd {
@@ -97,7 +97,7 @@ impl Pcmd {
 /// encoding, from the datagram when parsing).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AtCommand<'a> {
-    /// `AT*REF=seq,input`: the take-off / land / emergency bitfield (§1.3).
+    /// `AT*REF=seq,input`: the take-off / land / emergency bitfield.
     Ref { input: u32 },
     /// `AT*PCMD=seq,flag,roll,pitch,gaz,yaw`.
     Pcmd(Pcmd),
@@ -421,7 +421,7 @@ fn check_range(v: f64, (lo, hi): (f64, f64), key: &'static str) -> Result<(), At
 }
 
 impl PcmdLimits {
-    /// Checks the limits against the ranges the Developer Guide documents (§1.10): tilt in
+    /// Checks the limits against the ranges the Developer Guide documents: tilt in
     /// (0, 0.52] rad, vertical speed in [0.2, 2.0] m/s, yaw rate in [0.7, 6.11] rad/s.
     pub fn new(
         euler_angle_max_rad: f64,

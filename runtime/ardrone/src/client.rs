@@ -1,7 +1,7 @@
 //! The AR.Drone 2.0 backend: the AT and navdata codecs wired to two non-blocking UDP
 //! sockets ([`ArDroneClient`], a [`Drone`]).
 //!
-//! **Start-up** ([`ArDroneClient::connect`], protocols.md §1.6, §1.10):
+//! **Start-up** ([`ArDroneClient::connect`]):
 //! 1. the navdata trigger `01 00 00 00` to the navdata port, re-sent every 100 ms until a
 //!    valid packet arrives (a freshly booted drone answers with bootstrap packets);
 //! 2. unless the drone already streams demo navdata: `AT*CONFIG "general:navdata_demo"
@@ -46,7 +46,7 @@ use crate::url::ArDroneUrl;
 use dronecine_backend::frames::Command;
 use dronecine_backend::{BackendError, Drone, FlightState, Telemetry};
 
-/// The navdata trigger: int32 1 = unicast (protocols.md §1.6).
+/// The navdata trigger: int32 1 = unicast.
 pub const NAVDATA_TRIGGER: [u8; 4] = [1, 0, 0, 0];
 /// Keep-alive period: commands go out at least this often while `telemetry` is called.
 pub const KEEP_ALIVE: Duration = Duration::from_millis(30);
@@ -59,7 +59,7 @@ const POLL_SLEEP: Duration = Duration::from_millis(2);
 const AT_BUF_LEN: usize = 2048;
 
 /// Custom configuration ids (multi-configuration mode): each CONFIG is preceded by
-/// `AT*CONFIG_IDS` with these, in the same datagram (protocols.md §1.2).
+/// `AT*CONFIG_IDS` with these, in the same datagram.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ConfigIds {
     pub session: String,
@@ -121,7 +121,7 @@ pub struct LinkStats {
 pub struct ArDroneStatus {
     /// The major control state (`landed`, `hovering`, `taking_off`, …).
     pub ctrl_state: String,
-    /// The minor control state (its meaning depends on the major, protocols.md §1.9).
+    /// The minor control state (its meaning depends on the major).
     pub ctrl_minor: u16,
     pub battery_percent: u32,
     /// Pitch θ, roll φ, yaw ψ, degrees.
@@ -131,7 +131,7 @@ pub struct ArDroneStatus {
     pub altitude_m: f64,
     /// The drone's own velocity estimate, m/s, body-horizontal frame.
     pub velocity_mps: [f64; 3],
-    /// The set drone-state bits, by name (protocols.md §1.8), lowest bit first.
+    /// The set drone-state bits, by name, lowest bit first.
     pub flags: Vec<&'static str>,
     /// The flight state the flight loop would see.
     pub flight_state: FlightState,

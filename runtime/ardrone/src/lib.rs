@@ -9,7 +9,7 @@
 //! - [`client`]: the drone over UDP (the navdata kick and `general:navdata_demo` handshake,
 //!   CONFIG with its ACK, the limits written at start, FTRIM before take-off, non-blocking
 //!   sockets), and the `status` read-out.
-//! - [`url`]: `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`.
+//! - [`url`]: the address, `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`.
 
 pub mod at;
 pub mod client;

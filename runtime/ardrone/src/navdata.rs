@@ -1,6 +1,6 @@
-//! AR.Drone 2.0 navdata (protocols.md §1.6–1.9): decoding a packet into a caller-provided
-//! [`Navdata`], writing valid packets ([`NavdataWriter`], for the emulator and tests), and
-//! the sequence rule ([`NavdataSequence`]).
+//! AR.Drone 2.0 navdata: decoding a packet into a caller-provided [`Navdata`], writing valid
+//! packets ([`NavdataWriter`], for the emulator and tests), and the sequence rule
+//! ([`NavdataSequence`]).
 //!
 //! Layout (little-endian): u32 header `0x55667788` (`0x55667789` also accepted, as
 //! node-ar-drone does), u32 drone state, u32 sequence number, u32 vision flag, then options,
@@ -37,7 +37,7 @@ pub const DEMO_MIN_SIZE: u16 = 44;
 pub const TIME_SIZE: u16 = 8;
 pub const CHECKSUM_SIZE: u16 = 8;
 
-/// The 32 drone state bits (§1.8), by bit number.
+/// The 32 drone state bits, by bit number.
 pub const STATE_BIT_NAMES: [&str; 32] = [
     "flying",
     "video_enabled",
@@ -73,7 +73,7 @@ pub const STATE_BIT_NAMES: [&str; 32] = [
     "emergency",
 ];
 
-/// The drone state bitfield (§1.8).
+/// The drone state bitfield.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct DroneState(pub u32);
 
@@ -153,7 +153,7 @@ impl DroneState {
     }
 }
 
-/// The major control state (§1.9, `ctrl_state >> 16`).
+/// The major control state (`ctrl_state >> 16`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum MajorState {
     Default,

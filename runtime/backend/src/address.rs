@@ -1,6 +1,5 @@
-//! Backend addresses as the command line takes them (`ardrone://…`, `natnet://…`, and the
-//! forms to come): the pieces every scheme's parser shares. Each backend crate parses its own
-//! scheme with these.
+//! Backend addresses as the command line takes them (`ardrone://…`, `natnet://…`): the pieces
+//! every scheme's parser shares. Each backend crate parses its own scheme with these.
 //!
 //! HOST is a name, an IPv4 address or a bracketed IPv6 address (`[::1]`). Parsing checks
 //! the form only; names are resolved when the backend connects.

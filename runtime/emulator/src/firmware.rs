@@ -1,52 +1,52 @@
 //! The emulated AR.Drone 2.0 firmware: what the drone does with AT commands and what it puts
-//! in its navdata (protocols.md §1), over any [`Drone`] (the embedded simulator's). No
-//! sockets, no threads: the emulator's loop feeds it datagrams and asks it for packets.
+//! in its navdata, over any [`Drone`] (the embedded simulator's). No sockets, no threads: the
+//! emulator's loop feeds it datagrams and asks it for packets.
 //!
-//! **AT commands** (§1.2–1.5). Each datagram is parsed line by line with the tolerant parser
+//! **AT commands**. Each datagram is parsed line by line with the tolerant parser
 //! (`ardrone::at::parse_datagram`); a bad line is counted and skipped, the others still act.
-//! The sequence rule (§1.2): a line whose seq is not larger than the last accepted one is
+//! The sequence rule: a line whose seq is not larger than the last accepted one is
 //! dropped; seq 1 always resets the counter; after [`SEQ_RESET_SILENCE_S`] without an
 //! accepted line any seq is accepted (the drone forgot the client). One counter for every
 //! command kind and every sender.
 //!
-//! - `REF` (§1.3, only bits 8 and 9 are read): bit 9 set → take off (when landed), clear →
+//! - `REF` (only bits 8 and 9 are read): bit 9 set → take off (when landed), clear →
 //!   land (when flying or taking off); it is level-triggered, as clients repeat REF until the
 //!   navdata confirms. Bit 8 is the emergency *toggle*, acting on its rising edge (a client
 //!   repeats the same REF every tick): in emergency it clears the emergency, otherwise it cuts
 //!   the motors (in flight or on the ground, like the real drone's SELECT button).
-//! - `PCMD` / `PCMD_MAG` (§1.4): flag bit 0 set → the four values times the limits
+//! - `PCMD` / `PCMD_MAG`: flag bit 0 set → the four values times the limits
 //!   (`control:euler_angle_max` for roll and pitch, `control:control_vz_max` for gaz,
 //!   `control:control_yaw` for yaw), each clamped to [−1, 1], as a [`Command`] (same signs,
 //!   `frames.rs`); flag bit 0 clear → the drone's own hover. A non-finite value rejects the
 //!   line. `PCMD_MAG`'s psi and the absolute-control flag are ignored (no magnetometer).
 //! - `FTRIM`: accepted on the ground, ignored in flight. `CALIB`: accepted, no effect.
 //! - `CONFIG`: the value is stored and the command-ACK state bit (6) is set until
-//!   `CTRL=…,5,0` clears it (§1.6 step 3). Values that act: `general:navdata_demo`
-//!   (TRUE/FALSE), the three limits of §1.10 (in the units of the firmware's `config.ini`:
-//!   rad, mm/s, rad/s; values outside the documented ranges are refused and counted), and
-//!   `general:com_watchdog` (seconds, 1–60). `CONFIG_IDS` is accepted and ignored (no
-//!   multi-configuration check).
+//!   `CTRL=…,5,0` clears it (the client's configuration handshake). Values that act:
+//!   `general:navdata_demo` (TRUE/FALSE), the three limits above (in the units of the
+//!   firmware's `config.ini`: rad, mm/s, rad/s; values outside the documented ranges are
+//!   refused and counted), and `general:com_watchdog` (seconds, 1–60). `CONFIG_IDS` is
+//!   accepted and ignored (no multi-configuration check).
 //! - `CTRL`: mode 5 clears the ACK bit; mode 4 (config file on TCP 5559) is not emulated.
 //! - `COMWDG` clears the com-watchdog state bit (30), which is set at boot (the bootstrap
-//!   packet of §1.6 has it) and again after `general:com_watchdog` seconds (default 2) without
-//!   an accepted AT line (§1.5); the simulator's own watchdog then makes the drone hover.
+//!   packet has it) and again after `general:com_watchdog` seconds (default 2) without an
+//!   accepted AT line; the simulator's own watchdog then makes the drone hover.
 //!
-//! **Navdata** (§1.6–1.9). Bootstrap packets (header + checksum, state bit 11) until
+//! **Navdata**. Bootstrap packets (header + checksum, state bit 11) until
 //! `general:navdata_demo` is configured; then, with TRUE, demo packets (demo option) at
 //! 15 Hz and state bit 10; with FALSE, full packets (demo and time options: the other
 //! options are not emulated) at 200 Hz. The sequence number starts at 1 and increases by one
 //! per packet sent, for the emulator's life. Demo option values, from the simulator's truth:
 //!
-//! - `ctrl_state` (§1.9): landed → LANDED; taking off → TRANS_TAKEOFF/1 (AUTO); flying a
+//! - `ctrl_state`: landed → LANDED; taking off → TRANS_TAKEOFF/1 (AUTO); flying a
 //!   progressive command → FLYING/0; flying on the drone's own hover → HOVERING/0, or
 //!   HOVERING/8 (LOST_COM) while the com-watchdog bit is set; landing → TRANS_LANDING/0;
 //!   emergency → DEFAULT/0 (state bit 31 says why).
 //! - `theta` = pitch, `phi` = roll, in millidegrees, in the AR.Drone's signs (the ones of
 //!   `frames::Command`: nose up and right side down positive). `psi` = −heading in
 //!   millidegrees in (−180000, 180000]: the AR.Drone's yaw is clockwise-positive seen from
-//!   above (§1.4), `frames.rs`'s heading counter-clockwise; its zero is the world +x axis
+//!   above, `frames.rs`'s heading counter-clockwise; its zero is the world +x axis
 //!   (a real drone's psi zero is arbitrary: clients must not rely on it).
-//! - `altitude` in mm (§1.7: mm in practice), the true height above the floor.
+//! - `altitude` in mm (what the drone sends in practice), the true height above the floor.
 //! - `vx, vy, vz` in mm/s in the body-horizontal frame: forward, left, up (the frame of
 //!   `frames.rs`; ardrone_autonomy copies vx, vy straight into a ROS x-forward, y-left twist;
 //!   the SDK headers name no frame).
@@ -55,7 +55,7 @@
 //!
 //! Other state bits: 0 flying (taking off, flying, landing), 4 altitude control (flying),
 //! 6 command ACK, 10 navdata demo, 11 bootstrap, 23–27 PIC version and the firmware's
-//! threads (always on, as in the §1.6 example), 30 com watchdog, 31 emergency.
+//! threads (always on, as in a real drone's bootstrap packet), 30 com watchdog, 31 emergency.
 
 use dronecine_math as math;
 use std::collections::BTreeMap;
@@ -71,15 +71,15 @@ use dronecine_backend::frames::{self, Command};
 use dronecine_backend::{Drone, FlightState};
 use dronecine_sim::Truth;
 
-/// Without an accepted AT line for this long, any sequence number is accepted again (§1.2).
+/// Without an accepted AT line for this long, any sequence number is accepted again.
 pub const SEQ_RESET_SILENCE_S: f64 = 2.0;
-/// Navdata rate in demo mode (§1.6 step 4).
+/// Navdata rate in demo mode.
 pub const DEMO_RATE_HZ: f64 = 15.0;
 /// Navdata rate with `navdata_demo` FALSE.
 pub const FULL_RATE_HZ: f64 = 200.0;
-/// Default `general:com_watchdog` (§1.5).
+/// Default `general:com_watchdog`.
 pub const COM_WATCHDOG_DEFAULT_S: f64 = 2.0;
-/// The firmware's defaults for the three limits (§1.10, fw 2.4.8 `config.ini`).
+/// The firmware's defaults for the three limits (fw 2.4.8 `config.ini`).
 pub const DEFAULT_EULER_ANGLE_MAX_RAD: f64 = 0.2094;
 pub const DEFAULT_CONTROL_VZ_MAX_MPS: f64 = 0.7;
 pub const DEFAULT_CONTROL_YAW_RADPS: f64 = 1.7453;
@@ -425,7 +425,7 @@ impl Firmware {
         DroneState(s)
     }
 
-    /// The control state (§1.9). `commanded`: the drone flies a progressive command (not its
+    /// The control state. `commanded`: the drone flies a progressive command (not its
     /// own hover).
     pub fn control_state(&self, state: FlightState, commanded: bool) -> ControlState {
         let (major, minor) = match state {

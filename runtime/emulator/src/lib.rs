@@ -1,5 +1,5 @@
 //! The AR.Drone 2.0 + OptiTrack emulator behind `dronecine emulate ardrone`: the embedded
-//! simulator (`sim`) run in real time behind the real wire protocols (protocols.md §1, §4.1),
+//! simulator (`sim`) run in real time behind the real wire protocols (AR.Drone and NatNet),
 //! so the AR.Drone and NatNet backends (and any AR.Drone client) can fly it over UDP.
 //!
 //! [`Emulator::start`] binds the sockets (errors come back at once), then one thread owns the
@@ -9,8 +9,8 @@
 //! 1. drain the AT port: each datagram goes to the emulated firmware ([`firmware`]);
 //! 2. drain the navdata port: a datagram of 1–4 bytes is the client's trigger (`01 00 00 00`,
 //!    or NAD's single `01`); its sender becomes the navdata destination, replied to from
-//!    the navdata port (§1.1: the source address of the trigger) — longer ones are counted
-//!    and dropped;
+//!    the navdata port (the drone answers the trigger's source address) — longer ones are
+//!    counted and dropped;
 //! 3. drain the NatNet command port ([`motive`]), answering each requester;
 //! 4. advance the simulator to the wall time since start (`SimClock::sleep_until`), times
 //!    [`EmulatorConfig::time_scale`] (1: real time);
@@ -51,9 +51,9 @@ use dronecine_sim::{SimClock, SimConfig, SimDrone, SimError, SimMocap, Simulator
 pub use firmware::{AtCounters, Firmware, Limits, NavdataMode};
 pub use motive::{Motive, ACTOR_ID_BASE, DRONE_ID};
 
-/// The AR.Drone's AT command port (§1.1).
+/// The AR.Drone's AT command port.
 pub const AT_PORT: u16 = 5556;
-/// The AR.Drone's navdata port (§1.1).
+/// The AR.Drone's navdata port.
 pub const NAVDATA_PORT: u16 = 5554;
 
 /// Where NatNet frames go.

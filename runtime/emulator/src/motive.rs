@@ -1,5 +1,5 @@
-//! The emulated Motive (protocols.md §4.1): the answers on the NatNet command port and the
-//! frames of data, built from the simulator's mocap frames. No sockets.
+//! The emulated Motive: the answers on the NatNet command port and the frames of data, built
+//! from the simulator's mocap frames. No sockets.
 //!
 //! - Command port: `NAT_CONNECT` (the SDK's "ping", whatever version it asks for) is answered
 //!   with `NAT_SERVERINFO`: application "Motive" 3.0.0.0, the configured NatNet version

@@ -161,13 +161,13 @@ fn navdata_starts_in_bootstrap_and_follows_the_handshake() {
     assert!(c.recv().is_none(), "no navdata before the trigger");
     c.trigger();
     let (nd, from, len) = c.recv().expect("a bootstrap packet");
-    // From the navdata port, to the trigger's sender; header + checksum only (§1.6 step 2).
+    // From the navdata port, to the trigger's sender; header + checksum only.
     assert_eq!(from, h.navdata_addr());
     assert_eq!(len, 24);
     assert!(nd.state.bootstrap() && nd.demo.is_none());
     assert!(
         nd.state.com_watchdog(),
-        "set at boot, as in the §1.6 example"
+        "set at boot, as in a real drone's bootstrap packet"
     );
     assert!(!nd.state.flying() && !nd.state.emergency());
 
@@ -331,7 +331,7 @@ fn config_sets_the_limits_pcmd_is_scaled_by() {
             lim.control_yaw_radps
         ),
         (0.2094, 0.7, 1.7453),
-        "the firmware defaults of §1.10"
+        "the firmware defaults"
     );
     c.send(&[
         AtCommand::Config {

@@ -330,10 +330,9 @@ pub enum Shape {
 /// The shape of test `rep` on `axis`: every axis gets doublets and steps, each sign in turn.
 /// Roll and pitch (`repeats` tests): doublets, the last two short steps
 /// ([`Shape::ShortStep`]) when there are four tests or more: the doublet's + and − halves
-/// separate the drag's τ from the gain better under gusts (with a third of the tests steps,
-/// K on seed 3 came out 20 % high). The
-/// vertical axis and yaw: doublets (tests 0 and 1 of each four), then steps (2 and 3); a
-/// vertical doublet holds a climb and a descent, which the AR.Drone answers with different
+/// separate the drag's τ from the gain better under gusts than steps do. The vertical axis
+/// and yaw: doublets (tests 0 and 1 of each four), then steps (2 and 3); a vertical doublet
+/// holds a climb and a descent, which the AR.Drone answers with different
 /// gains, and gives the fit's descent gain its best window.
 pub fn shape(axis: Axis, rep: usize, repeats: usize) -> Shape {
     match axis {
@@ -396,13 +395,7 @@ pub fn fly_tests(
             "rate and durations must be positive".into(),
         ));
     }
-    let margin = prior.safety.stage_margin_m;
-    let (mut lo, mut hi) = (stage.min_m(), stage.max_m());
-    for i in 0..3 {
-        lo[i] += margin;
-        hi[i] -= margin;
-    }
-    lo[2] = -0.1; // the floor itself (take-off and landing; mocap noise around z = 0)
+    let (lo, hi) = keep_in_box(stage, prior);
     let mut f = Flyer {
         b: backends,
         frame: MocapFrame::default(),
@@ -418,19 +411,7 @@ pub fn fly_tests(
     };
     f.t = f.b.clock.now_s();
     f.last_seen_s = f.t;
-    f.b.drone.take_off()?;
-    let deadline = f.t + 10.0;
-    loop {
-        let pose = f.tick()?;
-        f.guard(pose)?;
-        if f.b.drone.telemetry().state == FlightState::Flying {
-            break;
-        }
-        if f.t > deadline {
-            f.land();
-            return Err(CalibrateError::Timeout("take-off"));
-        }
-    }
+    f.take_off()?;
     let Some(start) = f.last else {
         f.land();
         return Err(CalibrateError::MocapLost);
@@ -438,136 +419,201 @@ pub fn fly_tests(
     let hz = plan.hover_height_m.clamp(lo[2].max(0.5), hi[2]);
     let home = ([start.0[0], start.0[1], hz], start.1);
     let mut tests = Vec::new();
-    let m = &prior.model;
     for &axis in &plan.axes {
         let repeats = match axis {
             Axis::Roll | Axis::Pitch => plan.tilt_repeats,
             Axis::Vz | Axis::Yaw => plan.repeats,
         };
         for rep in 0..repeats.max(1) {
-            // Settle at home: at least `settle_s`, then until back and slow (three times
-            // that at most), so that every test starts with the stage's room around it.
-            let (start, end) = (f.t, f.t + plan.settle_s);
-            while f.t < end || (!f.settled(home) && f.t < start + 3.0 * plan.settle_s) {
-                let pose = f.tick()?;
-                f.guard(pose)?;
-                let c = f.hold(home);
-                f.b.drone.send(&c)?;
-            }
+            f.settle(home, plan.settle_s)?;
             let sign = if rep % 2 == 0 { 1.0 } else { -1.0 };
             let sh = shape(axis, rep, repeats);
-            let base = match axis {
-                Axis::Roll | Axis::Pitch => plan.tilt_rad,
-                Axis::Vz => plan.vz_mps,
-                Axis::Yaw => plan.yaw_rate_radps,
-            };
-            // Stage check on the prior's predicted excursion.
-            let here = f.last.map_or(home.0, |l| l.0);
-            let room = |dir: [f64; 3]| -> f64 {
-                // Distance to the keep-in box along ±dir from here (the smaller side).
-                let mut r = f64::INFINITY;
-                for i in 0..3 {
-                    if dir[i].abs() > 1e-9 {
-                        r = r.min((hi[i] - here[i]) / dir[i].abs());
-                        r = r.min((here[i] - lo[i]) / dir[i].abs());
-                    }
-                }
-                r
-            };
-            let heading = f.last.map_or(home.1, |l| l.1);
-            let mut amp = base;
-            let mut ok = false;
-            for _ in 0..3 {
-                let (need, dir) = match axis {
-                    Axis::Roll => {
-                        let d = frames::body_to_world(heading) * nalgebra::Vector3::y();
-                        (
-                            predicted_excursion(
-                                m.gain_roll_mps_per_rad,
-                                m.tau_roll_s,
-                                amp,
-                                plan,
-                                sh,
-                            ),
-                            [d.x, d.y, 0.0],
-                        )
-                    }
-                    Axis::Pitch => {
-                        let d = frames::body_to_world(heading) * nalgebra::Vector3::x();
-                        (
-                            predicted_excursion(
-                                m.gain_pitch_mps_per_rad,
-                                m.tau_pitch_s,
-                                amp,
-                                plan,
-                                sh,
-                            ),
-                            [d.x, d.y, 0.0],
-                        )
-                    }
-                    Axis::Vz => (
-                        predicted_excursion(m.gain_vz, m.tau_vz_s, amp, plan, sh),
-                        [0.0, 0.0, 1.0],
-                    ),
-                    Axis::Yaw => (0.0, [0.0; 3]),
-                };
-                if need * EXCURSION_SAFETY <= room(dir) {
-                    ok = true;
-                    break;
-                }
-                amp *= 0.5;
-            }
-            if !ok {
+            let Some(amp) = f.test_amplitude(axis, sh, home, plan) else {
                 f.land();
                 return Err(CalibrateError::StageTooSmall(axis));
-            }
-            // The test, open loop, recorded.
-            let mut seg = Segment::new();
-            let t0 = f.t;
-            let total = 2.0 * plan.half_s + plan.coast_s;
-            let mut pose = f.last;
-            loop {
-                let s = f.t - t0;
-                if s > total + 1e-9 {
-                    break;
-                }
-                let c = command_for(axis, test_input(sh, s, sign * amp, plan.half_s));
-                f.b.drone.send(&c)?;
-                seg.push(Sample {
-                    t_s: f.t,
-                    command: c,
-                    position_m: pose.map(|p| p.0),
-                    heading_rad: pose.map(|p| p.1),
-                });
-                pose = f.tick()?;
-                f.guard(pose)?;
-                if let Some((p, _)) = pose {
-                    // The floor counts from z = 0 (the box's floor is below it for landing).
-                    let floor = [f.lo[0], f.lo[1], f.lo[2].max(0.0)];
-                    let near = (0..3).any(|i| {
-                        p[i] < floor[i] + TEST_FENCE_M[i] || p[i] > f.hi[i] - TEST_FENCE_M[i]
-                    });
-                    if near {
-                        break;
-                    }
-                }
-            }
+            };
+            let seg = f.record_test(axis, sh, sign * amp, plan)?;
             tests.push((axis, seg));
         }
     }
     // Back home, then land.
     let end = f.t + plan.settle_s;
     while f.t < end {
-        let pose = f.tick()?;
-        f.guard(pose)?;
-        let c = f.hold(home);
-        f.b.drone.send(&c)?;
+        f.hold_tick(home)?;
     }
     f.land();
     if f.b.drone.telemetry().state != FlightState::Landed {
         return Err(CalibrateError::Timeout("landing"));
     }
     Ok(tests)
+}
+
+/// The keep-in box: the stage shrunk by the profile's stage margin, its floor just below the
+/// ground.
+fn keep_in_box(stage: &Stage, prior: &Profile) -> ([f64; 3], [f64; 3]) {
+    let margin = prior.safety.stage_margin_m;
+    let (mut lo, mut hi) = (stage.min_m(), stage.max_m());
+    for i in 0..3 {
+        lo[i] += margin;
+        hi[i] -= margin;
+    }
+    lo[2] = -0.1; // the floor itself (take-off and landing; mocap noise around z = 0)
+    (lo, hi)
+}
+
+/// The prior model's predicted excursion of a test at amplitude `amp`, and the world
+/// direction it moves the drone in (none for yaw).
+fn excursion(
+    m: &dronecine_profile::Model,
+    axis: Axis,
+    heading: f64,
+    amp: f64,
+    plan: &Plan,
+    sh: Shape,
+) -> (f64, [f64; 3]) {
+    match axis {
+        Axis::Roll => {
+            let d = frames::body_to_world(heading) * nalgebra::Vector3::y();
+            (
+                predicted_excursion(m.gain_roll_mps_per_rad, m.tau_roll_s, amp, plan, sh),
+                [d.x, d.y, 0.0],
+            )
+        }
+        Axis::Pitch => {
+            let d = frames::body_to_world(heading) * nalgebra::Vector3::x();
+            (
+                predicted_excursion(m.gain_pitch_mps_per_rad, m.tau_pitch_s, amp, plan, sh),
+                [d.x, d.y, 0.0],
+            )
+        }
+        Axis::Vz => (
+            predicted_excursion(m.gain_vz, m.tau_vz_s, amp, plan, sh),
+            [0.0, 0.0, 1.0],
+        ),
+        Axis::Yaw => (0.0, [0.0; 3]),
+    }
+}
+
+impl Flyer<'_, '_> {
+    /// Takes off and waits until the drone flies, the safety checks running.
+    fn take_off(&mut self) -> Result<(), CalibrateError> {
+        self.b.drone.take_off()?;
+        let deadline = self.t + 10.0;
+        loop {
+            let pose = self.tick()?;
+            self.guard(pose)?;
+            if self.b.drone.telemetry().state == FlightState::Flying {
+                return Ok(());
+            }
+            if self.t > deadline {
+                self.land();
+                return Err(CalibrateError::Timeout("take-off"));
+            }
+        }
+    }
+
+    /// One tick of the hover hold toward `home`.
+    fn hold_tick(&mut self, home: ([f64; 3], f64)) -> Result<(), CalibrateError> {
+        let pose = self.tick()?;
+        self.guard(pose)?;
+        let c = self.hold(home);
+        self.b.drone.send(&c)?;
+        Ok(())
+    }
+
+    /// Holds at `home` for at least `settle_s`, then until back and slow (three times that at
+    /// most), so that every test starts with the stage's room around it.
+    fn settle(&mut self, home: ([f64; 3], f64), settle_s: f64) -> Result<(), CalibrateError> {
+        let (start, end) = (self.t, self.t + settle_s);
+        while self.t < end || (!self.settled(home) && self.t < start + 3.0 * settle_s) {
+            self.hold_tick(home)?;
+        }
+        Ok(())
+    }
+
+    /// Distance to the keep-in box along ±`dir` from `here` (the smaller side).
+    fn room(&self, here: [f64; 3], dir: [f64; 3]) -> f64 {
+        let mut r = f64::INFINITY;
+        for i in 0..3 {
+            if dir[i].abs() > 1e-9 {
+                r = r.min((self.hi[i] - here[i]) / dir[i].abs());
+                r = r.min((here[i] - self.lo[i]) / dir[i].abs());
+            }
+        }
+        r
+    }
+
+    /// The plan's amplitude of a test on `axis`, halved (twice at most) until the prior's
+    /// predicted excursion fits the keep-in box from where the drone is; `None` when even the
+    /// quarter does not fit.
+    fn test_amplitude(
+        &self,
+        axis: Axis,
+        sh: Shape,
+        home: ([f64; 3], f64),
+        plan: &Plan,
+    ) -> Option<f64> {
+        let base = match axis {
+            Axis::Roll | Axis::Pitch => plan.tilt_rad,
+            Axis::Vz => plan.vz_mps,
+            Axis::Yaw => plan.yaw_rate_radps,
+        };
+        let here = self.last.map_or(home.0, |l| l.0);
+        let heading = self.last.map_or(home.1, |l| l.1);
+        let mut amp = base;
+        for _ in 0..3 {
+            let (need, dir) = excursion(&self.prior.model, axis, heading, amp, plan, sh);
+            if need * EXCURSION_SAFETY <= self.room(here, dir) {
+                return Some(amp);
+            }
+            amp *= 0.5;
+        }
+        None
+    }
+
+    /// Flies one test open loop at signed amplitude `amp` and records it; the test ends early
+    /// when the drone comes within [`TEST_FENCE_M`] of the keep-in box.
+    fn record_test(
+        &mut self,
+        axis: Axis,
+        sh: Shape,
+        amp: f64,
+        plan: &Plan,
+    ) -> Result<Segment, CalibrateError> {
+        let mut seg = Segment::new();
+        let t0 = self.t;
+        let total = 2.0 * plan.half_s + plan.coast_s;
+        let mut pose = self.last;
+        loop {
+            let s = self.t - t0;
+            if s > total + 1e-9 {
+                break;
+            }
+            let c = command_for(axis, test_input(sh, s, amp, plan.half_s));
+            self.b.drone.send(&c)?;
+            seg.push(Sample {
+                t_s: self.t,
+                command: c,
+                position_m: pose.map(|p| p.0),
+                heading_rad: pose.map(|p| p.1),
+            });
+            pose = self.tick()?;
+            self.guard(pose)?;
+            if let Some((p, _)) = pose {
+                if self.near_fence(p) {
+                    break;
+                }
+            }
+        }
+        Ok(seg)
+    }
+
+    /// Whether `p` is within [`TEST_FENCE_M`] of the keep-in box's sides, floor or ceiling.
+    fn near_fence(&self, p: [f64; 3]) -> bool {
+        // The floor counts from z = 0 (the box's floor is below it for landing).
+        let floor = [self.lo[0], self.lo[1], self.lo[2].max(0.0)];
+        (0..3).any(|i| p[i] < floor[i] + TEST_FENCE_M[i] || p[i] > self.hi[i] - TEST_FENCE_M[i])
+    }
 }
 
 /// The calibration report of one axis (SVG): per test (up to four), the measured response
@@ -583,14 +629,9 @@ pub fn report_svg(
     fit: &identify::AxisFit,
     previous: &Profile,
 ) -> Option<String> {
-    use dronecine_preview::svg::{Anchor, Style, Svg};
+    use dronecine_preview::svg::{Anchor, Svg};
     let m = &previous.model;
-    let (k_prev, tau_prev) = match axis {
-        Axis::Roll => (m.gain_roll_mps_per_rad, Some(m.tau_roll_s)),
-        Axis::Pitch => (m.gain_pitch_mps_per_rad, Some(m.tau_pitch_s)),
-        Axis::Vz => (m.gain_vz, Some(m.tau_vz_s)),
-        Axis::Yaw => (m.gain_yaw, None),
-    };
+    let (k_prev, tau_prev) = previous_values(axis, m);
     let prev_fit = identify::AxisFit {
         gain: identify::Estimate {
             value: k_prev,
@@ -602,35 +643,86 @@ pub fn report_svg(
         }),
         ..fit.clone()
     };
-    // A panel per test: (time, measured, model) curves for the fit and for the previous
-    // profile. A roll or pitch test that turns is shown in world x and y with the joint model
-    // (the other axis at the previous profile's values).
-    type Curve = Vec<(f64, Option<f64>, f64)>;
-    let plane = |s: &Segment, k: f64, tau: f64| -> Option<[Curve; 2]> {
-        let (own, other) = match axis {
-            Axis::Roll => ((k, tau), (m.gain_pitch_mps_per_rad, m.tau_pitch_s)),
-            _ => ((k, tau), (m.gain_roll_mps_per_rad, m.tau_roll_s)),
-        };
-        let (r, p) = if axis == Axis::Roll {
-            (own, other)
-        } else {
-            (other, own)
-        };
-        let v = identify::simulate_plane(s, r, p)?;
-        Some([0, 1].map(|i| {
-            v.iter()
-                .map(|(t, y, mdl)| (*t, y.map(|y| y[i]), mdl[i]))
-                .collect()
-        }))
+    let shown = report_curves(axis, segments, fit, &prev_fit, m);
+    if shown.is_empty() {
+        return None;
+    }
+    let (w, panel_h, top) = (900.0, 200.0, 70.0);
+    let mut svg = Svg::new(w, top + panel_h * shown.len() as f64 + 20.0);
+    let unit = if axis == Axis::Yaw { "rad" } else { "m" };
+    let title = report_title(axis, fit, k_prev, tau_prev);
+    let how = report_how(axis);
+    svg.text(20.0, 28.0, 15.0, Anchor::Start, "#222222", &title);
+    svg.text(
+        20.0,
+        52.0,
+        12.0,
+        Anchor::Start,
+        "#666666",
+        &format!(
+            "measured (black), fitted (blue), previous (red, dashed): {how}; {unit} against s"
+        ),
+    );
+    for (i, (fitted, prev)) in shown.iter().enumerate() {
+        let y0 = top + panel_h * i as f64;
+        let panel = Panel::new(y0, w, panel_h, fitted, prev);
+        panel.draw_frame(&mut svg);
+        panel.draw_curves(&mut svg, fitted, prev);
+    }
+    Some(svg.finish())
+}
+
+/// The previous profile's gain and time constant of `axis` (yaw has no time constant).
+fn previous_values(axis: Axis, m: &dronecine_profile::Model) -> (f64, Option<f64>) {
+    match axis {
+        Axis::Roll => (m.gain_roll_mps_per_rad, Some(m.tau_roll_s)),
+        Axis::Pitch => (m.gain_pitch_mps_per_rad, Some(m.tau_pitch_s)),
+        Axis::Vz => (m.gain_vz, Some(m.tau_vz_s)),
+        Axis::Yaw => (m.gain_yaw, None),
+    }
+}
+
+/// A report curve: (time, measured, model) per sample.
+type Curve = Vec<(f64, Option<f64>, f64)>;
+
+/// The curves of a roll or pitch test that turns, in world x and y, from the joint model at
+/// gain `k` and time constant `tau` on `axis` (the other axis at the previous profile's
+/// values).
+fn plane_curves(
+    axis: Axis,
+    m: &dronecine_profile::Model,
+    s: &Segment,
+    k: f64,
+    tau: f64,
+) -> Option<[Curve; 2]> {
+    let (own, other) = match axis {
+        Axis::Roll => ((k, tau), (m.gain_pitch_mps_per_rad, m.tau_pitch_s)),
+        _ => ((k, tau), (m.gain_roll_mps_per_rad, m.tau_roll_s)),
     };
-    let how = match axis {
-        Axis::Yaw => "start heading fitted",
-        Axis::Vz => "start and steady drift fitted, latency and descent gain as fitted",
-        Axis::Roll | Axis::Pitch => {
-            "start and steady wind fitted, latency and attitude lag as fitted"
-        }
+    let (r, p) = if axis == Axis::Roll {
+        (own, other)
+    } else {
+        (other, own)
     };
-    let shown: Vec<(Vec<Curve>, Vec<Curve>)> = segments
+    let v = identify::simulate_plane(s, r, p)?;
+    Some([0, 1].map(|i| {
+        v.iter()
+            .map(|(t, y, mdl)| (*t, y.map(|y| y[i]), mdl[i]))
+            .collect()
+    }))
+}
+
+/// A panel per test (the first four): the curves of the fit and of the previous profile, each
+/// on the input as the fit says the drone applied it.
+fn report_curves(
+    axis: Axis,
+    segments: &[&Segment],
+    fit: &identify::AxisFit,
+    prev_fit: &identify::AxisFit,
+    m: &dronecine_profile::Model,
+) -> Vec<(Vec<Curve>, Vec<Curve>)> {
+    let (k_prev, tau_prev) = (prev_fit.gain.value, prev_fit.tau_s.map(|t| t.value));
+    segments
         .iter()
         .take(4)
         .map(|s| identify::as_applied(s, fit))
@@ -638,26 +730,35 @@ pub fn report_svg(
             let s = &applied;
             match (
                 identify::simulate_fit(s, fit),
-                identify::simulate_fit(s, &prev_fit),
+                identify::simulate_fit(s, prev_fit),
             ) {
                 (Some(a), Some(b)) => Some((vec![a], vec![b])),
                 _ if matches!(axis, Axis::Roll | Axis::Pitch) => {
                     let t = fit.tau_s?.value;
-                    let a = plane(s, fit.gain.value, t)?;
-                    let b = plane(s, k_prev, tau_prev?)?;
+                    let a = plane_curves(axis, m, s, fit.gain.value, t)?;
+                    let b = plane_curves(axis, m, s, k_prev, tau_prev?)?;
                     Some((a.to_vec(), b.to_vec()))
                 }
                 _ => None,
             }
         })
-        .collect();
-    if shown.is_empty() {
-        return None;
+        .collect()
+}
+
+/// What the report's curves fit to each test, by axis.
+fn report_how(axis: Axis) -> &'static str {
+    match axis {
+        Axis::Yaw => "start heading fitted",
+        Axis::Vz => "start and steady drift fitted, latency and descent gain as fitted",
+        Axis::Roll | Axis::Pitch => {
+            "start and steady wind fitted, latency and attitude lag as fitted"
+        }
     }
-    let (w, panel_h, top) = (900.0, 200.0, 70.0);
-    let mut svg = Svg::new(w, top + panel_h * shown.len() as f64 + 20.0);
-    let unit = if axis == Axis::Yaw { "rad" } else { "m" };
-    let title = match fit.tau_s {
+}
+
+/// The report's title: the fitted values ± 95 % next to the previous ones, and R².
+fn report_title(axis: Axis, fit: &identify::AxisFit, k_prev: f64, tau_prev: Option<f64>) -> String {
+    match fit.tau_s {
         Some(t) => format!(
             "{}: K = {:.4} ± {:.4} (previous {:.4}), τ = {:.4} ± {:.4} s (previous {:.4} s), R² = {:.4}",
             axis.name(),
@@ -677,20 +778,25 @@ pub fn report_svg(
             k_prev,
             fit.r2
         ),
-    };
-    svg.text(20.0, 28.0, 15.0, Anchor::Start, "#222222", &title);
-    svg.text(
-        20.0,
-        52.0,
-        12.0,
-        Anchor::Start,
-        "#666666",
-        &format!(
-            "measured (black), fitted (blue), previous (red, dashed): {how}; {unit} against s"
-        ),
-    );
-    for (i, (fitted, prev)) in shown.iter().enumerate() {
-        let y0 = top + panel_h * i as f64;
+    }
+}
+
+/// One test's panel of the report: its box on the page and the time and value ranges it
+/// shows.
+struct Panel {
+    x_lo: f64,
+    x_hi: f64,
+    y_lo: f64,
+    y_hi: f64,
+    t0: f64,
+    t1: f64,
+    lo: f64,
+    hi: f64,
+}
+
+impl Panel {
+    /// The panel whose top is at `y0`, spanning every value of its curves with 5 % to spare.
+    fn new(y0: f64, w: f64, panel_h: f64, fitted: &[Curve], prev: &[Curve]) -> Panel {
         let (x_lo, x_hi) = (80.0, w - 20.0);
         let (y_lo, y_hi) = (y0 + panel_h - 30.0, y0 + 10.0);
         let t0 = fitted[0].first().map_or(0.0, |p| p.0);
@@ -709,8 +815,33 @@ pub fn report_svg(
         let pad = 0.05 * (hi - lo);
         lo -= pad;
         hi += pad;
-        let px = |t: f64| x_lo + (t - t0) / (t1 - t0) * (x_hi - x_lo);
-        let py = |v: f64| y_lo + (v - lo) / (hi - lo) * (y_hi - y_lo);
+        Panel {
+            x_lo,
+            x_hi,
+            y_lo,
+            y_hi,
+            t0,
+            t1,
+            lo,
+            hi,
+        }
+    }
+
+    /// The page x of time `t`.
+    fn px(&self, t: f64) -> f64 {
+        self.x_lo + (t - self.t0) / (self.t1 - self.t0) * (self.x_hi - self.x_lo)
+    }
+
+    /// The page y of value `v`.
+    fn py(&self, v: f64) -> f64 {
+        self.y_lo + (v - self.lo) / (self.hi - self.lo) * (self.y_hi - self.y_lo)
+    }
+
+    /// The panel's box and its value and time labels.
+    fn draw_frame(&self, svg: &mut dronecine_preview::svg::Svg) {
+        use dronecine_preview::svg::{Anchor, Style};
+        let (x_lo, x_hi, y_lo, y_hi) = (self.x_lo, self.x_hi, self.y_lo, self.y_hi);
+        let (t0, t1, lo, hi) = (self.t0, self.t1, self.lo, self.hi);
         svg.rect(
             x_lo,
             y_hi,
@@ -750,21 +881,29 @@ pub fn report_svg(
             "#666666",
             &format!("{t1:.1} s"),
         );
+    }
+
+    /// The measured, fitted and previous curves, and a note when they are in world x and y.
+    fn draw_curves(&self, svg: &mut dronecine_preview::svg::Svg, fitted: &[Curve], prev: &[Curve]) {
+        use dronecine_preview::svg::{Anchor, Style};
         for (fitted, prev) in fitted.iter().zip(prev) {
             let measured: Vec<[f64; 2]> = fitted
                 .iter()
-                .filter_map(|p| p.1.map(|v| [px(p.0), py(v)]))
+                .filter_map(|p| p.1.map(|v| [self.px(p.0), self.py(v)]))
                 .collect();
-            let model: Vec<[f64; 2]> = fitted.iter().map(|p| [px(p.0), py(p.2)]).collect();
-            let before: Vec<[f64; 2]> = prev.iter().map(|p| [px(p.0), py(p.2)]).collect();
+            let model: Vec<[f64; 2]> = fitted
+                .iter()
+                .map(|p| [self.px(p.0), self.py(p.2)])
+                .collect();
+            let before: Vec<[f64; 2]> = prev.iter().map(|p| [self.px(p.0), self.py(p.2)]).collect();
             svg.polyline(&measured, &Style::stroke("#222222", 2.5));
             svg.polyline(&model, &Style::stroke("#1f77b4", 1.5));
             svg.polyline(&before, &Style::stroke("#d62728", 1.5).dashed("6 4"));
         }
         if fitted.len() == 2 {
             svg.text(
-                0.5 * (x_lo + x_hi),
-                y_lo + 16.0,
+                0.5 * (self.x_lo + self.x_hi),
+                self.y_lo + 16.0,
                 11.0,
                 Anchor::Middle,
                 "#666666",
@@ -772,7 +911,6 @@ pub fn report_svg(
             );
         }
     }
-    Some(svg.finish())
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! System identification of the servo's model (control.md §2–3) from a measured response:
+//! System identification of the servo's model from a measured response:
 //! the fit behind `dronecine calibrate` and `dronecine identify`. Pure functions, no I/O.
 //!
 //! **Data.** A [`Segment`] is a run of [`Sample`]s: at `t_s` the mocap measured the pose
@@ -7,15 +7,14 @@
 //! anywhere (a test window, a few seconds of a flight log).
 //!
 //! **Translation axes: prediction-error fit (`pem.rs`).** Roll, pitch and vertical speed are
-//! fitted by maximum likelihood through a Kalman filter whose model is control.md §2's (the
+//! fitted by maximum likelihood through a Kalman filter whose model is the servo's (the
 //! body-frame lag `v̇_b = (P·K·u − v_b)/τ`, exact per tick, heading frozen at the tick's
 //! midpoint) plus what a real flight adds and the servo's model leaves out: a drift that
 //! random-walks (wind), an attitude lag and a command latency. Gains come in closed form
 //! for each (τ, lag, latency, drift intensity), which a simplex searches. A gusty stage, a
-//! latency or a closed loop no longer bias K and τ (on the full simulator: within ±15 %
-//! with ±10–13 % intervals from 12 doublets per axis; the output-error fit this replaced
-//! refused every axis there). The vertical axis has one gain climbing and one descending;
-//! the profile takes the climb's.
+//! latency or a closed loop do not bias K and τ, where an output-error fit of the servo's
+//! model alone is biased or refused. The vertical axis has one gain climbing and one
+//! descending; the profile takes the climb's.
 //!
 //! **Report curves (output-error).** [`simulate_fit`] draws a test's response with the
 //! fitted model and the segment's initial state fitted by least squares (the body axis at
@@ -27,9 +26,9 @@
 //! **Confidence and quality.** Translation axes: 95 % intervals from the inverse Hessian of
 //! the likelihood, and R² of the model's one-second-ahead predictions against
 //! constant-velocity extrapolation (`pem.rs`). Heading: standard errors from the least
-//! squares, R² against a constant heading. A fit is refused ([`FitError`]) when R² < [`R2_MIN`], a 95 % half-width
-//! exceeds [`CI_REL_MAX`] of its value, τ sits at the edge of the search range, or the axis
-//! was not excited — naming the axis and the test to repeat.
+//! squares, R² against a constant heading. A fit is refused ([`FitError`]) when R² <
+//! [`R2_MIN`], a 95 % half-width exceeds [`CI_REL_MAX`] of its value, τ sits at the edge of
+//! the search range, or the axis was not excited — naming the axis and the test to repeat.
 
 use dronecine_math as math;
 use std::fmt;
@@ -139,7 +138,7 @@ pub struct AxisFit {
     /// Measured samples used.
     pub samples: usize,
     /// Vertical only: K_ż while descending (the AR.Drone's descent is about twice as strong
-    /// as its climb, control.md §5); `gain` is the climb's, the profile's convention.
+    /// as its climb); `gain` is the climb's, the profile's convention.
     pub descent_gain: Option<Estimate>,
     /// Translation axes: the command latency and (roll, pitch) the attitude lag the fit
     /// found, seconds — the servo's model has neither, they are reported only.
@@ -442,7 +441,7 @@ enum Drive {
 
 /// The model's world x, y positions (stacked) for one drive, at time constants
 /// `taus = [τ_φ, τ_θ]`: per interval the body-frame lag toward `P·K·u + Mᵀw` at the
-/// interval's heading (control.md §2, heading frozen per step), integrated exactly.
+/// interval's heading (heading frozen per step), integrated exactly.
 fn plane_response(d: &PlaneData, taus: [f64; 2], drive: Drive) -> Vec<f64> {
     let n = d.dt.len();
     let mut out = vec![0.0; 2 * n];

@@ -4,20 +4,19 @@
 //! `shoot` log), where the plain output-error fit of [`super`] is biased or refused.
 //!
 //! **Model.** Per tick (command held over Δ, heading frozen at the tick's mid-heading) the
-//! exact discretisation of control.md §2 behind an attitude lag and a latency:
+//! exact discretisation of the servo's model behind an attitude lag and a latency:
 //! `ȧ = (K·u(t − latency) − a)/τ_a`, `v̇_b = (a − v_b)/τ` per body axis, plus a drift `d`
 //! that moves the drone directly: `ḋ = (w − d)/τ_d`, `w` a random walk of intensity `q`
 //! (m²/s³ per axis); positions are measured with white noise of variance `r`. Horizontal:
 //! states `[x, y, vx, vy, a_fwd, a_left, wx, wy, dx, dy]`, gains `[K_φ, K_θ]`, time
 //! constants `[τ_φ, τ_θ, τ_a, τ_d]`. Vertical: `[z, ż, d]`, `d` a random walk, one gain
-//! climbing and one descending (the AR.Drone descends about twice as fast as it climbs,
-//! control.md §5), one τ.
+//! climbing and one descending (the AR.Drone descends about twice as fast as it climbs),
+//! one τ.
 //!
 //! The drift is deliberately *not* fed through the drag's lag, although wind physically
 //! is: tied to τ, a disturbance model that misses the real gusts' spectrum pulls τ (and K)
-//! with it — 30–40 % on the simulator's smooth gusts. Kept apart (a Box–Jenkins structure),
-//! the open-loop tests' K and τ stay unbiased whatever the gusts' spectrum; `τ_d` lets the
-//! drift be as smooth as the gusts are. The attitude lag is held below half the drag's τ:
+//! with it. Kept apart (a Box–Jenkins structure), the open-loop tests' K and τ stay unbiased
+//! whatever the gusts' spectrum; `τ_d` lets the drift be as smooth as the gusts are. The attitude lag is held below half the drag's τ:
 //! two lags in cascade answer the input alike whichever is which.
 //!
 //! **Likelihood.** The filter's covariances do not depend on the gains, and the innovations
@@ -27,8 +26,8 @@
 //! every covariance too. What is left, `ℓ(τs, λ = ln q/r, latency) = ½ Σ ln det S̃ + ½ n ln
 //! σ̂²`, is minimised by a grid, then Nelder–Mead. The transition is reused while the tick's
 //! length and heading hold, and the covariance recursion stops once converged (the steady
-//! state), which keeps a fit of an eight-minute calibration to about a second. The first [`BURN_IN`] measurements of each segment only start the
-//! filter (a diffuse start).
+//! state), which keeps a fit of an eight-minute calibration to about a second. The first
+//! [`BURN_IN`] measurements of each segment only start the filter (a diffuse start).
 //!
 //! **Intervals and quality.** 95 % intervals from the inverse Hessian (central differences)
 //! of ℓ over the gains, the τs and λ. The quality figure is the R² of the fitted model's
@@ -86,7 +85,7 @@ const LATENCY_START_S: f64 = 0.03;
 /// The attitude lag's range: from nothing to this share of the faster velocity lag.
 const ATTITUDE_LAG_MIN_S: f64 = 1e-3;
 const ATTITUDE_LAG_MAX_SHARE: f64 = 0.5;
-/// Where the search for the attitude lag starts (tum_ardrone's 1/7 s, control.md §5).
+/// Where the search for the attitude lag starts (tum_ardrone's 1/7 s).
 const ATTITUDE_LAG_START_S: f64 = 0.15;
 
 /// One tick of a segment: the interval, the heading it flies at, the drive of each gain's
@@ -632,144 +631,17 @@ where
         return None;
     }
     let r0 = rough_noise(segs);
-    // Parameters: ln τ (T of them), λ, the command latency.
-    let unpack = |x: &[f64]| -> (Vec<f64>, f64, f64, f64) {
-        let mut pen = 0.0;
-        let taus = (0..T)
-            .map(|j| {
-                let (lo, hi) = F::ln_tau_range(j, x);
-                let c = x[j].clamp(lo, hi);
-                pen += (x[j] - c).powi(2);
-                math::exp(c)
-            })
-            .collect();
-        let l = x[T].clamp(LAMBDA_MIN, LAMBDA_MAX);
-        pen += (x[T] - l).powi(2);
-        let d = x[T + 1].clamp(0.0, LATENCY_MAX_S);
-        pen += ((x[T + 1] - d) / LATENCY_MAX_S).powi(2);
-        (taus, l, d, pen)
-    };
-    let objective = |x: &[f64]| -> f64 {
-        let (taus, l, d, pen) = unpack(x);
-        let (p, _) = pass::<F, N, M, L>(segs, &taus, l, d, r0, None);
-        if p.n == 0 {
-            return f64::INFINITY;
-        }
-        let nll = p.nll(&p.gains(&excited));
-        if nll.is_finite() {
-            nll + 1e3 * pen
-        } else {
-            f64::INFINITY
-        }
-    };
-    // Grid on a common τ and λ, then the simplex.
-    let mut best = (f64::INFINITY, vec![0.0; T + 2]);
-    for it in 0..5 {
-        let lt = math::ln(0.25f64 * 2.5f64.powi(it));
-        for il in 0..5 {
-            let l = 2.0 * il as f64 + if T > 1 { 8.0 } else { -6.0 };
-            let mut x = F::grid_taus(lt);
-            x.push(l);
-            x.push(LATENCY_START_S);
-            let v = objective(&x);
-            if v < best.0 {
-                best = (v, x);
-            }
-        }
-    }
-    let run = |x0: Vec<f64>| -> Vec<f64> {
-        // Nelder–Mead over the free parameters only.
-        let free: Vec<usize> = (0..T).filter(|&j| tau_free[j]).chain([T, T + 1]).collect();
-        let full = |y: &[f64]| -> Vec<f64> {
-            let mut x = x0.clone();
-            for (i, &fi) in free.iter().enumerate() {
-                x[fi] = y[i];
-            }
-            x
-        };
-        let y0: Vec<f64> = free.iter().map(|&i| x0[i]).collect();
-        let steps: Vec<f64> = free
-            .iter()
-            .map(|&i| match i - T.min(i) {
-                _ if i < T => 0.3,
-                0 => 2.0,
-                _ => 0.02,
-            })
-            .collect();
-        let y = nelder_mead(&|y| objective(&full(y)), &y0, &steps, 60 * free.len());
-        full(&y)
-    };
-    let x = run(best.1);
-    let (taus, lambda, delay_s, _) = unpack(&x);
+    let objective = |x: &[f64]| objective::<F, N, M, L, T>(segs, &excited, r0, x);
+    let x = refine::<T>(
+        &objective,
+        grid_start::<F, N, M, L, T>(&objective),
+        tau_free,
+    );
+    let (taus, lambda, delay_s, _) = unpack::<F, N, M, L, T>(&x);
     let (p, _) = pass::<F, N, M, L>(segs, &taus, lambda, delay_s, r0, None);
     let k = p.gains(&excited);
     let sigma2 = p.ssr(&k) / p.n as f64;
-
-    // Intervals: the Hessian of ℓ over (gains, ln τ, λ), free parameters only.
-    let mut names: Vec<(usize, f64)> = Vec::new(); // (parameter index, step)
-    for j in 0..L {
-        if excited[j] {
-            names.push((j, (k[j].abs() * 1e-3).max(1e-6)));
-        }
-    }
-    // A parameter that ended on a bound of its range (no attitude lag, no latency, no wind)
-    // is held there: the likelihood has no interior curvature in it.
-    let inside = |i: usize, lo: f64, hi: f64| x[i] > lo + 1e-3 && x[i] < hi - 1e-3;
-    for (j, free) in tau_free.iter().enumerate() {
-        let (lo, hi) = F::ln_tau_range(j, &x);
-        if *free && inside(j, lo, hi) {
-            names.push((L + j, 1e-3));
-        }
-    }
-    if inside(T, LAMBDA_MIN, LAMBDA_MAX) {
-        names.push((L + T, 1e-2));
-    }
-    if inside(T + 1, 0.0, LATENCY_MAX_S) {
-        names.push((L + T + 1, 1e-3));
-    }
-    let ell = |d: &[(usize, f64)]| -> f64 {
-        let mut kk = k;
-        let mut xx = x.clone();
-        for &(i, dv) in d {
-            if i < L {
-                kk[i] += dv;
-            } else {
-                xx[i - L] += dv;
-            }
-        }
-        let (taus, l, d, _) = unpack(&xx);
-        let (pp, _) = pass::<F, N, M, L>(segs, &taus, l, d, r0, None);
-        pp.nll(&kk)
-    };
-    let m = names.len();
-    let f0 = ell(&[]);
-    let mut hess = nalgebra::DMatrix::<f64>::zeros(m, m);
-    for a in 0..m {
-        let (ia, ha) = names[a];
-        let fp = ell(&[(ia, ha)]);
-        let fm = ell(&[(ia, -ha)]);
-        hess[(a, a)] = (fp - 2.0 * f0 + fm) / (ha * ha);
-        for b in 0..a {
-            let (ib, hb) = names[b];
-            let fpp = ell(&[(ia, ha), (ib, hb)]);
-            let fpm = ell(&[(ia, ha), (ib, -hb)]);
-            let fmp = ell(&[(ia, -ha), (ib, hb)]);
-            let fmm = ell(&[(ia, -ha), (ib, -hb)]);
-            let v = (fpp - fpm - fmp + fmm) / (4.0 * ha * hb);
-            hess[(a, b)] = v;
-            hess[(b, a)] = v;
-        }
-    }
-    let cov = hess.try_inverse();
-    let sd = |param: usize| -> f64 {
-        let Some(cov) = &cov else {
-            return f64::INFINITY;
-        };
-        names
-            .iter()
-            .position(|(i, _)| *i == param)
-            .map_or(0.0, |r| cov[(r, r)].max(0.0).sqrt())
-    };
+    let sd = std_devs::<F, N, M, L, T>(segs, r0, &x, &k, &excited, tau_free);
     let gains = std::array::from_fn(|j| Estimate {
         value: k[j],
         ci95: if excited[j] {
@@ -795,6 +667,204 @@ where
         rms_m: sigma2.sqrt(),
         samples: p.n / M,
     })
+}
+
+/// The parameters `x` (ln τ for each of the `T` time constants, λ, the command latency) as
+/// (τs, λ, latency) clamped into their ranges, and the penalty of the clamping.
+fn unpack<F, const N: usize, const M: usize, const L: usize, const T: usize>(
+    x: &[f64],
+) -> (Vec<f64>, f64, f64, f64)
+where
+    F: Family<N, M, L>,
+{
+    let mut pen = 0.0;
+    let taus = (0..T)
+        .map(|j| {
+            let (lo, hi) = F::ln_tau_range(j, x);
+            let c = x[j].clamp(lo, hi);
+            pen += (x[j] - c).powi(2);
+            math::exp(c)
+        })
+        .collect();
+    let l = x[T].clamp(LAMBDA_MIN, LAMBDA_MAX);
+    pen += (x[T] - l).powi(2);
+    let d = x[T + 1].clamp(0.0, LATENCY_MAX_S);
+    pen += ((x[T + 1] - d) / LATENCY_MAX_S).powi(2);
+    (taus, l, d, pen)
+}
+
+/// The concentrated negative log-likelihood at parameters `x` (see [`unpack`]) and the best
+/// gains, plus the clamping penalty; infinite where the filter fails.
+fn objective<F, const N: usize, const M: usize, const L: usize, const T: usize>(
+    segs: &[Vec<Tick<M, L>>],
+    excited: &[bool; L],
+    r0: f64,
+    x: &[f64],
+) -> f64
+where
+    F: Family<N, M, L>,
+{
+    let (taus, l, d, pen) = unpack::<F, N, M, L, T>(x);
+    let (p, _) = pass::<F, N, M, L>(segs, &taus, l, d, r0, None);
+    if p.n == 0 {
+        return f64::INFINITY;
+    }
+    let nll = p.nll(&p.gains(excited));
+    if nll.is_finite() {
+        nll + 1e3 * pen
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The best point of a grid on a common τ and λ, the latency at its start: where the simplex
+/// starts.
+fn grid_start<F, const N: usize, const M: usize, const L: usize, const T: usize>(
+    objective: &dyn Fn(&[f64]) -> f64,
+) -> Vec<f64>
+where
+    F: Family<N, M, L>,
+{
+    let mut best = (f64::INFINITY, vec![0.0; T + 2]);
+    for it in 0..5 {
+        let lt = math::ln(0.25f64 * 2.5f64.powi(it));
+        for il in 0..5 {
+            let l = 2.0 * il as f64 + if T > 1 { 8.0 } else { -6.0 };
+            let mut x = F::grid_taus(lt);
+            x.push(l);
+            x.push(LATENCY_START_S);
+            let v = objective(&x);
+            if v < best.0 {
+                best = (v, x);
+            }
+        }
+    }
+    best.1
+}
+
+/// Nelder–Mead from `x0` over the free parameters only (the τs marked in `tau_free`, λ and
+/// the latency); the others stay at `x0`'s values.
+fn refine<const T: usize>(
+    objective: &dyn Fn(&[f64]) -> f64,
+    x0: Vec<f64>,
+    tau_free: [bool; T],
+) -> Vec<f64> {
+    let free: Vec<usize> = (0..T).filter(|&j| tau_free[j]).chain([T, T + 1]).collect();
+    let full = |y: &[f64]| -> Vec<f64> {
+        let mut x = x0.clone();
+        for (i, &fi) in free.iter().enumerate() {
+            x[fi] = y[i];
+        }
+        x
+    };
+    let y0: Vec<f64> = free.iter().map(|&i| x0[i]).collect();
+    let steps: Vec<f64> = free
+        .iter()
+        .map(|&i| match i - T.min(i) {
+            _ if i < T => 0.3,
+            0 => 2.0,
+            _ => 0.02,
+        })
+        .collect();
+    let y = nelder_mead(&|y| objective(&full(y)), &y0, &steps, 60 * free.len());
+    full(&y)
+}
+
+/// The standard deviations of the fit at parameters `x` and gains `k`, from the inverse
+/// Hessian (central differences) of ℓ over the free gains, ln τs and λ (and the latency):
+/// per parameter index (gains first, then `L +` the index in `x`), 0 for a parameter held,
+/// infinite for all when the Hessian is singular.
+fn std_devs<F, const N: usize, const M: usize, const L: usize, const T: usize>(
+    segs: &[Vec<Tick<M, L>>],
+    r0: f64,
+    x: &[f64],
+    k: &SVector<f64, L>,
+    excited: &[bool; L],
+    tau_free: [bool; T],
+) -> impl Fn(usize) -> f64
+where
+    F: Family<N, M, L>,
+{
+    let names = hessian_parameters::<F, N, M, L, T>(x, k, excited, tau_free);
+    let ell = |d: &[(usize, f64)]| -> f64 {
+        let mut kk = *k;
+        let mut xx = x.to_vec();
+        for &(i, dv) in d {
+            if i < L {
+                kk[i] += dv;
+            } else {
+                xx[i - L] += dv;
+            }
+        }
+        let (taus, l, d, _) = unpack::<F, N, M, L, T>(&xx);
+        let (pp, _) = pass::<F, N, M, L>(segs, &taus, l, d, r0, None);
+        pp.nll(&kk)
+    };
+    let m = names.len();
+    let f0 = ell(&[]);
+    let mut hess = nalgebra::DMatrix::<f64>::zeros(m, m);
+    for a in 0..m {
+        let (ia, ha) = names[a];
+        let fp = ell(&[(ia, ha)]);
+        let fm = ell(&[(ia, -ha)]);
+        hess[(a, a)] = (fp - 2.0 * f0 + fm) / (ha * ha);
+        for b in 0..a {
+            let (ib, hb) = names[b];
+            let fpp = ell(&[(ia, ha), (ib, hb)]);
+            let fpm = ell(&[(ia, ha), (ib, -hb)]);
+            let fmp = ell(&[(ia, -ha), (ib, hb)]);
+            let fmm = ell(&[(ia, -ha), (ib, -hb)]);
+            let v = (fpp - fpm - fmp + fmm) / (4.0 * ha * hb);
+            hess[(a, b)] = v;
+            hess[(b, a)] = v;
+        }
+    }
+    let cov = hess.try_inverse();
+    move |param: usize| -> f64 {
+        let Some(cov) = &cov else {
+            return f64::INFINITY;
+        };
+        names
+            .iter()
+            .position(|(i, _)| *i == param)
+            .map_or(0.0, |r| cov[(r, r)].max(0.0).sqrt())
+    }
+}
+
+/// The parameters the Hessian is taken over, each with its difference step: the excited
+/// gains (indices `0..L`), then, as `L +` their index in `x`, the free ln τs, λ and the
+/// latency that ended inside their ranges.
+fn hessian_parameters<F, const N: usize, const M: usize, const L: usize, const T: usize>(
+    x: &[f64],
+    k: &SVector<f64, L>,
+    excited: &[bool; L],
+    tau_free: [bool; T],
+) -> Vec<(usize, f64)>
+where
+    F: Family<N, M, L>,
+{
+    let mut names: Vec<(usize, f64)> = Vec::new(); // (parameter index, step)
+    for j in 0..L {
+        if excited[j] {
+            names.push((j, (k[j].abs() * 1e-3).max(1e-6)));
+        }
+    }
+    // A parameter that ended on a bound of its range (no attitude lag, no latency, no wind)
+    // is held there: the likelihood has no interior curvature in it.
+    let inside = |i: usize, lo: f64, hi: f64| x[i] > lo + 1e-3 && x[i] < hi - 1e-3;
+    for (j, free) in tau_free.iter().enumerate() {
+        let (lo, hi) = F::ln_tau_range(j, x);
+        if *free && inside(j, lo, hi) {
+            names.push((L + j, 1e-3));
+        }
+    }
+    if inside(T, LAMBDA_MIN, LAMBDA_MAX) {
+        names.push((L + T, 1e-2));
+    }
+    if inside(T + 1, 0.0, LATENCY_MAX_S) {
+        names.push((L + T + 1, 1e-3));
+    }
+    names
 }
 
 /// R² of the [`HORIZON_S`]-ahead predictions against constant-velocity extrapolation.

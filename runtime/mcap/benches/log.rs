@@ -1,9 +1,10 @@
 //! The flight log's cost: writing ticks (per tick, and one hour = 360,000 ticks at 100 Hz with
 //! two actors), with and without LZ4 chunks, and reading the hour back; and what each group of
-//! plot topics (`/tf`, `/measurement`, the 10 Hz plots; CDR) adds to the hour (`log_hour_without`: the hour with that group's rate set to
-//! nothing, so the difference with `log_hour/write_none` is the group's cost).
+//! plot topics (`/tf`, `/measurement`, the 10 Hz plots; CDR) adds to the hour
+//! (`log_hour_without`: the hour with that group's rate set to nothing, so the difference with
+//! `log_hour/write_none` is the group's cost).
 //!
-//! Run: `cargo bench -p dronecine-runtime --bench log`.
+//! Run: `cargo bench -p dronecine-mcap --bench log`.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -152,9 +153,9 @@ fn header(names: &[String]) -> FlightHeader {
     }
 }
 
-/// This thread's CPU time (`/proc/thread-self/schedstat`, Linux), else `None`. On the shared
-/// development machine (2 cores, several jobs) wall time counts the time other jobs hold the
-/// core; CPU time is what the flight loop's budget is about.
+/// This thread's CPU time (`/proc/thread-self/schedstat`, Linux), else `None`. On a machine
+/// shared with other jobs wall time counts the time they hold the core; CPU time is what the
+/// flight loop's budget is about.
 fn cpu_time() -> Option<Duration> {
     let stat = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
     let ns: u64 = stat.split_whitespace().next()?.parse().ok()?;

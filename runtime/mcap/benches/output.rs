@@ -1,7 +1,7 @@
 //! The writers on a one-hour reference at 100 Hz (360,000 samples, 2 actors): MCAP with each
 //! chunk compression (Zstandard at level 1), and CSV. Prints each file's size once.
 //!
-//! Run: `cargo bench -p dronecine-compiler --bench output -- --warm-up-time 1`
+//! Run: `cargo bench -p dronecine-mcap --bench output -- --warm-up-time 1`
 
 use std::f64::consts::PI;
 use std::path::Path;

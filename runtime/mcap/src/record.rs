@@ -49,8 +49,8 @@ pub struct FlightHeader {
     /// The simulator's seed (`None` on hardware).
     pub seed: Option<u64>,
     /// The simulator's effects that were off, by their names (the simulator's `Effects::NAMES`;
-    /// `[]`: every effect on, the default; `None` on hardware, and in logs whose format
-    /// predates the field): with the seed, what reproduces a simulated flight.
+    /// `[]`: every effect on, the default; `None` on hardware, and in logs that do not
+    /// record it): with the seed, what reproduces a simulated flight.
     #[serde(default)]
     pub sim_effects_off: Option<Vec<String>>,
     pub rate_hz: f64,

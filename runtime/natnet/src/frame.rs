@@ -1,6 +1,5 @@
-//! OptiTrack NatNet 3.0–4.1 messages (protocols.md §4.1): the server-info handshake, the
-//! frame of data (decoder and encoder), and the conversion of Motive's axes to the world
-//! frame of `frames.rs`.
+//! OptiTrack NatNet 3.0–4.1 messages: the server-info handshake, the frame of data (decoder
+//! and encoder), and the conversion of Motive's axes to the world frame of `frames.rs`.
 //!
 //! Every message is `u16 id, u16 payload byte count, payload`, little-endian.
 //!
@@ -31,9 +30,9 @@
 //!
 //! NatNet 3.x sections are walked element by element; 4.1 sections are skipped by their
 //! byte counts (rigid bodies are decoded and must fill their count exactly). The payload
-//! must end right after the end-of-data tag. Sources: protocols.md §4.1, checked against
-//! the NatNet SDK's `PacketClient.cpp` and `NatNetClient.py`. Versions outside 3.0–4.1 are
-//! refused. Nothing panics; decoding reuses the caller's rigid-body vector.
+//! must end right after the end-of-data tag, as in the NatNet SDK's `PacketClient.cpp` and
+//! `NatNetClient.py`. Versions outside 3.0–4.1 are refused. Nothing panics; decoding reuses
+//! the caller's rigid-body vector.
 //!
 //! **Axes** ([`to_world`]): the world frame is x, y on the floor, z up (`frames.rs`).
 //! Motive streams Y-up (its default) or Z-up. Y-up: world = (x, −z, y) of Motive's, a
@@ -612,6 +611,41 @@ impl<'a> Reader<'a> {
         })
     }
 
+    /// A section's opening: its count (elements of at least `min_elem` bytes) and, when the
+    /// version has them (`sized`, 4.1), its byte count. In 4.1, sections not decoded are
+    /// skipped by their byte count.
+    fn open(
+        &mut self,
+        sized: bool,
+        min_elem: usize,
+        name: &'static str,
+    ) -> Result<(usize, Option<usize>), NatNetError> {
+        let n = self.count(min_elem)?;
+        let size = if sized {
+            Some(self.section_size(name)?)
+        } else {
+            None
+        };
+        Ok((n, size))
+    }
+
+    /// Checks a section's byte count, if any, against its `n` elements of `elem` bytes.
+    fn check_fixed(
+        &self,
+        n: usize,
+        size: Option<usize>,
+        elem: usize,
+        name: &'static str,
+    ) -> Result<(), NatNetError> {
+        match size {
+            Some(s) if s != n * elem => Err(NatNetError::BadSectionSize {
+                section: name,
+                offset: self.off,
+            }),
+            _ => Ok(()),
+        }
+    }
+
     /// Force plates and devices: n × (id, channels, per channel k, k × f32).
     fn skip_channels(&mut self, n: usize) -> Result<(), NatNetError> {
         for _ in 0..n {
@@ -659,38 +693,8 @@ pub fn decode_frame_payload(
     let mut r = Reader::new(payload);
     out.frame_number = r.i32()?;
 
-    // A section: (count, 4.1 byte count). In 4.1, sections not decoded are skipped by
-    // their byte count; `fixed` is the element size when elements have one, checked
-    // against the byte count.
-    let open = |r: &mut Reader<'_>,
-                min_elem: usize,
-                name: &'static str|
-     -> Result<(usize, Option<usize>), NatNetError> {
-        let n = r.count(min_elem)?;
-        let size = if sized {
-            Some(r.section_size(name)?)
-        } else {
-            None
-        };
-        Ok((n, size))
-    };
-    let check_fixed = |r: &Reader<'_>,
-                       n: usize,
-                       size: Option<usize>,
-                       elem: usize,
-                       name: &'static str|
-     -> Result<(), NatNetError> {
-        match size {
-            Some(s) if s != n * elem => Err(NatNetError::BadSectionSize {
-                section: name,
-                offset: r.off,
-            }),
-            _ => Ok(()),
-        }
-    };
-
     // Marker sets: C-string name (≥ 1 byte), i32 count, 12 bytes per marker.
-    let (n, size) = open(&mut r, 5, "marker set")?;
+    let (n, size) = r.open(sized, 5, "marker set")?;
     out.marker_set_count = n as u32;
     match size {
         Some(s) => {
@@ -706,14 +710,14 @@ pub fn decode_frame_payload(
     }
 
     // Other (legacy unlabeled) markers: 12 bytes each.
-    let (n, size) = open(&mut r, 12, "other marker")?;
-    check_fixed(&r, n, size, 12, "other marker")?;
+    let (n, size) = r.open(sized, 12, "other marker")?;
+    r.check_fixed(n, size, 12, "other marker")?;
     out.other_marker_count = n as u32;
     r.take(n * 12)?;
 
     // Rigid bodies: 38 bytes each, decoded.
-    let (n, size) = open(&mut r, RIGID_BODY_LEN, "rigid body")?;
-    check_fixed(&r, n, size, RIGID_BODY_LEN, "rigid body")?;
+    let (n, size) = r.open(sized, RIGID_BODY_LEN, "rigid body")?;
+    r.check_fixed(n, size, RIGID_BODY_LEN, "rigid body")?;
     out.rigid_bodies.clear();
     out.rigid_bodies.reserve(n);
     for _ in 0..n {
@@ -722,7 +726,7 @@ pub fn decode_frame_payload(
     }
 
     // Skeletons: i32 id, i32 bone count, 38 bytes per bone.
-    let (n, size) = open(&mut r, 8, "skeleton")?;
+    let (n, size) = r.open(sized, 8, "skeleton")?;
     out.skeleton_count = n as u32;
     match size {
         Some(s) => {
@@ -740,14 +744,14 @@ pub fn decode_frame_payload(
     // Assets (4.1): skipped by their byte count.
     out.asset_count = 0;
     if sized {
-        let (n, size) = open(&mut r, 0, "asset")?;
+        let (n, size) = r.open(sized, 0, "asset")?;
         out.asset_count = n as u32;
         r.take(size.unwrap_or(0))?;
     }
 
     // Labeled markers: 26 bytes each.
-    let (n, size) = open(&mut r, LABELED_MARKER_LEN, "labeled marker")?;
-    check_fixed(&r, n, size, LABELED_MARKER_LEN, "labeled marker")?;
+    let (n, size) = r.open(sized, LABELED_MARKER_LEN, "labeled marker")?;
+    r.check_fixed(n, size, LABELED_MARKER_LEN, "labeled marker")?;
     out.labeled_marker_count = n as u32;
     r.take(n * LABELED_MARKER_LEN)?;
 
@@ -756,7 +760,7 @@ pub fn decode_frame_payload(
         ("force plate", &mut out.force_plate_count),
         ("device", &mut out.device_count),
     ] {
-        let (n, size) = open(&mut r, 8, name)?;
+        let (n, size) = r.open(sized, 8, name)?;
         *count = n as u32;
         match size {
             Some(s) => {
@@ -766,7 +770,12 @@ pub fn decode_frame_payload(
         }
     }
 
-    // Suffix.
+    decode_suffix(&mut r, sized, out)
+}
+
+/// The frame's suffix: timecode, timestamps and parameters, then the end-of-data tag, which
+/// must end the payload.
+fn decode_suffix(r: &mut Reader<'_>, sized: bool, out: &mut Frame) -> Result<(), NatNetError> {
     out.timecode = r.u32()?;
     out.timecode_sub = r.u32()?;
     out.timestamp_s = r.f64()?;

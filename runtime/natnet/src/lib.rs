@@ -7,7 +7,7 @@
 //! - [`rig`]: which rigid body is the drone and which each actor (`rig::` diagnostics).
 //! - [`client`]: the motion capture over UDP, unicast or multicast, frames timestamped on
 //!   arrival on the flight's clock.
-//! - [`url`]: `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`.
+//! - [`url`]: the address, `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`.
 
 pub mod client;
 pub mod frame;

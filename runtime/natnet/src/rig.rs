@@ -187,40 +187,39 @@ impl Reader {
     }
 }
 
-impl Rig {
-    /// Parses and checks a rig file's text: the rig, or every mistake in it.
-    pub fn from_toml(src: &str) -> Result<Rig, RigError> {
-        let invalid = |diagnostics: Vec<Diagnostic>| RigError::Invalid {
-            source: src.to_string(),
-            diagnostics,
-        };
-        let (doc, errors) = DeTable::parse_recoverable(src);
-        if !errors.is_empty() {
-            let diags = errors
-                .iter()
-                .take(20)
-                .map(|e| {
-                    let span = error_span(src, e, 0);
-                    let first = e
-                        .message()
-                        .trim()
-                        .lines()
-                        .next()
-                        .unwrap_or("invalid TOML")
-                        .to_string();
-                    Diagnostic::error(RigCode::Syntax, span, format!("invalid TOML: {first}"))
-                        .with_label(first)
-                        .with_help(format!(
-                            "a rig file is TOML, one `key = value` per line: {EXAMPLE}"
-                        ))
-                })
-                .collect();
-            return Err(invalid(diags));
-        }
-        let mut r = Reader { diags: Vec::new() };
-        let root = doc.get_ref();
-        let get = |key: &str| root.iter().find(|(k, _)| k.get_ref().as_ref() == key);
+/// The value of `key` at the top of the rig file, if any.
+fn get<'t, 'i>(root: &'t DeTable<'i>, key: &str) -> Option<&'t Spanned<DeValue<'i>>> {
+    root.iter()
+        .find(|(k, _)| k.get_ref().as_ref() == key)
+        .map(|(_, v)| v)
+}
 
+/// The `rig::syntax` diagnostics of a text that is not valid TOML (the first 20 errors).
+fn syntax_diagnostics(src: &str, errors: &[toml::de::Error]) -> Vec<Diagnostic> {
+    errors
+        .iter()
+        .take(20)
+        .map(|e| {
+            let span = error_span(src, e, 0);
+            let first = e
+                .message()
+                .trim()
+                .lines()
+                .next()
+                .unwrap_or("invalid TOML")
+                .to_string();
+            Diagnostic::error(RigCode::Syntax, span, format!("invalid TOML: {first}"))
+                .with_label(first)
+                .with_help(format!(
+                    "a rig file is TOML, one `key = value` per line: {EXAMPLE}"
+                ))
+        })
+        .collect()
+}
+
+impl Reader {
+    /// Reports every top-level key a rig file does not have, with the closest one it does.
+    fn unknown_keys(&mut self, root: &DeTable<'_>) {
         for (k, _) in root.iter() {
             let name = k.get_ref().as_ref();
             if KEYS.contains(&name) {
@@ -231,110 +230,148 @@ impl Rig {
                 Some(g) => format!("did you mean `{g}`? A rig file has {}", KEYS.join(", ")),
                 None => format!("a rig file has {} (for example {EXAMPLE})", KEYS.join(", ")),
             };
-            r.diags.push(
+            self.diags.push(
                 Diagnostic::error(RigCode::UnknownKey, sp(k), format!("unknown key `{name}`"))
                     .with_label("not a rig key")
                     .with_help(help),
             );
         }
+    }
 
-        let up = match get("up") {
-            Some((_, v)) => match v.get_ref() {
-                DeValue::String(t) if t.eq_ignore_ascii_case("y") => Some(UpAxis::Y),
-                DeValue::String(t) if t.eq_ignore_ascii_case("z") => Some(UpAxis::Z),
-                other => {
-                    r.bad(
-                        sp(v),
-                        format!(
-                            "`up` is {}: Motive streams \"y\" (its default) or \"z\" as up",
-                            kind_of(other)
-                        ),
-                        "\"y\" or \"z\"",
-                        "write `up = \"y\"` unless Motive's streaming settings say Z up".into(),
-                    );
-                    None
-                }
-            },
-            None => None,
-        };
-        let drone = get("drone").and_then(|(_, v)| r.id("`drone`", v).map(|id| (id, sp(v))));
+    /// The `up` axis, if given and valid.
+    fn up(&mut self, root: &DeTable<'_>) -> Option<UpAxis> {
+        let v = get(root, "up")?;
+        match v.get_ref() {
+            DeValue::String(t) if t.eq_ignore_ascii_case("y") => Some(UpAxis::Y),
+            DeValue::String(t) if t.eq_ignore_ascii_case("z") => Some(UpAxis::Z),
+            other => {
+                self.bad(
+                    sp(v),
+                    format!(
+                        "`up` is {}: Motive streams \"y\" (its default) or \"z\" as up",
+                        kind_of(other)
+                    ),
+                    "\"y\" or \"z\"",
+                    "write `up = \"y\"` unless Motive's streaming settings say Z up".into(),
+                );
+                None
+            }
+        }
+    }
+
+    /// Reports `up` and `drone` when missing (at the end of the file).
+    fn missing_keys(&mut self, src: &str, root: &DeTable<'_>) {
         for (key, example) in [("up", "up = \"y\""), ("drone", "drone = 1")] {
-            if get(key).is_none() {
-                r.diags.push(
+            if get(root, key).is_none() {
+                self.diags.push(
                     Diagnostic::error(RigCode::MissingKey, eof_span(src), format!("the rig has no `{key}`"))
                         .with_label(format!("`{key}` is required"))
                         .with_help(format!("add `{example}` (the drone's streaming id and Motive's up axis are always needed)")),
                 );
             }
         }
+    }
 
-        // Actors, each id distinct from the drone's and the others'.
+    /// The `[actors]` table, each id distinct from the drone's (`drone`: its id and where it
+    /// is written) and the others'.
+    fn actors(&mut self, root: &DeTable<'_>, drone: Option<(i32, Span)>) -> BTreeMap<String, i32> {
         let mut actors = BTreeMap::new();
         let mut seen: Vec<(i32, String, Span)> = Vec::new();
         if let Some((id, span)) = drone {
             seen.push((id, "the drone".into(), span));
         }
-        if let Some((_, v)) = get("actors") {
-            match v.get_ref() {
-                DeValue::Table(t) => {
-                    for (k, v) in t.iter() {
-                        let name = k.get_ref().as_ref();
-                        let Some(id) = r.id(&format!("`actors.{name}`"), v) else {
-                            continue;
-                        };
-                        if let Some((_, other, at)) = seen.iter().find(|(i, _, _)| *i == id) {
-                            let d = Diagnostic::error(
-                                RigCode::BadValue,
-                                sp(v),
-                                format!("`actors.{name}` = {id}: rigid body {id} is already {other}"),
-                            )
-                            .with_label(format!("{other}'s body"))
-                            .with_related(*at, format!("{other} is body {id}"))
-                            .with_help("each rigid body tracks one thing: give each actor the id Motive streams for their own body");
-                            r.diags.push(d);
-                            continue;
-                        }
-                        seen.push((id, format!("actor `{name}`"), sp(v)));
-                        actors.insert(name.to_string(), id);
+        let Some(v) = get(root, "actors") else {
+            return actors;
+        };
+        match v.get_ref() {
+            DeValue::Table(t) => {
+                for (k, v) in t.iter() {
+                    let name = k.get_ref().as_ref();
+                    let Some(id) = self.id(&format!("`actors.{name}`"), v) else {
+                        continue;
+                    };
+                    if let Some((_, other, at)) = seen.iter().find(|(i, _, _)| *i == id) {
+                        let d = Diagnostic::error(
+                            RigCode::BadValue,
+                            sp(v),
+                            format!("`actors.{name}` = {id}: rigid body {id} is already {other}"),
+                        )
+                        .with_label(format!("{other}'s body"))
+                        .with_related(*at, format!("{other} is body {id}"))
+                        .with_help("each rigid body tracks one thing: give each actor the id Motive streams for their own body");
+                        self.diags.push(d);
+                        continue;
                     }
+                    seen.push((id, format!("actor `{name}`"), sp(v)));
+                    actors.insert(name.to_string(), id);
                 }
-                other => r.bad(
+            }
+            other => self.bad(
+                sp(v),
+                format!("`actors` must be a table, found {}", kind_of(other)),
+                "expected `[actors]`",
+                "write a section `[actors]` with one `Name = id` line per actor, by the script's names".into(),
+            ),
+        }
+        actors
+    }
+
+    /// `origin_m` (the origin when absent), if valid.
+    fn origin(&mut self, root: &DeTable<'_>) -> Option<[f64; 3]> {
+        let Some(v) = get(root, "origin_m") else {
+            return Some([0.0; 3]);
+        };
+        match v.get_ref().as_array() {
+            Some(items) if items.len() == 3 => {
+                let xs: Vec<Option<f64>> = items
+                    .iter()
+                    .enumerate()
+                    .map(|(i, item)| self.number(&format!("`origin_m[{i}]`"), item))
+                    .collect();
+                match xs[..] {
+                    [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+                    _ => None,
+                }
+            }
+            _ => {
+                self.bad(
                     sp(v),
-                    format!("`actors` must be a table, found {}", kind_of(other)),
-                    "expected `[actors]`",
-                    "write a section `[actors]` with one `Name = id` line per actor, by the script's names".into(),
-                ),
+                    format!(
+                        "`origin_m` must be a list of 3 numbers [x, y, z] in metres, found {}",
+                        kind_of(v.get_ref())
+                    ),
+                    "expected [x, y, z]",
+                    "write where the mocap origin sits on the stage: `origin_m = [0.5, -1.0, 0.0]`"
+                        .into(),
+                );
+                None
             }
         }
+    }
+}
 
-        let origin_m = match get("origin_m") {
-            None => Some([0.0; 3]),
-            Some((_, v)) => match v.get_ref().as_array() {
-                Some(items) if items.len() == 3 => {
-                    let xs: Vec<Option<f64>> = items
-                        .iter()
-                        .enumerate()
-                        .map(|(i, item)| r.number(&format!("`origin_m[{i}]`"), item))
-                        .collect();
-                    match xs[..] {
-                        [Some(x), Some(y), Some(z)] => Some([x, y, z]),
-                        _ => None,
-                    }
-                }
-                _ => {
-                    r.bad(
-                        sp(v),
-                        format!("`origin_m` must be a list of 3 numbers [x, y, z] in metres, found {}", kind_of(v.get_ref())),
-                        "expected [x, y, z]",
-                        "write where the mocap origin sits on the stage: `origin_m = [0.5, -1.0, 0.0]`".into(),
-                    );
-                    None
-                }
-            },
+impl Rig {
+    /// Parses and checks a rig file's text: the rig, or every mistake in it.
+    pub fn from_toml(src: &str) -> Result<Rig, RigError> {
+        let invalid = |diagnostics: Vec<Diagnostic>| RigError::Invalid {
+            source: src.to_string(),
+            diagnostics,
         };
-        let yaw_deg = match get("yaw_deg") {
+        let (doc, errors) = DeTable::parse_recoverable(src);
+        if !errors.is_empty() {
+            return Err(invalid(syntax_diagnostics(src, &errors)));
+        }
+        let mut r = Reader { diags: Vec::new() };
+        let root = doc.get_ref();
+        r.unknown_keys(root);
+        let up = r.up(root);
+        let drone = get(root, "drone").and_then(|v| r.id("`drone`", v).map(|id| (id, sp(v))));
+        r.missing_keys(src, root);
+        let actors = r.actors(root, drone);
+        let origin_m = r.origin(root);
+        let yaw_deg = match get(root, "yaw_deg") {
             None => Some(0.0),
-            Some((_, v)) => r.number("`yaw_deg`", v),
+            Some(v) => r.number("`yaw_deg`", v),
         };
 
         r.diags.sort_by_key(|d| (d.span.start, d.span.end));
@@ -543,7 +580,7 @@ mod tests {
                 "{src:?}: {found:?}"
             );
         }
-        // Every mistake at once, in file order (before, only the first was told).
+        // Every mistake at once, in file order.
         let found = mistakes("up = \"x\"\ndrone = 1\norgin_m = [0, 0, 0]\n[actors]\nA = 1\n");
         let codes: Vec<dronecine_diag::Code> = found.iter().map(|f| f.0).collect();
         assert_eq!(

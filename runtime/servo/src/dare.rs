@@ -1,5 +1,5 @@
 //! The discrete algebraic Riccati equation, solved by the structure-preserving doubling
-//! algorithm (SDA; Chu, Fan, Lin & Wang 2004; control.md §4):
+//! algorithm (SDA; Chu, Fan, Lin & Wang 2004):
 //!
 //! ```text
 //! P = AᵀPA − AᵀPB (R + BᵀPB)⁻¹ BᵀPA + Q,      K = (R + BᵀPB)⁻¹ BᵀPA

@@ -1,4 +1,4 @@
-//! The LQG servo (control.md §4): an LQ regulator with a reference pre-filter on the
+//! The LQG servo: an LQ regulator with a reference pre-filter on the
 //! translation model, a pole-placed heading loop, and non-stationary Kalman filters for both.
 //!
 //! **Gains.** With the body-frame lag model and equal x/y weights in Q the regulator is

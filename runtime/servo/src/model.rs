@@ -1,4 +1,4 @@
-//! The servo's plant models (control.md §2–3), discretised with the measured time step Δ.
+//! The servo's plant models, discretised with the measured time step Δ.
 //!
 //! **Translation.** State `x1 = [v; p]` (world-frame velocity and position), input
 //! `u1 = [φ, θ, ż]` in the signs of [`crate::frames`]. Each body axis (forward, left, up) is a

@@ -1,4 +1,4 @@
-//! The baseline: tum_ardrone's per-axis PID autopilot (Engel, Sturm & Cremers; control.md §7),
+//! The baseline: tum_ardrone's per-axis PID autopilot (Engel, Sturm & Cremers),
 //! kept to compare against the LQG servo on the same seeded flights.
 //!
 //! Errors are taken in metres and degrees, exactly as tum_ardrone does, and the outputs are

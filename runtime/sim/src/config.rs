@@ -7,9 +7,9 @@ use std::fmt;
 /// An effect's switch in [`Effects`]: the field it is.
 pub type EffectSwitch = fn(&mut Effects) -> &mut bool;
 
-/// The effects the simulated AR.Drone, mocap and actors add to the servo's model
-/// (control.md §6). All off ([`Effects::none`]) leaves exactly the model of control.md §2–3;
-/// each one switches on independently.
+/// The effects the simulated AR.Drone, mocap and actors add to the servo's model. All off
+/// ([`Effects::none`]) leaves exactly the servo's model (`dronecine_servo::model`); each one
+/// switches on independently.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Effects {
     /// Attitude follows the command with a first-order lag (`θ̇ = a·(θ_cmd − θ)`) and thrust
@@ -118,9 +118,9 @@ impl Effects {
 }
 
 /// Everything the simulator needs besides the profile and the scene. [`SimConfig::new`] gives
-/// the defaults documented on each field (sources: control.md §5, the tum_ardrone state
-/// estimator of Engel, Sturm & Cremers, the AR.Drone Developer Guide, OptiTrack's
-/// specifications; estimates are marked as such).
+/// the defaults documented on each field (sources: the tum_ardrone state estimator of Engel,
+/// Sturm & Cremers, the AR.Drone Developer Guide, OptiTrack's specifications; estimates are
+/// marked as such).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SimConfig {
     /// Seeds every random process (each has its own stream).
@@ -158,8 +158,8 @@ pub struct SimConfig {
     /// `ż = K_ż·factor·u` for `u < 0`). Default 2 (tum_ardrone's vertical model:
     /// `z̈ = 0.8·(0.6·u·(2 if u < 0 else 1) − ż)`).
     pub descent_gain_factor: f64,
-    /// Command latency. Default 40 ms (WiFi round trip and firmware, an estimate in the
-    /// "tens of ms" of control.md §6).
+    /// Command latency. Default 40 ms (WiFi round trip and firmware: an estimate, within the
+    /// tens of milliseconds these take).
     pub latency_s: f64,
     /// Probability that a command packet is lost. Default 0.01.
     pub radio_loss_probability: f64,
@@ -210,8 +210,8 @@ pub struct SimConfig {
     /// The simulated motion capture offers the flight its actors' future
     /// (`Mocap::actors_ahead`: they do not depend on the drone), and the flight steps its
     /// director on a second thread, ahead of the loop: the same flight, bit for bit
-    /// (`runtime/tests/ahead.rs`), in less time when the machine has a core for that thread
-    /// ([`crate::session::director_thread_pays`]). Default false: the director is stepped on
+    /// (`runtime/tests/it/ahead.rs`), in less time when the machine has a core for that thread
+    /// (`dronecine_runtime::director_thread_pays`). Default false: the director is stepped on
     /// the loop's thread, as with a real motion capture.
     #[serde(default)]
     pub actors_ahead: bool,
@@ -263,11 +263,10 @@ impl SimConfig {
     /// How far the simulated drone may drift on the wind while it takes off (the firmware's
     /// take-off holds its velocity near zero, not its position, for the ~4 s of the climb):
     /// four times the gusts' σ over a second, 1.2 m at the default 0.3 m/s; none without
-    /// wind. Measured over 300 seeds at the default (`LS on A` on a 30 m stage): median
-    /// 0.31 m, 99th percentile 0.86 m, most 1.11 m. The simulated drone waits at least this
-    /// far inside the stage's walls (`session::start_pose`): one that took off 0.3 m from a
-    /// wall, below a first framing on the stage's margin, drifted out of the stage before the
-    /// servo took over (2 of 332 random scripts), and the flight ended in the stage failsafe.
+    /// wind. The simulated drone waits at least this far inside the stage's walls
+    /// (`dronecine_runtime::start_pose`): one that takes off nearer a wall, below a first
+    /// framing on the stage's margin, can drift out of the stage before the servo takes over,
+    /// and the flight ends in the stage failsafe.
     pub fn takeoff_drift_m(&self) -> f64 {
         // Four σ of the gusts, held for a second.
         const HELD_S: f64 = 1.0;
@@ -281,7 +280,7 @@ impl SimConfig {
     /// How far from their marks the simulated actors may be measured standing: the place
     /// offset's bound on both floor axes (when the actors deviate) and four σ of the mocap's
     /// noise. The simulated drone waits at least this much further from every mark than
-    /// the actor distance (`session::start_pose`), so that the pre-flight check, which
+    /// the actor distance (`dronecine_runtime::start_pose`), so that the pre-flight check, which
     /// measures both, passes.
     pub fn actor_reach_m(&self) -> f64 {
         let offset_m = if self.effects.actor_deviation {

@@ -2,11 +2,11 @@
 //! system and the live actors, behind the [`Drone`], [`Mocap`] and [`Clock`] traits, so the
 //! flight loop flies it exactly as it flies the hardware, as fast as the CPU allows.
 //!
-//! The simulated drone is harder than the servo's model (control.md §6): attitude lag, firmware
-//! limits, quadratic drag, asymmetric vertical response, yaw-rate lag, command latency, radio
-//! loss, mocap noise and dropouts, wind gusts, actors who do not walk the script exactly,
-//! battery drain — each switchable in [`Effects`], each seeded. With [`Effects::none`] the plant
-//! is exactly the model of control.md §2–3 (see `plant.rs`).
+//! The simulated drone is harder than the servo's model: attitude lag, firmware limits,
+//! quadratic drag, asymmetric vertical response, yaw-rate lag, command latency, radio loss,
+//! mocap noise and dropouts, wind gusts, actors who do not walk the script exactly, battery
+//! drain — each switchable in [`Effects`], each seeded. With [`Effects::none`] the plant is
+//! exactly the servo's model (see `plant.rs`).
 //!
 //! One [`Simulator`] owns the world; [`SimDrone`], [`SimMocap`] and [`SimClock`] are handles on
 //! it (`Rc<RefCell<_>>`, single-threaded). [`SimClock::sleep_until`] advances the physics; the
@@ -594,7 +594,7 @@ impl Mocap for SimMocap {
 /// copy taken from the world that goes on by the same schedule ([`next_event`]), stepping
 /// the plant's clock but not its physics, and takes each frame as the world does, drawing
 /// the same random numbers (the drone's noise included, added to nothing). Its frames'
-/// actors are the world's, bit for bit (`tests/ahead.rs` flies both ways).
+/// actors are the world's, bit for bit (`runtime/tests/it/ahead.rs` flies both ways).
 struct ActorWorld {
     now_s: f64,
     /// The plant's step count and step, as in the world.

@@ -2,7 +2,7 @@
 //! watchdog) and the radio link that carries its commands.
 //!
 //! The plant advances on a fixed grid of `step_s`. Per step `k` (from `t_k` to `t_k + h`),
-//! with the heading `c_k` frozen for the translation (as control.md §2's `M_D[k]`):
+//! with the heading `c_k` frozen for the translation (as the servo model's `M_D[k]`):
 //!
 //! - attitude: `θ_{k+1} = θ_cmd + (θ_k − θ_cmd)·e^{−a·h}` (exact for a held command) when
 //!   `attitude_lag` is on, and the thrust tilts by `sin θ_k`; off, `θ = θ_cmd` and the thrust
@@ -11,7 +11,7 @@
 //!   velocity `G·u`, `G = INPUT_TO_BODY·diag(K_φ, K_θ, K_ż)`, exactly:
 //!   `v_b' = G·u + (v_b − G·u)·e^{−h/τ}` per body axis (`frames::body_taus_s`), `v_b = M_Dᵀ(v − w)`,
 //!   `v' = M_D·v_b' + w` (w the wind); quadratic drag `−c·|v_rel|·v_rel·h` on top; position
-//!   `p' = p + h·v` — with every effect off this is control.md §2's `A1`, `B1` with
+//!   `p' = p + h·v` — with every effect off this is the servo model's `A1`, `B1` with
 //!   `T_D = diag(1 − e^{−h/τ})`, exactly;
 //! - vertical input `u_z = ż_cmd`, times `descent_gain_factor` when negative and
 //!   `asymmetric_vz` is on;

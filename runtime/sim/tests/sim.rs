@@ -1,4 +1,4 @@
-//! The embedded simulator against its specification (control.md §2–6): the sign conventions
+//! The embedded simulator against its specification: the sign conventions
 //! through the plant, the reduced plant equal to the servo's discrete model, every effect
 //! switchable, determinism, latency, radio loss, watchdog, mocap noise and dropouts, the live
 //! actors, take-off / landing / emergency, and bad settings.
@@ -181,7 +181,7 @@ fn positive_pitch_moves_back_roll_right_yaw_clockwise_through_the_plant() {
     }
 }
 
-/// control.md §2–3's discrete model, written independently with nalgebra:
+/// The servo's discrete model, written independently with nalgebra:
 /// `v' = (I − M T Mᵀ) v + M T G u`, `p' = p + Δ v`, `c' = c + K_ψ Δ ċ(ψ̇)`,
 /// `T = diag(1 − e^{−Δ/τ})`, `G = INPUT_TO_BODY·diag(K)`.
 struct Model {
@@ -787,8 +787,7 @@ fn deviation_acceleration_mps2(cfg: &SimConfig) -> f64 {
 
 /// The actors drift off their marks as a person does, slowly: the deviation's acceleration is
 /// set by the knots per correlation time, not by σ and τ: at the default (2) it is about a
-/// tenth of the AR.Drone profile's 1.08 m/s² (0.08–0.09 m/s² on these seeds), at the wind's
-/// 8 knots per τ two thirds of it (0.64–0.70).
+/// tenth of the AR.Drone profile's 1.08 m/s², at the wind's 8 knots per τ two thirds of it.
 #[test]
 fn actors_drift_without_fidgeting() {
     for seed in [1, 2, 3] {

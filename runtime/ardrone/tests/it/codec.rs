@@ -1,4 +1,4 @@
-//! AR.Drone 2.0 codecs against protocols.md §1: every verified constant, byte-exact AT
+//! AR.Drone 2.0 codecs against the protocol: every verified constant, byte-exact AT
 //! lines, the generic-command mapping and its signs, hand-built navdata packets (the
 //! forum's bootstrap packet, a demo packet), rejection of bad packets, encoder → decoder
 //! round trips, and no panic on truncated or random input.
@@ -30,7 +30,7 @@ fn encode(cmds: &[AtCommand<'_>]) -> String {
 
 #[test]
 fn verified_float_encodings() {
-    // protocols.md §1.2 (node-ar-drone's tests; 0 → 0).
+    // node-ar-drone's tests; 0 → 0.
     for (v, wire) in [
         (1.0f32, 1065353216),
         (-1.0, -1082130432),
@@ -47,7 +47,7 @@ fn verified_float_encodings() {
 
 #[test]
 fn ref_words_are_the_documented_ones() {
-    // protocols.md §1.3: land 290717696, take-off 290718208, emergency 290717952.
+    // Land 290717696, take-off 290718208, emergency 290717952.
     assert_eq!(
         encode(&[AtCommand::LAND, AtCommand::TAKE_OFF, AtCommand::EMERGENCY]),
         "AT*REF=1,290717696\rAT*REF=2,290718208\rAT*REF=3,290717952\r"
@@ -174,7 +174,7 @@ fn ardrone2() -> PcmdLimits {
 
 #[test]
 fn positive_generic_values_give_positive_pcmd_values() {
-    // frames.rs and protocols.md §1.4 use the same signs: nothing is negated.
+    // frames.rs and AT*PCMD use the same signs: nothing is negated.
     let l = ardrone2();
     let one = |c: Command| l.pcmd(&c);
     let p = one(Command {
@@ -590,7 +590,7 @@ impl B {
 
 #[test]
 fn forum_bootstrap_packet_decodes() {
-    // protocols.md §1.6: the 24-byte bootstrap packet from the Parrot forum.
+    // The 24-byte bootstrap packet from the Parrot forum.
     let p = [
         0x88, 0x77, 0x66, 0x55, 0x10, 0x0c, 0x80, 0x4f, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
         0x00, 0xff, 0xff, 0x08, 0x00, 0xa6, 0x02, 0x00, 0x00,

@@ -1,6 +1,6 @@
 //! `/servo/tick` in CDR (OMG XCDR1, little-endian, the encoding of ROS 2 messages), with a
 //! `ros2msg` schema Foxglove decodes: every field replay needs, the actors as the director saw
-//! them and the framing, every float bit for bit (NaN payloads and `-0.0` included): 470
+//! them and the framing, every float bit for bit (NaN payloads and `-0.0` included): 514
 //! bytes a tick with two actors framed.
 //!
 //! The message is a 4-byte encapsulation header (`00 01 00 00`: CDR, little-endian), a fixed
@@ -12,9 +12,9 @@
 //! A field that is absent (no measurement, a faulted tick's output, no latency, an actor
 //! behind the camera) is zero with its flag clear.
 //!
-//! A message of exactly [`FIXED_LEN`] bytes is the tick of a log written before the actors
-//! and the framing moved here (such a log has its framing on the JSON `/framing` topic at
-//! every tick): [`decode`] reads it with empty sequences and says so.
+//! A message of exactly [`FIXED_LEN`] bytes is a fixed-length tick, without the two
+//! sequences: its log has the framing on the JSON `/framing` topic at every tick. [`decode`]
+//! reads it with empty sequences and says so.
 
 use crate::record::{FramingRecord, Phase, TickRecord};
 use dronecine_backend::frames::Command;
@@ -220,7 +220,7 @@ fn encode_sequences(buf: &mut Vec<u8>, tick: &TickRecord) {
     }
 }
 
-/// Reads a message written by [`encode`] (or an older fixed-length one: see the module doc,
+/// Reads a message written by [`encode`] (or a fixed-length one: see the module doc,
 /// then `extended` is false); a message that is cut or too long, of another encapsulation, or
 /// with an unknown enum value or an impossible count, is an error that says which.
 pub fn decode(data: &[u8]) -> Result<Decoded, String> {
@@ -323,8 +323,8 @@ fn bool_of(b: u8, name: &str) -> Result<bool, String> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Decoded {
     pub tick: LoggedTick,
-    /// The message has the actors and framing sequences (else it is an older fixed-length
-    /// tick, whose framing is on `/framing`).
+    /// The message has the actors and framing sequences (else it is a fixed-length tick,
+    /// whose framing is on `/framing`).
     pub extended: bool,
 }
 
@@ -577,7 +577,7 @@ mod tests {
         assert_eq!(back.tick.framing, FRAMING);
     }
 
-    /// A tick of an older log (the fixed part only) still reads, with empty sequences.
+    /// A fixed-length tick (the fixed part only) reads, with empty sequences.
     #[test]
     fn a_fixed_length_tick_of_an_older_log_reads() {
         let buf = with_sequences();

@@ -6,8 +6,8 @@
 //! Metadata record `dronecine.flight`: every field of the
 //! [`FlightHeader`](crate::record::FlightHeader) under its own name, each value the field's
 //! JSON text (`"script_name"` → `"\"orbit.psl\""`, `"seed"` → `"42"` or `"null"`,
-//! `"sim_effects_off"` → `["wind","battery"]`, `[]` or `"null"` (absent from logs written
-//! before it was recorded), `"controller"` → `{"kind":"lqg",…}`). Attachment: the script
+//! `"sim_effects_off"` → `["wind","battery"]`, `[]` or `"null"` (absent from logs that do
+//! not record it), `"controller"` → `{"kind":"lqg",…}`). Attachment: the script
 //! text (`text/plain`, named after the script). The per-tick topics are CDR with `ros2msg`
 //! schemas (`/servo/tick`: [`cdr`]; the plot topics: [`plots`], and compile's writers for
 //! `/reference`, `/actors` and `/tf`); `/events` and the topics written once are JSON with
@@ -34,11 +34,9 @@
 //! them) and framing are on `/servo/tick` (which Foxglove plots as well, field by field), and
 //! that (with `/events`) is all replay reads; the actors' raw measured poses are kept at
 //! 30 Hz only, on `/measurement`. A topic is written on the first tick that has one when it is
-//! due. The plot topics went from 30 to 10 Hz when a flight log's JSON turned out to cost
-//! the writer thread more than the simulated flight it logs (an hour: 0.75 s of the writer's
-//! CPU at 30 Hz, 0.51 s at 10 Hz, against 0.62 s for the flight), and from JSON to CDR when
-//! formatting their floats still cost more than the rest of the log: an hour's log went from
-//! 383 to 288 MB (`benches/README.md`).
+//! due. The plot topics are CDR at 10 Hz because the writer thread must keep up with a
+//! simulated flight, which runs as fast as the CPU allows: formatting their floats as text,
+//! or writing them at the mocap's rate, would cost the writer more than the flight it logs.
 //!
 //! # Numbers
 //!

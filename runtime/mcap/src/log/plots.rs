@@ -6,8 +6,8 @@
 //! message is an error that names the field, never a panic.
 //!
 //! Why CDR: these topics and `/tf` are most of the log's messages (about 800,000 an hour at
-//! 100 Hz), and formatting their floats as JSON text cost the writer thread more than the
-//! rest of the log (see `benches/README.md`).
+//! 100 Hz), and formatting their floats as JSON text would cost the writer thread more than
+//! the rest of the log.
 
 use crate::output::cdr::{Cdr, CdrReader, SEPARATOR};
 

@@ -39,7 +39,7 @@ pub struct LoggedTick {
     pub input: TickInput,
     pub output: Result<TickOutput, TickFault>,
     pub command_sent: Command,
-    /// The actors as the director saw them (empty in a log of an older dronecine).
+    /// The actors as the director saw them (empty in a log whose ticks do not carry them).
     pub actors: Vec<ActorPose>,
     /// The tick's framing records (empty outside holds).
     pub framing: Vec<FramingRecord>,
@@ -122,7 +122,7 @@ struct RawEvent {
     level: String,
     kind: String,
     message: String,
-    /// Absent from logs written before events carried the script's line and the fix.
+    /// Absent from logs whose events do not carry the script's line and the fix.
     #[serde(default)]
     line: Option<u32>,
     #[serde(default)]
@@ -587,7 +587,7 @@ struct ReadState {
     ticks: Vec<LoggedTick>,
     events: Vec<Event>,
     /// A `/framing` message waiting for its tick (written just before it, same `t_s`): the
-    /// framing of a log whose ticks do not carry it (an older dronecine's).
+    /// framing of a log whose ticks do not carry it.
     pending_framing: Option<(u64, Vec<FramingRecord>)>,
     records: usize,
     footer: bool,
@@ -613,8 +613,8 @@ impl ReadState {
                     }
                     topic::SERVO_TICK => Some(Wanted::Tick),
                     topic::EVENTS => Some(Wanted::Event),
-                    // JSON framing at every tick: a log written before the framing moved
-                    // to `/servo/tick` (a newer log's `/framing` is CDR, for plots only).
+                    // JSON framing at every tick: a log whose `/servo/tick` does not carry
+                    // the framing (where it does, `/framing` is CDR, for plots only).
                     topic::FRAMING if channel.message_encoding == Encoding::Json.message() => {
                         Some(Wanted::Framing)
                     }

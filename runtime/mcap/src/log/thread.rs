@@ -9,9 +9,7 @@
 //!
 //! The writer thread polls for full batches (sleeping 0.1 ms, doubling up to 20 ms while none
 //! comes) instead of blocking on the channel: a blocked receiver makes every hand-over wake
-//! it, a system call and a cross-core wake-up on the loop's thread. Measured on an hour of
-//! simulated flight (14,400 hand-overs) with a writer that only returned the batches: 0.87 s
-//! with a blocking receiver, 0.66 s polling (0.62 s without a log). In a real-time flight the
+//! it, a system call and a cross-core wake-up on the loop's thread. In a real-time flight the
 //! writer wakes about 50 times a second and writes a batch at most 20 ms after it is full.
 //!
 //! For a log forced to the disk as it is written ([`LogOptions::durable`]: a flight paced by
@@ -21,15 +19,11 @@
 //! time have passed since the last sync (a flight in real time: every two seconds), and every
 //! 32 s of flight whatever the clock says (a simulated flight, thousands of times faster
 //! than real time). A power cut loses less, and the disk writes while the flight goes on, so
-//! the final `fsync` has only the tail left: measured on an hour of simulated flight (500 MB of log), syncing only by the clock
-//! left 0.21 s of final `fsync` and took 1.20 s, syncing also every 32 s of flight 1.07 s;
-//! syncing every two seconds of flight (1,800 syncs) was slower again. Not syncing at all is
-//! slower too, not faster: the hour's flight bench with its log on disk took 0.72 s against
-//! 0.60 s (0.91 s against 0.74 s when the bench still truncated the previous hour's file),
-//! the dirty pages piling up until the kernel throttles the writer. (That run still `fsync`ed
-//! at the end. A log left to the OS, `shoot`'s for a simulated flight as fast as it goes, has
-//! neither the syncer nor the final `fsync`: the hour's flight with its log, 16 interleaved
-//! runs each, median 0.353 → 0.326 s; its writeback is the OS's, after the flight.)
+//! the final `fsync` has only the tail left. Syncing every two seconds of flight whatever the
+//! clock says costs a simulated flight more than it saves; syncing only at the end costs more
+//! too, not less: the dirty pages pile up until the kernel throttles the writer. A log left
+//! to the OS, `shoot`'s for a simulated flight as fast as it goes, has neither the syncer nor
+//! the final `fsync`: its writeback is the OS's, after the flight.
 //!
 //! Both threads lower their own scheduling priority ([`LOG_NICE`]): the loop comes first
 //! when the machine's cores are all busy.
@@ -37,7 +31,7 @@
 //! The writer keeps the chunks it closes while more batches wait and hands them to the OS in
 //! one write of up to [`HAND_OVER_BYTES`] ([`FlightLogWriter::defer_hand_over`]), or as soon
 //! as no batch waits, before it sleeps. A flight in real time leaves it idle after every
-//! batch, so each chunk reaches the OS as it closes, as before; a simulated flight keeps it
+//! batch, so each chunk reaches the OS as it closes; a simulated flight keeps it
 //! busy, and the kernel's cost per byte falls with the write's size.
 //!
 //! What a crash may lose: a batch is handed over every [`BATCH_PERIOD_S`] of flight time and
@@ -51,8 +45,7 @@
 //! write error reaches the loop on the next tick after the writer met it (the loop then
 //! lands), and [`LogThread::finish`] returns it. The loop learns of it from a flag it reads
 //! each tick, not from the error channel: an empty channel's `try_recv` is a full memory
-//! fence. (Measured on the hour's flight with its log, 20 interleaved runs each, together with
-//! the syncer asked from the writer: no difference, median 0.462 s against 0.466 s.)
+//! fence.
 //!
 //! [`LogOptions`]: super::LogOptions
 //! [`LogOptions::durable`]: super::LogOptions::durable
@@ -76,11 +69,8 @@ use dronecine_servo::control::{TickFault, TickInput, TickOutput};
 pub const BATCH_PERIOD_S: f64 = 0.25;
 /// Batches in flight: the loop waits only when the writer is this many batches behind
 /// (eight seconds of flight: a disk that stalls for less never stalls the loop). A
-/// simulated flight makes two seconds of flight in the writer's longest poll (20 ms): with
-/// 8 batches the loop sometimes waited for it. Measured on the hour's flight with its log
-/// (10 interleaved runs each): 0.563 s with 8, 0.527 s with 32 (three rounds: 0.021 to
-/// 0.036 s better), no better with 128 (0.577 s against 0.577 s: 3 MB of batches crowd the
-/// caches).
+/// simulated flight makes two seconds of flight in the writer's longest poll (20 ms), so
+/// with a quarter of these the loop would wait for it; many more crowd the caches.
 const BATCHES: usize = 32;
 /// The file's data is synced to the disk (`sync_data`, on a third thread that mostly waits)
 /// after every this many batches (two seconds of flight)…
@@ -96,34 +86,23 @@ pub const POLL_MAX_S: f64 = 0.02;
 const POLL_MAX: Duration = Duration::from_micros((POLL_MAX_S * 1e6) as u64);
 /// The writer thread keeps closed chunks until they reach this many bytes, or until it has no
 /// batch waiting, and hands them to the OS in one write ([`FlightLogWriter::defer_hand_over`];
-/// about six seconds of a simulated flight's log). Measured on the hour's flight with its log,
-/// the director ahead (probe, interleaved runs, 2 cores, ext4): each chunk written as it
-/// closed (about 60 kB), median 0.394 s, 0.69 s of CPU of which 0.12 s in the kernel; kept up
-/// to 512 KiB, 0.374 s, 0.65 s and 0.09 s (15 runs each; the slowest 0.43 against 0.39 s).
-/// Ten runs each over other sizes: 256 KiB 0.378 s, 384 KiB 0.374 s, 768 KiB 0.358 s, 1 MiB
-/// 0.40 s (with a wider spread: the chunks no longer fit the second-level cache the writer and
-/// the kernel read them from). The file is the same bytes.
+/// about six seconds of a simulated flight's log): fewer, larger writes cost the kernel less
+/// per byte, and chunks kept up to this size still fit the second-level cache the writer and
+/// the kernel read them from. The file is the same bytes.
 const HAND_OVER_BYTES: usize = 512 << 10;
 /// How much the log's threads lower their priority (nice value, Linux): when a third thread
 /// (the syncer, the kernel's writeback) wants a core, the scheduler takes it from them rather
-/// than from the loop. Measured on the hour's flight with its log (30 interleaved runs each):
-/// median 0.482 → 0.464 s, mean 0.486 → 0.463 s. On set it keeps a slow disk's writer from
-/// delaying a tick.
+/// than from the loop. On set it keeps a slow disk's writer from delaying a tick.
 const LOG_NICE: i32 = 10;
 /// How long the loop sleeps between looks for an emptied batch when the writer holds them
 /// all (it has fallen [`BATCHES`] behind). In a simulated flight with the director ahead the
 /// writer, at `nice` +10, falls behind while the loop and the director have the cores, and
 /// the loop waits for it about a thousand times an hour: each look that finds nothing is a
 /// wake-up and a context switch, and a longer sleep lets the writer and the director work in
-/// longer stretches. Measured on the hour's flight with its log (probe, six interleaved runs
-/// each): 50 µs, median 0.416 s and 728 ms of CPU; 100 µs 0.392 s; 150 µs 0.390 s; 200 µs
-/// 0.391 s and 678 ms; 300 µs 0.394 s and 665 ms; 500 µs 0.47 s and 1 ms 0.70 s (longer
-/// than the director's batches ahead last: both threads wait, a core idles). Again, eight
-/// runs each, 50 against 200 µs: 0.389 against 0.387 s, 691 against 675 ms; the flight
-/// bench on a slow hour could not tell them apart (0.424–0.467 against 0.424–0.452 s). The
-/// CPU is less in every series. Blocking on the channel instead wakes the loop at every
-/// batch returned: 0.47–0.49 s. On set the loop waits only when the disk has stalled for
-/// [`BATCHES`] batches (eight seconds).
+/// longer stretches. A sleep longer than the director's batches ahead last would leave both
+/// threads waiting and a core idle; blocking on the channel would wake the loop at every
+/// batch returned. On set the loop waits only when the disk has stalled for [`BATCHES`]
+/// batches (eight seconds).
 const WAIT_FOR_BATCH: Duration = Duration::from_micros(200);
 
 /// A [`TickRecord`] with its borrowed parts copied, kept from batch to batch.
@@ -195,7 +174,7 @@ impl OwnedTick {
 
     /// Asks the cache for the lines that [`OwnedTick::fill`] will write with a record of
     /// `actors` actors: the tick itself and its vectors' first elements. The batch was last
-    /// read by the writer's core; without this the loop waited for each line in turn.
+    /// read by the writer's core; without this the loop would wait for each line in turn.
     fn prefetch(&self, actors: usize) {
         prefetch_for_write(self, std::mem::size_of::<OwnedTick>());
         prefetch_for_write(
@@ -230,9 +209,8 @@ impl OwnedTick {
 }
 
 /// A hint that the `bytes` from `start` are about to be written: their cache lines are
-/// fetched, for writing, into this core's cache. Measured on the hour's flight with its log
-/// (three rounds of 8–10 interleaved runs): the flight 0.009–0.030 s faster (about 0.53 →
-/// 0.52 s), the loop's thread 0.015–0.033 s less CPU. A no-op off x86-64.
+/// fetched, for writing, into this core's cache, so that the loop does not wait for them. A
+/// no-op off x86-64.
 #[inline]
 fn prefetch_for_write<T>(start: *const T, bytes: usize) {
     #[cfg(target_arch = "x86_64")]

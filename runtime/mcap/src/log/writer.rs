@@ -34,11 +34,10 @@ const REFERENCE_FRAME: &str = "reference";
 
 /// Chunk compression of the flight log.
 ///
-/// Measured (`benches/log.rs`, CPU time of one core on the 2-core development machine,
-/// 100 Hz, two actors): no compression 0.58 µs a tick and 1.07 kB (an hour: 0.34 s and 384
-/// MB); LZ4 1.96 µs a tick and 480 bytes: less than half the size for three times the CPU
-/// time, which would make the log thread slower than the simulated flight it logs.
-/// The default is no compression: a flight of minutes is a few hundred megabytes at most.
+/// LZ4 makes the log less than half the size for about three times the writer's CPU time per
+/// tick (`benches/log.rs` measures both), which would make the log thread slower than the
+/// simulated flight it logs. The default is no compression: a flight of minutes is a few
+/// hundred megabytes at most.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCompression {
     /// The default (see above).
@@ -187,6 +186,56 @@ fn open(path: &Path, new: bool) -> io::Result<File> {
     o.open(path).map_err(|e| annotate(path, e))
 }
 
+/// Adds the log's schemas and channels but `/tf`'s: the per-tick topics in CDR with ros2msg
+/// schemas, events and the static ones JSON; `/servo/tick` first (its schema and channel ids
+/// are 1).
+fn add_channels(writer: &mut McapFile) -> io::Result<Channels> {
+    let mut channel = |schema_name: &str, schema: &str, topic: &str, enc: Encoding| {
+        let schema_id = writer.add_schema(schema_name, enc.schema(), schema.as_bytes())?;
+        let id = writer.add_channel(schema_id, topic, enc.message())?;
+        Ok::<_, io::Error>(Channel::new(id))
+    };
+    let (c, j) = (Encoding::Cdr, Encoding::Json);
+    let servo_tick = channel(cdr::SCHEMA_NAME, cdr::SCHEMA, topic::SERVO_TICK, c)?;
+    let scene_schema = foxglove::scene_update_schema();
+    Ok(Channels {
+        reference: channel(REFERENCE_SCHEMA, &reference_schema(), topic::REFERENCE, c)?,
+        actors: channel(ACTORS_SCHEMA, &actors_schema(), topic::ACTORS, c)?,
+        camera: channel(CAMERA_SCHEMA, &camera_schema(), topic::CAMERA, j)?,
+        estimate: channel(
+            plots::ESTIMATE,
+            &plots::estimate_schema(),
+            topic::ESTIMATE,
+            c,
+        )?,
+        measurement: channel(
+            plots::MEASUREMENT,
+            &plots::measurement_schema(),
+            topic::MEASUREMENT,
+            c,
+        )?,
+        command: channel(plots::COMMAND, &plots::command_schema(), topic::COMMAND, c)?,
+        framing: channel(plots::FRAMING, &plots::framing_schema(), topic::FRAMING, c)?,
+        events: channel(schema::EVENT, &schema::event(), topic::EVENTS, j)?,
+        servo_tick,
+        tf: Vec::new(),
+        stage: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_STAGE, j)?,
+        drone: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_DRONE, j)?,
+        actor_scene: channel(
+            foxglove::SCENE_UPDATE,
+            &scene_schema,
+            topic::SCENE_ACTORS,
+            j,
+        )?,
+        calibration: channel(
+            foxglove::CAMERA_CALIBRATION,
+            &foxglove::camera_calibration_schema(),
+            topic::CAMERA_CALIBRATION,
+            j,
+        )?,
+    })
+}
+
 impl FlightLogWriter {
     /// Creates (truncating) the log at `path` and writes the header, the schemas and
     /// channels, the `dronecine.flight` metadata, the script attachment and the static scene,
@@ -246,62 +295,7 @@ impl FlightLogWriter {
         )
         .map_err(err)?;
 
-        // The per-tick topics in CDR with ros2msg schemas; events and the static ones JSON.
-        let mut channel = |schema_name: &str, schema: &str, topic: &str, enc: Encoding| {
-            let schema_id = writer.add_schema(schema_name, enc.schema(), schema.as_bytes())?;
-            let id = writer.add_channel(schema_id, topic, enc.message())?;
-            Ok::<_, io::Error>(Channel::new(id))
-        };
-        let (c, j) = (Encoding::Cdr, Encoding::Json);
-        // `/servo/tick` first (its schema and channel ids are 1).
-        let servo_tick =
-            channel(cdr::SCHEMA_NAME, cdr::SCHEMA, topic::SERVO_TICK, c).map_err(err)?;
-        let scene_schema = foxglove::scene_update_schema();
-        let channels = Channels {
-            reference: channel(REFERENCE_SCHEMA, &reference_schema(), topic::REFERENCE, c)
-                .map_err(err)?,
-            actors: channel(ACTORS_SCHEMA, &actors_schema(), topic::ACTORS, c).map_err(err)?,
-            camera: channel(CAMERA_SCHEMA, &camera_schema(), topic::CAMERA, j).map_err(err)?,
-            estimate: channel(
-                plots::ESTIMATE,
-                &plots::estimate_schema(),
-                topic::ESTIMATE,
-                c,
-            )
-            .map_err(err)?,
-            measurement: channel(
-                plots::MEASUREMENT,
-                &plots::measurement_schema(),
-                topic::MEASUREMENT,
-                c,
-            )
-            .map_err(err)?,
-            command: channel(plots::COMMAND, &plots::command_schema(), topic::COMMAND, c)
-                .map_err(err)?,
-            framing: channel(plots::FRAMING, &plots::framing_schema(), topic::FRAMING, c)
-                .map_err(err)?,
-            events: channel(schema::EVENT, &schema::event(), topic::EVENTS, j).map_err(err)?,
-            servo_tick,
-            tf: Vec::new(),
-            stage: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_STAGE, j)
-                .map_err(err)?,
-            drone: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_DRONE, j)
-                .map_err(err)?,
-            actor_scene: channel(
-                foxglove::SCENE_UPDATE,
-                &scene_schema,
-                topic::SCENE_ACTORS,
-                j,
-            )
-            .map_err(err)?,
-            calibration: channel(
-                foxglove::CAMERA_CALIBRATION,
-                &foxglove::camera_calibration_schema(),
-                topic::CAMERA_CALIBRATION,
-                j,
-            )
-            .map_err(err)?,
-        };
+        let channels = add_channels(&mut writer).map_err(err)?;
 
         let metadata = header_metadata(header).map_err(|e| annotate(path, io::Error::other(e)))?;
         writer

@@ -55,18 +55,15 @@ pub enum Compression {
     None,
     /// LZ4 frames, default (fast) level.
     Lz4,
-    /// Zstandard level 1: as fast as LZ4 here and 40 % smaller; level 3 costs 50 % more time
-    /// for 10 % less size.
+    /// Zstandard level 1: about as fast as LZ4 on these files, and smaller; higher levels cost
+    /// more time than they save size.
     Zstd,
 }
 
 /// Tuning of the MCAP writer.
 ///
-/// Measured on a one-hour reference at 100 Hz with two actors (`benches/output.rs`; CPU
-/// time of one core on the shared 2-core development machine): no compression 0.6–0.7 s for
-/// 349 MB; LZ4 1.25–1.3 s for 139 MB; Zstandard level 1 1.3–1.35 s for 82 MB (level 3:
-/// 1.8–2.0 s for 91 MB). The volume is the exact JSON of `/reference` and `/actors` at the
-/// full rate (about 0.8 kB a sample with `/tf`); compressing it costs more than writing it.
+/// The volume is every sample's exact `/reference` and `/actors` at the full rate, and
+/// compressing it costs more CPU time than writing it (`benches/output.rs` measures both).
 /// Hence two presets: [`Default`] (no compression: the compile's one-second budget) and
 /// [`McapOptions::compact`] (Zstandard: a quarter of the size, for flight logs written at
 /// flight pace, where the CPU time per sample does not matter).

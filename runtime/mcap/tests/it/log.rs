@@ -804,8 +804,7 @@ fn reference_log() -> &'static [u8] {
 }
 
 /// A log cut inside its closing magic, after the footer, holds every record, but it was cut
-/// short all the same: flagged as such (it read as whole, with a damage entry that said
-/// "cut", until the property test below cut 3 bytes off).
+/// short all the same: flagged as such.
 #[test]
 fn a_log_cut_inside_its_closing_magic_is_truncated_and_read_whole() {
     let bytes = reference_log();
@@ -1060,7 +1059,8 @@ fn the_log_thread_writes_the_same_file_and_closes_it_when_dropped() {
     }
 }
 
-/// A log from before `/servo/tick` was CDR: replay says why it cannot read it and what to do.
+/// A log whose `/servo/tick` is JSON, not CDR: replay says why it cannot read it and what to
+/// do.
 #[test]
 fn a_json_servo_tick_from_an_older_dronecine_is_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
@@ -1089,8 +1089,8 @@ fn a_json_servo_tick_from_an_older_dronecine_is_refused_by_name() {
     );
 }
 
-/// A log of the previous format — `/servo/tick` the 278-byte fixed part only, the framing on
-/// `/framing` (JSON) at every tick — still replays: its framing is read from `/framing`.
+/// A log with fixed-length ticks — `/servo/tick` the 278-byte fixed part only, the framing on
+/// `/framing` (JSON) at every tick — replays: its framing is read from `/framing`.
 #[test]
 fn a_log_with_fixed_length_ticks_reads_its_framing_from_the_json_topic() {
     let dir = tempfile::tempdir().unwrap();
@@ -1099,7 +1099,7 @@ fn a_log_with_fixed_length_ticks_reads_its_framing_from_the_json_topic() {
     let ticks: Vec<Tick> = (0..250).map(flight_tick).collect();
     write_log(&new, &ticks, &[]);
 
-    // Rewrite it as the previous dronecine wrote it.
+    // Rewrite it in that format.
     let bytes = std::fs::read(&new).unwrap();
     let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
     let meta_index = summary

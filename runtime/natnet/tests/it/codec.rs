@@ -1,7 +1,7 @@
-//! NatNet codecs against protocols.md §4.1 and the SDK layouts: hand-built 3.0 and 4.1
-//! frames with every section filled (skipped exactly by count or byte size), the handshake
-//! messages, encoder → decoder round trips for 3.0/3.1/4.0/4.1, rejection of malformed
-//! frames, no panic on truncated or random input, and the axis conversion.
+//! NatNet codecs against the SDK layouts: hand-built 3.0 and 4.1 frames with every section
+//! filled (skipped exactly by count or byte size), the handshake messages, encoder → decoder
+//! round trips for 3.0/3.1/4.0/4.1, rejection of malformed frames, no panic on truncated or
+//! random input, and the axis conversion.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -370,7 +370,7 @@ fn hand_built_server_info_decodes() {
     let d = B::default()
         .put(&name)
         .put(&[3, 1, 0, 0])
-        .put(&[0x04, 0x01, 0x00, 0x00]) // protocols.md: `04 01 00 00` = 4.1
+        .put(&[0x04, 0x01, 0x00, 0x00]) // `04 01 00 00` = 4.1
         .u64(10_000_000)
         .u16(1511)
         .put(&[1])

@@ -624,7 +624,7 @@ fn command_checksum(ctl: &mut dyn Controller, profile: &Profile) -> u64 {
 /// arithmetic must not depend on the machine: the same flight gives the same checksum
 /// everywhere. A different checksum means the control law changed (update the constants:
 /// logs written before no longer replay) or a platform function crept into a controller
-/// (`compiler/src/math.rs`; replay would then fail on another machine).
+/// (instead of `dronecine_math`'s; replay would then fail on another machine).
 #[test]
 fn the_commands_are_the_same_bits_on_every_machine() {
     let profile = ardrone();
