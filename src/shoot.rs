@@ -13,6 +13,7 @@ use dronecine_compiler::director::Director;
 use dronecine_diag as diag;
 use dronecine_flight::report::{Figures, FlightReport};
 use dronecine_flight::{FlightError, Observer, Progress};
+use dronecine_grammar::script::Scene;
 use dronecine_mcap::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
 use dronecine_mcap::record::{Event, FlightHeader, Phase};
 use dronecine_runtime::{self as session, HardwareFlight, SessionError, SimFlight};
@@ -176,59 +177,101 @@ pub fn run(a: &Args) -> ExitCode {
         Ok(l) => l,
         Err(code) => return code,
     };
-    let (r, profile) = (&loaded.file, loaded.profile.clone());
-    let (script, scene) = (loaded.script(), loaded.scene());
+    let (target, seed, effects) = match where_it_flies(a, loaded.scene()) {
+        Ok(t) => t,
+        Err(e) => return fail(e),
+    };
+    let script_name = a
+        .file
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "flight".into());
+    let (log_path, into_dir) = match log_path_for(a, &script_name) {
+        Ok(p) => p,
+        Err(e) => return fail(e),
+    };
+    if let Err(code) = compiler_verdict(a, &loaded) {
+        return code;
+    }
+    let setup = ControllerSetup {
+        kind: a.controller.to_string(),
+        paper_prefilter: a.paper_prefilter,
+        per_tick_solve: a.per_tick_solve,
+    };
+    if let Err(e) = crate::files::prepare_output(&log_path, "--log") {
+        return fail(e);
+    }
+    let flight = Flight {
+        a,
+        loaded: &loaded,
+        target: &target,
+        seed,
+        effects,
+        setup,
+        script_name,
+    };
+    let (log, log_path) = match flight.open_log(log_path, into_dir) {
+        Ok(l) => l,
+        Err(e) => return fail(e),
+    };
+    flight.fly(log, &log_path)
+}
 
-    // The simulator's options: refused on hardware, before anything is compiled or flown.
+/// The target (the simulator, or the hardware `--drone`/`--mocap`/`--rig` name), the
+/// simulator's seed and effects: the simulator's options are refused with a real drone,
+/// before anything is compiled or flown.
+fn where_it_flies(a: &Args, scene: &Scene) -> Result<(Target, u64, Effects), String> {
     if a.drone.is_some() {
         let given = [
             (a.seed.is_some(), "--seed"),
             (a.ideal, "--ideal"),
             (!a.sim_off.is_empty(), "--sim-off"),
         ];
-        if let Err(e) = refuse_sim_options(&given) {
-            return fail(e);
-        }
+        refuse_sim_options(&given)?;
     }
     let names: Vec<&str> = scene.actors.iter().map(|x| x.name.as_str()).collect();
     let target =
-        match crate::hardware::target("shoot", a.drone, a.mocap, a.rig, Some(&names), a.color) {
-            Ok(None) => Target::Sim,
-            Ok(Some(t)) => Target::Hardware(t),
-            Err(e) => return fail(e),
+        match crate::hardware::target("shoot", a.drone, a.mocap, a.rig, Some(&names), a.color)? {
+            None => Target::Sim,
+            Some(t) => Target::Hardware(t),
         };
+    Ok((
+        target,
+        a.seed.unwrap_or(1),
+        sim_effects(a.ideal, a.sim_off)?,
+    ))
+}
 
-    let seed = a.seed.unwrap_or(1);
-    let effects = match sim_effects(a.ideal, a.sim_off) {
-        Ok(e) => e,
-        Err(e) => return fail(e),
-    };
-
-    let script_name = a
-        .file
-        .file_stem()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "flight".into());
-    // `--log DIR` (an existing folder): the time-stamped name, in that folder.
+/// Where the log goes, and the folder `--log` names if it names one (the time-stamped name
+/// then goes in it). A `--log` that names a recording is refused now, not after the compile
+/// (a quarter of a second for an hour's script); creating the log refuses it again,
+/// race-free.
+fn log_path_for<'a>(
+    a: &Args<'a>,
+    script_name: &str,
+) -> Result<(PathBuf, Option<&'a Path>), String> {
     let into_dir = a.log.filter(|p| p.is_dir());
-    let mut log_path = match (a.log, into_dir) {
-        (_, Some(dir)) => dir.join(default_log_name(&script_name)),
+    let path = match (a.log, into_dir) {
+        (_, Some(dir)) => dir.join(default_log_name(script_name)),
         (Some(p), None) => p.to_path_buf(),
-        (None, None) => Path::new("flights").join(default_log_name(&script_name)),
+        (None, None) => Path::new("flights").join(default_log_name(script_name)),
     };
-    // A `--log` that names a recording is refused now, not after the compile (a quarter of a
-    // second for an hour's script); creating the log below refuses it again, race-free.
-    if a.log.is_some() && into_dir.is_none() && log_path.exists() {
-        return fail(log_exists(&log_path));
+    if a.log.is_some() && into_dir.is_none() && path.exists() {
+        return Err(log_exists(&path));
     }
+    Ok((path, into_dir))
+}
 
-    // The compiler's verdict first: a script the drone cannot fly is not flown.
+/// The compiler's verdict first: a script the drone cannot fly is not flown (its errors as
+/// `compile` shows them); one flown with warnings says so in one line.
+fn compiler_verdict(a: &Args, loaded: &crate::compile::Loaded) -> Result<(), ExitCode> {
+    let (r, profile) = (&loaded.file, &loaded.profile);
     let opts = Options { rate_hz: a.rate_hz };
-    let compiled =
-        match compile::compile(script, &profile, &opts, |_, _| Ok::<(), std::io::Error>(())) {
-            Ok(c) => c,
-            Err(e) => return fail(e),
-        };
+    let no_output = |_: &_, _: &_| Ok::<(), std::io::Error>(());
+    let compiled = match compile::compile(loaded.script(), profile, &opts, no_output) {
+        Ok(c) => c,
+        Err(e) => return Err(fail(e)),
+    };
     // The same compilation as `compile`'s at this rate: its output shows the same.
     let rate = if a.rate_hz == compile::DEFAULT_RATE_HZ {
         String::new()
@@ -247,7 +290,7 @@ pub fn run(a: &Args) -> ExitCode {
             profile.name,
             r.name,
         );
-        return ExitCode::FAILURE;
+        return Err(ExitCode::FAILURE);
     }
     if !a.quiet {
         let warned =
@@ -256,146 +299,217 @@ pub fn run(a: &Args) -> ExitCode {
             errln!("{line}");
         }
     }
+    Ok(())
+}
 
-    let setup = ControllerSetup {
-        kind: a.controller.to_string(),
-        paper_prefilter: a.paper_prefilter,
-        per_tick_solve: a.per_tick_solve,
-    };
-    if let Err(e) = crate::files::prepare_output(&log_path, "--log") {
-        return fail(e);
+/// One flight as the command line asks for it.
+struct Flight<'a> {
+    a: &'a Args<'a>,
+    loaded: &'a crate::compile::Loaded,
+    target: &'a Target,
+    seed: u64,
+    effects: Effects,
+    setup: ControllerSetup,
+    script_name: String,
+}
+
+impl Flight<'_> {
+    /// The log's header: what replay needs to fly the controller again, and what reproduces
+    /// a simulated flight (the seed and the effects off).
+    fn header(&self) -> FlightHeader {
+        let (a, r, profile) = (self.a, &self.loaded.file, &self.loaded.profile);
+        let sim = matches!(self.target, Target::Sim);
+        FlightHeader {
+            script_name: self.script_name.clone(),
+            script_text: r.text.clone(),
+            profile_name: profile.name.clone(),
+            profile_toml: profile.to_toml(),
+            profile: profile.clone(),
+            controller: self.setup.clone(),
+            backend: match (self.target, a.drone) {
+                (Target::Hardware(_), Some(d)) => d.to_string(),
+                _ => "sim".into(),
+            },
+            seed: sim.then_some(self.seed),
+            sim_effects_off: sim
+                .then(|| self.effects.off().into_iter().map(String::from).collect()),
+            rate_hz: a.rate_hz,
+            actor_names: self
+                .loaded
+                .scene()
+                .actors
+                .iter()
+                .map(|x| x.name.clone())
+                .collect(),
+            dronecine_version: env!("CARGO_PKG_VERSION").into(),
+        }
     }
-    let actor_names: Vec<String> = scene.actors.iter().map(|x| x.name.clone()).collect();
-    let heights: Vec<f64> = scene.actors.iter().map(|x| x.height_m).collect();
-    let header = FlightHeader {
-        script_name: script_name.clone(),
-        script_text: r.text.clone(),
-        profile_name: profile.name.clone(),
-        profile_toml: profile.to_toml(),
-        profile: profile.clone(),
-        controller: setup.clone(),
-        backend: match (&target, a.drone) {
-            (Target::Hardware(_), Some(d)) => d.to_string(),
-            _ => "sim".into(),
-        },
-        seed: matches!(target, Target::Sim).then_some(seed),
-        sim_effects_off: matches!(target, Target::Sim)
-            .then(|| effects.off().into_iter().map(String::from).collect()),
-        rate_hz: a.rate_hz,
-        actor_names: actor_names.clone(),
-        dronecine_version: env!("CARGO_PKG_VERSION").into(),
-    };
-    let lens = *Director::new(script, scene, &profile).lens();
-    let log_scene = LogScene {
-        stage: scene.stage,
-        lens,
-        actor_names: &actor_names,
-        actor_heights_m: &heights,
-    };
-    // The log is written on a thread of its own; a crash loses at most the last second
-    // (a batch handed to the writer every 0.25 s, taken up within 0.02 s, a chunk closed
-    // every 0.73 s). Forced to the disk as it is written when the flight cannot be flown
-    // again (paced by the wall clock), or asked: a simulated flight as fast as it goes is
-    // its script's, profile's and seed's to reproduce, and leaves the disk to the OS.
-    let durable = a.sync_log || a.realtime || !matches!(target, Target::Sim);
-    let options = LogOptions::shoot(durable);
-    // A flight never overwrites a recording: a `--log` that exists is refused before take-off,
-    // and a default name already taken (two flights in one second) gets `-2`, `-3`, …
-    let created = if a.log.is_some() && into_dir.is_none() {
-        FlightLogWriter::create_new_with(&log_path, &header, &log_scene, options)
-    } else {
-        let (path, created) = first_free(&log_path, |p| {
-            FlightLogWriter::create_new_with(p, &header, &log_scene, options)
-        });
-        log_path = path;
-        created
-    };
-    let mut log = match created.and_then(|w| LogThread::spawn(w, a.rate_hz)) {
-        Ok(w) => w,
-        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-            return fail(log_exists(&log_path))
+
+    /// The flight log, always a new file, written on a thread of its own: a crash loses at
+    /// most the last second (a batch handed to the writer every 0.25 s, taken up within
+    /// 0.02 s, a chunk closed every 0.73 s). Forced to the disk as it is written when the
+    /// flight cannot be flown again (paced by the wall clock), or asked: a simulated flight
+    /// as fast as it goes is its script's, profile's and seed's to reproduce, and leaves the
+    /// disk to the OS. The log and its path.
+    fn open_log(
+        &self,
+        path: PathBuf,
+        into_dir: Option<&Path>,
+    ) -> Result<(LogThread, PathBuf), String> {
+        let (a, scene) = (self.a, self.loaded.scene());
+        let actor_names: Vec<String> = scene.actors.iter().map(|x| x.name.clone()).collect();
+        let heights: Vec<f64> = scene.actors.iter().map(|x| x.height_m).collect();
+        let header = self.header();
+        let lens = *Director::new(self.loaded.script(), scene, &self.loaded.profile).lens();
+        let log_scene = LogScene {
+            stage: scene.stage,
+            lens,
+            actor_names: &actor_names,
+            actor_heights_m: &heights,
+        };
+        let durable = a.sync_log || a.realtime || !matches!(self.target, Target::Sim);
+        let options = LogOptions::shoot(durable);
+        // A flight never overwrites a recording: a `--log` that exists is refused before
+        // take-off, and a default name already taken (two flights in one second) gets `-2`,
+        // `-3`, …
+        let (path, created) = if a.log.is_some() && into_dir.is_none() {
+            let created = FlightLogWriter::create_new_with(&path, &header, &log_scene, options);
+            (path, created)
+        } else {
+            first_free(&path, |p| {
+                FlightLogWriter::create_new_with(p, &header, &log_scene, options)
+            })
+        };
+        match created.and_then(|w| LogThread::spawn(w, a.rate_hz)) {
+            Ok(w) => Ok((w, path)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(log_exists(&path)),
+            Err(e) => Err(e.to_string()),
         }
-        Err(e) => return fail(e),
-    };
-    // Ctrl-C lands, a second Ctrl-C cuts the motors (the flight loop reads the count).
-    if let Err(e) = ctrlc::set_handler(|| {
-        INTERRUPTS.fetch_add(1, Ordering::Relaxed);
-    }) {
-        errln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
     }
-    let mut display = Display::new(a.quiet, &r.name, &r.text);
-    let result = match &target {
-        Target::Sim => {
-            let mut sim = SimConfig::new(seed);
-            sim.effects = effects;
-            // As fast as it can: the director on a thread of its own if there is a core for
-            // it (the same flight either way). Paced, the loop waits anyway.
-            sim.actors_ahead = !a.realtime && session::director_thread_pays();
-            let flight = SimFlight {
-                script,
-                source: &r.text,
-                scene,
-                profile: &profile,
-                rate_hz: a.rate_hz,
-                controller: setup,
-                plant: None,
-                sim,
-                realtime: a.realtime,
-                interrupts: Some(&INTERRUPTS),
-            };
-            session::fly_simulated(&flight, &mut log, &mut display)
+
+    /// Flies, logging into `log`, and prints the report; the exit status says whether the
+    /// flight completed.
+    fn fly(&self, mut log: LogThread, log_path: &Path) -> ExitCode {
+        let a = self.a;
+        // Ctrl-C lands, a second Ctrl-C cuts the motors (the flight loop reads the count).
+        if let Err(e) = ctrlc::set_handler(|| {
+            INTERRUPTS.fetch_add(1, Ordering::Relaxed);
+        }) {
+            errln!(
+                "warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing"
+            );
         }
-        Target::Hardware(crate::hardware::Target { drone, mocap, rig }) => {
-            let flight = HardwareFlight {
-                script,
-                source: &r.text,
-                scene,
-                profile: &profile,
-                rate_hz: a.rate_hz,
-                controller: setup,
-                drone,
-                mocap,
-                rig,
-                interrupts: Some(&INTERRUPTS),
-            };
-            session::fly_hardware(&flight, &mut log, &mut display)
-        }
-    };
-    display.finish();
-    let finished = log.finish();
-    let report = match result {
-        Ok(report) => report,
-        Err(e @ SessionError::Flight(FlightError::Log(_))) => {
+        let r = &self.loaded.file;
+        let mut display = Display::new(a.quiet, &r.name, &r.text);
+        let result = self.fly_on_target(&mut log, &mut display);
+        display.finish();
+        let finished = log.finish();
+        let report = match result {
+            Ok(report) => report,
+            Err(e) => return self.not_flown(e, log_path),
+        };
+        if let Err(e) = finished {
             return fail(format!(
+                "the flight log `{}` is incomplete: {e}",
+                log_path.display()
+            ));
+        }
+        if a.json {
+            match serde_json::to_string_pretty(&report) {
+                Ok(s) => outln!("{s}"),
+                Err(e) => return fail(e),
+            }
+        } else {
+            let profile = &self.loaded.profile.name;
+            out!("{}", render_report(&report, profile, a.controller));
+        }
+        errln!("flight log: {}", log_path.display());
+        if report.completed {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        }
+    }
+
+    /// The flight on the simulator or on the hardware the command line names.
+    fn fly_on_target(
+        &self,
+        log: &mut LogThread,
+        display: &mut Display,
+    ) -> Result<FlightReport, SessionError> {
+        let (a, r) = (self.a, &self.loaded.file);
+        let (script, scene, profile) = (
+            self.loaded.script(),
+            self.loaded.scene(),
+            &self.loaded.profile,
+        );
+        match self.target {
+            Target::Sim => {
+                let mut sim = SimConfig::new(self.seed);
+                sim.effects = self.effects;
+                // As fast as it can: the director on a thread of its own if there is a core
+                // for it (the same flight either way). Paced, the loop waits anyway.
+                sim.actors_ahead = !a.realtime && session::director_thread_pays();
+                let flight = SimFlight {
+                    script,
+                    source: &r.text,
+                    scene,
+                    profile,
+                    rate_hz: a.rate_hz,
+                    controller: self.setup.clone(),
+                    plant: None,
+                    sim,
+                    realtime: a.realtime,
+                    interrupts: Some(&INTERRUPTS),
+                };
+                session::fly_simulated(&flight, log, display)
+            }
+            Target::Hardware(crate::hardware::Target { drone, mocap, rig }) => {
+                let flight = HardwareFlight {
+                    script,
+                    source: &r.text,
+                    scene,
+                    profile,
+                    rate_hz: a.rate_hz,
+                    controller: self.setup.clone(),
+                    drone,
+                    mocap,
+                    rig,
+                    interrupts: Some(&INTERRUPTS),
+                };
+                session::fly_hardware(&flight, log, display)
+            }
+        }
+    }
+
+    /// A flight that did not fly to its end without a report: a pre-flight refusal (each
+    /// check's diagnostic, quoting the script where it is about the script), a log that
+    /// could not be written, or a backend's failure.
+    fn not_flown(&self, e: SessionError, log_path: &Path) -> ExitCode {
+        let r = &self.loaded.file;
+        match e {
+            SessionError::Flight(FlightError::Preflight(refusals)) => {
+                err!(
+                    "{}",
+                    diag::render(&r.name, &r.text, &refusals, self.a.color, 100)
+                );
+                errln!(
+                    "error: `{}` was not flown: the drone is on the ground",
+                    r.name
+                );
+                errln!("flight log: {}", log_path.display());
+                ExitCode::FAILURE
+            }
+            e @ SessionError::Flight(FlightError::Log(_)) => fail(format!(
                 "{e}\n  help: the log keeps the flight up to the failure (`dronecine replay {}` \
                  reads it); free space on its disk, or give --log a place that has some",
                 log_path.display()
-            ))
+            )),
+            e => {
+                errln!("flight log: {}", log_path.display());
+                fail(e)
+            }
         }
-        Err(e) => {
-            errln!("flight log: {}", log_path.display());
-            return fail(e);
-        }
-    };
-    if let Err(e) = finished {
-        return fail(format!(
-            "the flight log `{}` is incomplete: {e}",
-            log_path.display()
-        ));
-    }
-    if a.json {
-        match serde_json::to_string_pretty(&report) {
-            Ok(s) => outln!("{s}"),
-            Err(e) => return fail(e),
-        }
-    } else {
-        out!("{}", render_report(&report, &profile.name, a.controller));
-    }
-    errln!("flight log: {}", log_path.display());
-    if report.completed {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
     }
 }
 
@@ -670,13 +784,27 @@ pub fn render_report_as(
         profile_name, controller, r.flight_time_s, r.shots_time_s
     );
     let [rms, max, heading, framing, saturated] = cells(&r.figures);
+    // The framing error is a distance on a screen two units wide: half of it is the share of
+    // the frame's width.
+    let _ = match r.figures.rms_framing_error {
+        Some(e) => writeln!(
+            s,
+            "  framing: the actors sat {:.1}% of the frame's width from their marks on screen \
+             (error RMS {framing})",
+            e * 50.0
+        ),
+        None => writeln!(s, "  framing: no hold framed an actor"),
+    };
     let _ = writeln!(
         s,
-        "  position error  RMS {rms} cm, max {max} cm; heading error RMS {heading}°; framing \
-         error RMS {framing}; saturated {saturated}% of ticks"
+        "  tracking: the drone kept within {rms} cm of its path (RMS; {max} cm at worst), its \
+         heading within {heading}° (RMS); the servo was at a limit on {saturated}% of ticks"
     );
     if let Some(d) = r.figures.closest_actor_m {
-        let _ = write!(s, "  closest to an actor {d:.2} m (the drone, as measured)");
+        let _ = write!(
+            s,
+            "  safety: the drone came no nearer an actor than {d:.2} m"
+        );
         // The tracking margin the drone used where the reference was near the actors.
         if let Some(c) = r.figures.cut_in_m {
             let _ = write!(
@@ -919,13 +1047,20 @@ mod tests {
         );
         assert!(
             text.contains(
-                "RMS 1.2 cm, max 5.0 cm; heading error RMS 0.57°; framing error RMS \
-                 0.021; saturated 50.0% of ticks"
+                "\n  framing: the actors sat 1.1% of the frame's width from their marks on \
+                 screen (error RMS 0.021)\n"
             ),
             "{text}"
         );
         assert!(
-            text.contains("\n  closest to an actor 0.62 m (the drone, as measured)\n"),
+            text.contains(
+                "\n  tracking: the drone kept within 1.2 cm of its path (RMS; 5.0 cm at worst), \
+                 its heading within 0.57° (RMS); the servo was at a limit on 50.0% of ticks\n"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("\n  safety: the drone came no nearer an actor than 0.62 m\n"),
             "{text}"
         );
         let mut near = r.clone();
@@ -933,7 +1068,7 @@ mod tests {
         let text_near = render_report(&near, "ardrone2", "lqg");
         assert!(
             text_near.contains(
-                "\n  closest to an actor 0.62 m (the drone, as measured); near them up to \
+                "\n  safety: the drone came no nearer an actor than 0.62 m; near them up to \
                  6.1 cm nearer than its reference\n"
             ),
             "{text_near}"

@@ -40,7 +40,7 @@ use dronecine_compiler::director::{Director, Held};
 use dronecine_compiler::reference::Sample;
 use dronecine_diag::Diagnostic;
 
-use crate::{take_newer, ActorTracker};
+use crate::tracker::{take_newer, ActorTracker};
 use dronecine_backend::{ActorFeed, BodyPose, MocapFrame};
 use dronecine_compiler::reference::ActorPose;
 

@@ -4,16 +4,16 @@
 //! and the pre-flight checks. Each ends in a defined, logged
 //! behaviour — never a panic.
 
-use dronecine_backend::Backends;
-use dronecine_backend::{BackendError, Clock, Drone, FlightState, Mocap, MocapFrame};
+use dronecine_backend::{BackendError, Backends, Clock, Drone, FlightState, Mocap, MocapFrame};
+use dronecine_diag::Diagnostic;
 use dronecine_flight::report::FlightReport;
-use dronecine_flight::{self as flight, FlightError, FlightSetup, Observer, Progress, Safety};
-use dronecine_mcap::record::FlightSink;
-use dronecine_mcap::record::{Event, Phase, TickRecord};
+use dronecine_flight::{
+    self as flight, FlightError, FlightSetup, Observer, PreflightCode, Progress, Safety,
+};
+use dronecine_mcap::record::{Event, FlightSink, Phase, TickRecord};
 use dronecine_profile::Profile;
 use dronecine_runtime::start_pose;
-use dronecine_servo::setup::controller_for;
-use dronecine_servo::setup::ControllerSetup;
+use dronecine_servo::setup::{controller_for, ControllerSetup};
 use dronecine_sim::{SimConfig, Simulator};
 
 const SCRIPT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
@@ -304,12 +304,31 @@ fn fly_from(src: &str, start_m: [f64; 3]) -> (Result<FlightReport, FlightError>,
     (result, rec)
 }
 
-/// The pre-flight refusal's message, checking that nothing took off.
-fn refused_before_take_off(r: Result<FlightReport, FlightError>, rec: &Recorder) -> String {
+/// The pre-flight refusal's diagnostics, checking that nothing took off.
+fn refused_before_take_off(
+    r: Result<FlightReport, FlightError>,
+    rec: &Recorder,
+) -> Vec<Diagnostic> {
     assert!(rec.first("take_off").is_none(), "{:?}", rec.kinds());
     match r {
-        Err(FlightError::Preflight(m)) => m,
+        Err(FlightError::Preflight(d)) => {
+            assert!(d.iter().all(|d| d.is_error() && d.help.is_some()), "{d:?}");
+            d
+        }
         other => panic!("{other:?}"),
+    }
+}
+
+/// The codes of a refusal's diagnostics.
+fn codes(d: &[Diagnostic]) -> Vec<dronecine_diag::Code> {
+    d.iter().map(|d| d.code).collect()
+}
+
+/// The text a diagnostic points at in `src` (`""` for one about the set, not the script).
+fn at<'a>(src: &'a str, d: &Diagnostic) -> &'a str {
+    match d.span.is_placed() {
+        true => &src[d.span.start..d.span.end],
+        false => "",
     }
 }
 
@@ -550,8 +569,9 @@ fn preflight_refuses_an_untracked_drone_or_actor_and_a_flat_battery() {
         None,
         |_| {},
     );
-    let m = refused_before_take_off(r, &rec);
-    assert!(m.contains("not tracked"), "{m}");
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(codes(&d), [PreflightCode::DroneUntracked.code()], "{d:?}");
+    assert_eq!(at(SCRIPT, &d[0]), "", "about the set, not the script");
 
     let (r, rec) = fly_with(
         Faults {
@@ -561,12 +581,12 @@ fn preflight_refuses_an_untracked_drone_or_actor_and_a_flat_battery() {
         None,
         |_| {},
     );
-    let m = refused_before_take_off(r, &rec);
-    assert!(m.contains("actor not tracked") && m.contains('A'), "{m}");
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(codes(&d), [PreflightCode::ActorUntracked.code()], "{d:?}");
+    assert!(at(SCRIPT, &d[0]).starts_with("actor A "), "{d:?}");
 
     // An actor missing from the first frames only (a marker hidden for a moment; the
-    // simulator drops 0.5 % of frames) is tracked: the check waits for a whole frame. It
-    // refused the flight, on the simulator now and then (2 of 600 generated scripts).
+    // simulator drops 0.5 % of frames) is tracked: the check waits for a whole frame.
     let (r, rec) = fly_with(
         Faults {
             lose_actor: Some((0, 0.0, 0.05)),
@@ -579,8 +599,8 @@ fn preflight_refuses_an_untracked_drone_or_actor_and_a_flat_battery() {
     assert!(r.unwrap().completed, "{:?}", rec.kinds());
 
     let (r, rec) = fly_with(Faults::default(), None, |c| c.battery_start_percent = 10.0);
-    let m = refused_before_take_off(r, &rec);
-    assert!(m.contains("battery"), "{m}");
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(codes(&d), [PreflightCode::BatteryLow.code()], "{d:?}");
 }
 
 /// A clock that "presses Ctrl-C" at the given times.
@@ -818,23 +838,17 @@ fn a_draining_battery_lands_mid_flight() {
 
 #[test]
 fn preflight_refuses_a_take_off_outside_the_stage_or_by_an_actor() {
-    // SCRIPT's stage is 8 m × 6 m, A stands at the origin. Before, the first took off and
-    // was landed by the stage failsafe; the second took off 0.3 m from A.
-    // (Measured: the mocap's noise, and A standing a few centimetres off the mark.)
+    // SCRIPT's stage is 8 m × 6 m, A stands at the origin: the first would be landed by the
+    // stage failsafe at once, the second takes off 0.3 m from A.
     let cases = [
-        (
-            [-4.5, 0.0, 0.0],
-            ["the drone stands at (-4.5", "m, outside the stage"],
-        ),
-        (
-            [0.3, 0.0, 0.0],
-            ["the drone stands 0.", "m from A; ardrone2 keeps 0.50 m"],
-        ),
+        ([-4.5, 0.0, 0.0], PreflightCode::DroneOutsideStage, ""),
+        ([0.3, 0.0, 0.0], PreflightCode::DroneTooClose, "actor A "),
     ];
-    for (start_m, says) in cases {
+    for (start_m, code, place) in cases {
         let (r, rec) = fly_from(SCRIPT, start_m);
-        let m = refused_before_take_off(r, &rec);
-        assert!(m.starts_with(says[0]) && m.contains(says[1]), "{m}");
+        let d = refused_before_take_off(r, &rec);
+        assert_eq!(codes(&d), [code.code()], "{d:?}");
+        assert!(at(SCRIPT, &d[0]).starts_with(place), "{d:?}");
     }
 }
 
@@ -870,12 +884,15 @@ fn preflight_refuses_a_first_framing_where_an_actor_stands() {
     assert!(r.unwrap().completed, "{:?}", rec.kinds());
     // The front MS puts the camera at (0.80, 0, 1.49) m (compile's first sample).
     let (r, rec) = fly(Some([0.8, -2.0]));
-    let m = refused_before_take_off(r, &rec);
-    assert!(
-        m.starts_with("the first framing puts the drone 0.")
-            && m.contains("m from B as the actors stand now; ardrone2 keeps 0.50 m"),
-        "{m}"
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(
+        codes(&d),
+        [PreflightCode::FirstFramingNearActor.code()],
+        "{d:?}"
     );
+    assert_eq!(at(src, &d[0]), "MS on A front for 4s", "at the first shot");
+    let near = d[0].related.first().map(|r| &src[r.span.start..r.span.end]);
+    assert!(near.is_some_and(|t| t.starts_with("actor B ")), "{d:?}");
 }
 
 #[test]
@@ -884,23 +901,35 @@ fn preflight_refuses_a_first_framing_outside_the_stage() {
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                actor A height 1.80m at (3.8, 0) facing 0deg\nMS on A front for 4s\n";
     let (r, rec) = fly_from(src, [3.0, 0.0, 0.0]);
-    let m = refused_before_take_off(r, &rec);
-    assert!(m.contains("outside the stage"), "{m}");
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(
+        codes(&d),
+        [PreflightCode::FirstFramingOutsideStage.code()],
+        "{d:?}"
+    );
+    assert_eq!(at(src, &d[0]), "MS on A front for 4s", "at the first shot");
 }
 
 #[test]
 fn preflight_refuses_a_first_framing_that_does_not_solve() {
-    // B 1.5 m from A: the over-the-shoulder's LS of A is out of the toric circle's reach.
-    // Before, the unsolved framing's sample was where the director's camera starts, the
-    // origin, inside the stage: the drone took off and flew toward A's feet.
+    // B 1.5 m from A: the over-the-shoulder's LS of A is out of the toric circle's reach. An
+    // unsolved framing's sample is where the director's camera starts, the origin: never
+    // flown to.
     let src = "stage 10m x 8m x 3m\ndrone ardrone2\n\
                actor A height 1.80m at (0, 0) facing 0deg\n\
                actor B height 1.65m at (1.5, 0) facing 180deg\n\
                MS on B 34backright LS on A 34left screen right for 6s\n";
     let (r, rec) = fly_from(src, [-3.0, 2.0, 0.0]);
-    let m = refused_before_take_off(r, &rec);
-    assert!(m.contains("the first framing cannot be solved"), "{m}");
-    assert!(m.contains("cannot be framed"), "the director's reason: {m}");
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(
+        codes(&d),
+        [PreflightCode::FirstFramingUnsolved.code()],
+        "{d:?}"
+    );
+    assert!(
+        at(src, &d[0]).starts_with("MS on B 34backright"),
+        "at the first shot"
+    );
 }
 
 #[test]
@@ -946,11 +975,11 @@ fn the_approach_flies_round_an_actor_in_its_way() {
 
 #[test]
 fn preflight_refuses_a_scene_without_shots() {
-    // Before, the director indexed the first shot of an empty timeline: a panic.
+    // The director needs a first shot: a scene without one is refused, never flown.
     let src = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n";
     let (r, rec, state) = fly_on(src, |_| {}, None, Rig::plain);
-    let m = refused_before_take_off(r, &rec);
-    assert!(m.contains("no shots"), "{m}");
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(codes(&d), [PreflightCode::NoShots.code()], "{d:?}");
     assert_eq!(state, FlightState::Landed);
 }
 

@@ -377,8 +377,12 @@ fn take(seed: u64, dir: &std::path::Path, tally: &mut Tally) {
         Ok(r) => r,
         Err(SessionError::Flight(FlightError::Preflight(why))) => {
             assert!(
-                !why.trim().is_empty(),
-                "seed {seed}: refused without a reason"
+                !why.is_empty() && why.iter().all(|d| d.code.namespace() == "preflight"),
+                "seed {seed}: refused without a coded reason: {why:?}"
+            );
+            assert!(
+                why.iter().all(|d| d.help.is_some()),
+                "seed {seed}: no fix: {why:?}"
             );
             tally.preflight += 1;
             return;
