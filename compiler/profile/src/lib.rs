@@ -115,7 +115,9 @@ pub struct Safety {
     /// On set, the reference keeps `actor_distance_m` plus this from the actors, so that the
     /// drone itself, which strays from its reference by its tracking error, keeps
     /// `actor_distance_m` (the director, against measured actors). A compiled reference, a
-    /// perfect drone's, keeps `actor_distance_m` only.
+    /// perfect drone's, keeps `actor_distance_m` only. A flight log whose profile has no
+    /// margin (its format predates the field) reads as 0, how such a flight flew.
+    #[serde(default)]
     pub tracking_margin_m: f64,
 }
 
@@ -2015,6 +2017,19 @@ fn unknown_key_help(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A flight log's header holds its profile as JSON: one written before the tracking
+    /// margin existed lacks it, and reads as no margin, which is how that flight flew.
+    #[test]
+    fn a_logged_profile_without_a_tracking_margin_reads_as_none() {
+        let p = Profile::builtin("ardrone2").unwrap();
+        let mut v = serde_json::to_value(&p).unwrap();
+        let safety = v["safety"].as_object_mut().unwrap();
+        assert!(safety.remove("tracking_margin_m").is_some());
+        let back: Profile = serde_json::from_value(v).unwrap();
+        assert_eq!(back.safety.tracking_margin_m, 0.0);
+        assert_eq!(back.servo, p.servo);
+    }
 
     /// Every example a help line gives as the AR.Drone 2.0's value is the built-in
     /// profile's value, so that the two cannot drift apart; keys the profile leaves out are

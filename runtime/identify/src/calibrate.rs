@@ -2,7 +2,7 @@
 //! axis fly open-loop tests around it ([`shape`]): on every axis doublets (+A for T, −A for T)
 //! then steps, each sign in turn, followed by a coast at zero input where the drag's τ shows
 //! (on roll and pitch a long one, and the step is short: +A for T), recording every tick; land;
-//! then fit the model ([`crate::identify`], a prediction-error fit that models the wind, the
+//! then fit the model (the [crate root](crate), a prediction-error fit that models the wind, the
 //! attitude lag and the latency) and build the profile with the fitted `[model]`
 //! ([`identify::ModelFit::apply`]). Each test is a segment of its own; [`report_svg`] draws
 //! the calibration report of an axis. Gusts blur τ, so roll and pitch get more tests
@@ -416,7 +416,9 @@ pub fn fly_tests(
         f.land();
         return Err(CalibrateError::MocapLost);
     };
-    let hz = plan.hover_height_m.clamp(lo[2].max(0.5), hi[2]);
+    // Not `clamp`, which panics on a stage too low for the floor of 0.5 m: there the
+    // ceiling wins, and the keep-in box refuses the test.
+    let hz = plan.hover_height_m.max(lo[2].max(0.5)).min(hi[2]);
     let home = ([start.0[0], start.0[1], hz], start.1);
     let mut tests = Vec::new();
     for &axis in &plan.axes {

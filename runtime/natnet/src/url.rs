@@ -32,7 +32,7 @@ pub struct NatNetUrl {
 }
 
 const NATNET_FORM: &str =
-    "natnet://SERVER[:PORT][?multicast=GROUP|unicast], e.g. natnet://192.168.1.10";
+    "natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N], e.g. natnet://192.168.1.10";
 
 impl NatNetUrl {
     pub fn parse(text: &str) -> Result<Self, UrlError> {
