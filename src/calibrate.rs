@@ -1,7 +1,8 @@
 //! `dronecine calibrate` and `dronecine identify`: measure the servo's model (K and τ per
-//! axis, K_ψ) by flying doublets and steps on each input around hover (on the embedded simulator by default, or on a
-//! real AR.Drone 2.0 with NatNet positions, `--drone/--mocap`), or from any flight log; print each fitted value with its 95 % interval, the fit's R² and the
-//! previous profile's value; write the profile (`Profile::to_toml`) only when every fit is
+//! axis, K_ψ) by flying doublets and steps on each input around hover (on the embedded
+//! simulator by default, or on a real AR.Drone 2.0 with NatNet positions, `--drone/--mocap`),
+//! or from any flight log; print each fitted value with its 95 % interval, the fit's R² and
+//! the previous profile's value; write the profile (`Profile::to_toml`) only when every fit is
 //! good, else exit 1 naming the test to repeat.
 
 use std::path::Path;
@@ -14,7 +15,6 @@ use dronecine_identify::calibrate::{self as cal, Plan};
 use dronecine_identify::{self as identify, Axis, FitError, ModelFit, Segment};
 use dronecine_mcap::log::FlightLog;
 use dronecine_profile::{Profile, DEFAULT_NAME};
-use dronecine_runtime as session;
 use dronecine_sim::{Effects, SimConfig, Simulator};
 
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
@@ -64,7 +64,8 @@ pub struct CalibrateArgs {
     /// point where it takes off, inside --stage (centred on the mocap's origin).
     #[arg(long, value_name = "URL")]
     drone: Option<String>,
-    /// Its positions from OptiTrack NatNet: `natnet://SERVER[:PORT][?multicast=GROUP|?unicast]`.
+    /// Its positions from OptiTrack NatNet:
+    /// `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`.
     #[arg(long, value_name = "URL")]
     mocap: Option<String>,
     /// The drone's rigid-body id and the mocap's up axis (TOML, as `shoot --rig`)
@@ -293,28 +294,8 @@ fn finish(
 }
 
 pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
-    if a.drone.is_some() {
-        let given = [
-            (a.seed.is_some(), "--seed"),
-            (a.ideal, "--ideal"),
-            (a.plant.is_some(), "--plant"),
-        ];
-        if let Err(e) = crate::shoot::refuse_sim_options(&given) {
-            return fail(e);
-        }
-    }
-    if let Err(e) = crate::shoot::check_servo_rate(a.rate) {
-        return fail(e);
-    }
-    if a.repeats == Some(0) {
-        return fail("--repeats must be at least 1 (tests per axis)");
-    }
-    let axes = match axes(&a.axis) {
+    let (axes, stage) = match calibrate_options(a) {
         Ok(x) => x,
-        Err(e) => return fail(e),
-    };
-    let stage = match stage(&a.stage) {
-        Ok(s) => s,
         Err(e) => return fail(e),
     };
     let target = match crate::hardware::target(
@@ -332,7 +313,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
         Ok(p) => p,
         Err(c) => return c,
     };
-    // Before the flight: minutes of tests are not flown for a profile with nowhere to go.
+    // Ahead of the flight: minutes of tests are not flown for a profile with nowhere to go.
     if let Err(e) = crate::files::prepare_output(&a.output, "-o") {
         return fail(e);
     }
@@ -345,32 +326,11 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
     let (sim, mut sim_backends, mut hardware);
     let (backends, note) = match &target {
         None => {
-            let plant = match &a.plant {
-                Some(name) => match crate::compile::profile_arg("--plant", name, color) {
-                    Ok(p) => p,
-                    Err(c) => return c,
-                },
-                None => prior.clone(),
-            };
-            let seed = a.seed.unwrap_or(1);
-            let mut cfg = SimConfig::new(seed);
-            if a.ideal {
-                cfg.effects = Effects {
-                    mocap_noise: true,
-                    ..Effects::none()
-                };
-            }
-            let scene = Scene {
-                stage,
-                lens: None,
-                drone: None,
-                actors: Vec::new(),
-                blocking: Vec::new(),
-            };
-            sim = match Simulator::new(&cfg, &plant, &scene) {
+            let (simulated, seed) = match simulator(a, &prior, stage, color) {
                 Ok(s) => s,
-                Err(e) => return fail(e),
+                Err(c) => return c,
             };
+            sim = simulated;
             sim_backends = (sim.drone(), sim.mocap(), sim.clock());
             let (drone, mocap, clock) = &mut sim_backends;
             (
@@ -383,7 +343,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
             )
         }
         Some(t) => {
-            hardware = match session::connect_hardware(
+            hardware = match dronecine_runtime::connect_hardware(
                 &t.drone,
                 &t.mocap,
                 &t.rig,
@@ -396,14 +356,78 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
             (hardware.backends(), format!("calibrated on {}", t.drone))
         }
     };
+    fly_and_fit(a, backends, &stage, &prior, &axes, &note)
+}
+
+/// The options `calibrate` checks before anything is loaded or flown: the axes to test and
+/// the stage.
+fn calibrate_options(a: &CalibrateArgs) -> Result<(Vec<Axis>, Stage), String> {
+    if a.drone.is_some() {
+        let given = [
+            (a.seed.is_some(), "--seed"),
+            (a.ideal, "--ideal"),
+            (a.plant.is_some(), "--plant"),
+        ];
+        crate::shoot::refuse_sim_options(&given)?;
+    }
+    crate::shoot::check_servo_rate(a.rate)?;
+    if a.repeats == Some(0) {
+        return Err("--repeats must be at least 1 (tests per axis)".to_string());
+    }
+    Ok((axes(&a.axis)?, stage(&a.stage)?))
+}
+
+/// The simulated drone the tests fly (`--plant`, or the prior profile, on an empty `stage`)
+/// and its seed; `Err` is the exit status once the reason is printed.
+fn simulator(
+    a: &CalibrateArgs,
+    prior: &Profile,
+    stage: Stage,
+    color: bool,
+) -> Result<(Simulator, u64), ExitCode> {
+    let plant = match &a.plant {
+        Some(name) => crate::compile::profile_arg("--plant", name, color)?,
+        None => prior.clone(),
+    };
+    let seed = a.seed.unwrap_or(1);
+    let mut cfg = SimConfig::new(seed);
+    if a.ideal {
+        cfg.effects = Effects {
+            mocap_noise: true,
+            ..Effects::none()
+        };
+    }
+    let scene = Scene {
+        stage,
+        lens: None,
+        drone: None,
+        actors: Vec::new(),
+        blocking: Vec::new(),
+    };
+    match Simulator::new(&cfg, &plant, &scene) {
+        Ok(s) => Ok((s, seed)),
+        Err(e) => Err(fail(e)),
+    }
+}
+
+/// Flies the calibration's tests on `backends`, writes the report if asked, and [`finish`]es
+/// with the fit; `note` goes into the written profile's description.
+fn fly_and_fit(
+    a: &CalibrateArgs,
+    backends: Backends<'_>,
+    stage: &Stage,
+    prior: &Profile,
+    axes: &[Axis],
+    note: &str,
+) -> ExitCode {
     let plan = Plan {
-        axes: axes.clone(),
+        axes: axes.to_vec(),
         rate_hz: a.rate,
         repeats: a.repeats.unwrap_or(Plan::default().repeats),
         tilt_repeats: a.repeats.unwrap_or(Plan::default().tilt_repeats),
         ..Plan::default()
     };
-    let result = cal::calibrate(backends, &stage, &prior, &plan, Some(&INTERRUPTS));
+    let result = cal::calibrate(backends, stage, prior, &plan, Some(&INTERRUPTS));
     match result {
         Ok(c) => {
             if let Some(dir) = &a.report {
@@ -420,12 +444,12 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
                         )
                     })
                     .collect();
-                match write_report(dir, &c.fit, &c.errors, &prior, &tests) {
+                match write_report(dir, &c.fit, &c.errors, prior, &tests) {
                     Ok(files) => outln!("report: {} files in {}", files.len(), dir.display()),
                     Err(e) => return fail(e),
                 }
             }
-            finish(&c.fit, &c.errors, &prior, &axes, &a.output, &note)
+            finish(&c.fit, &c.errors, prior, axes, &a.output, note)
         }
         Err(e) => fail(format!("calibration flight: {e}")),
     }
@@ -448,7 +472,7 @@ pub fn run_identify(a: &IdentifyArgs, color: bool) -> ExitCode {
             ))
         }
     };
-    // Before the fit, which may take a while on a long flight.
+    // Checked ahead of the fit, which may take a while on a long flight.
     if let Err(e) = crate::files::prepare_output(&a.output, "-o") {
         return fail(e);
     }

@@ -280,8 +280,8 @@ pub fn run(a: &Args) -> ExitCode {
             d.severity = Severity::Warning;
         }
     }
-    // The language's warnings (a move timed with `for`, …) with the compiler's, in the
-    // script's order: `compile` showed only the compiler's.
+    // The language's warnings (a move timed with `for`, …) and the compiler's together, in
+    // the script's order.
     let shown = with_script_warnings(&r.checked.diagnostics, &compiled.diagnostics);
     if !shown.is_empty() {
         err!("{}", diag::render(&r.name, &r.text, &shown, a.color, 100));

@@ -12,7 +12,6 @@ use dronecine_emulator::{
 };
 use dronecine_natnet::frame::{UpAxis, Version};
 use dronecine_profile::{Profile, DEFAULT_NAME};
-use dronecine_runtime as session;
 use dronecine_sim::SimConfig;
 
 pub struct Args<'a> {
@@ -89,7 +88,7 @@ pub fn run(a: &Args) -> ExitCode {
     // refuses).
     if let Some(script) = (loaded.as_ref().map(|l| l.script())).filter(|s| !s.timeline.is_empty()) {
         (sim.start_position_m, sim.start_heading_rad) =
-            session::start_pose(script, &scene, &profile, &sim);
+            dronecine_runtime::start_pose(script, &scene, &profile, &sim);
     }
     let effects_off = sim.effects.off();
     let config = EmulatorConfig {

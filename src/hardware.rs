@@ -17,8 +17,9 @@ pub struct Target {
 
 /// `None` without `--drone` and `--mocap` (the command flies the simulator); the error
 /// message (without `error: `) when only one is given, when `--rig` comes without them, a
-/// URL is malformed or the rig file is bad (its diagnostics printed first, in `color`). `actors`: the scene's actor names in order
-/// (`None` for a command that flies no scene), numbered 2, 3, … when there is no rig file.
+/// URL is malformed or the rig file is bad (its diagnostics printed first, in `color`).
+/// `actors`: the scene's actor names in order (`None` for a command that flies no scene),
+/// numbered 2, 3, … when there is no rig file.
 pub fn target(
     command: &str,
     drone: Option<&str>,

@@ -95,8 +95,9 @@ enum Command {
     /// Print the LQG servo's gains for a drone profile (P, K1, N1, poles, Kalman gain, k2).
     Gains(gains::Args),
     /// Measure the servo's model: fly small doublets and steps on each input around hover (on the
-    /// embedded simulator by default, or a real drone with --drone/--mocap) and fit K and τ
-    /// per axis and K_ψ by least squares.
+    /// embedded simulator by default, or a real drone with --drone/--mocap), and fit K and τ
+    /// per axis (roll, pitch, vertical speed) by prediction error through a Kalman filter, and
+    /// K_ψ by least squares.
     ///
     /// Prints each fitted value with its 95 % interval, the fit's R² and the previous
     /// profile's value; writes the profile only when every fit is good, else exits 1 naming
@@ -104,7 +105,8 @@ enum Command {
     Calibrate(calibrate::CalibrateArgs),
     /// Fit the servo's model (as `calibrate`) from a flight log.
     Identify(calibrate::IdentifyArgs),
-    /// Fly a script: on the embedded AR.Drone simulator (the default), with the LQG servo.
+    /// Fly a script: on the embedded AR.Drone simulator (the default) or a real drone, with
+    /// the LQG servo (or `--controller pid`).
     ///
     /// Checks and compiles the script first (a script the drone cannot fly is refused), then
     /// takes off, flies to the first framing, flies the shots with the director re-framing the
@@ -155,7 +157,8 @@ enum Command {
         /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`. Needs --mocap.
         #[arg(long, value_name = "URL")]
         drone: Option<String>,
-        /// Its positions from OptiTrack NatNet: `natnet://SERVER[:PORT][?multicast=GROUP|?unicast]`.
+        /// Its positions from OptiTrack NatNet:
+        /// `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`.
         #[arg(long, value_name = "URL")]
         mocap: Option<String>,
         /// Rigid-body ids of the drone and the actors (TOML) [default: drone 1, actors 2, 3, …].

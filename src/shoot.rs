@@ -1,6 +1,7 @@
 //! `dronecine shoot`: fly a script. Checks and compiles it first (a script the drone cannot
-//! fly is refused, as `compile` refuses it), then flies it on the embedded simulator with the
-//! chosen controller, logging the flight to MCAP, and prints the report.
+//! fly is refused, as `compile` refuses it), then flies it on the embedded simulator (or a
+//! real drone, `--drone`/`--mocap`) with the chosen controller, logging the flight to MCAP,
+//! and prints the report.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -16,7 +17,7 @@ use dronecine_flight::{FlightError, Observer, Progress};
 use dronecine_grammar::script::Scene;
 use dronecine_mcap::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
 use dronecine_mcap::record::{Event, FlightHeader, Phase};
-use dronecine_runtime::{self as session, HardwareFlight, SessionError, SimFlight};
+use dronecine_runtime::{HardwareFlight, SessionError, SimFlight};
 use dronecine_servo::setup::ControllerSetup;
 use dronecine_sim::{Effects, SimConfig};
 
@@ -42,7 +43,7 @@ pub struct Args<'a> {
     pub sim_off: &'a [String],
     /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`: fly a real drone (or the emulator).
     pub drone: Option<&'a str>,
-    /// `natnet://SERVER[:PORT][?multicast=GROUP]`: its positions.
+    /// `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`: its positions.
     pub mocap: Option<&'a str>,
     /// The rig file (rigid-body ids); default: the emulator's layout.
     pub rig: Option<&'a Path>,
@@ -243,9 +244,8 @@ fn where_it_flies(a: &Args, scene: &Scene) -> Result<(Target, u64, Effects), Str
 }
 
 /// Where the log goes, and the folder `--log` names if it names one (the time-stamped name
-/// then goes in it). A `--log` that names a recording is refused now, not after the compile
-/// (a quarter of a second for an hour's script); creating the log refuses it again,
-/// race-free.
+/// then goes in it). A `--log` that names a recording is refused here, ahead of the compile
+/// (which takes a while on a long script); creating the log refuses it again, race-free.
 fn log_path_for<'a>(
     a: &Args<'a>,
     script_name: &str,
@@ -449,7 +449,7 @@ impl Flight<'_> {
                 sim.effects = self.effects;
                 // As fast as it can: the director on a thread of its own if there is a core
                 // for it (the same flight either way). Paced, the loop waits anyway.
-                sim.actors_ahead = !a.realtime && session::director_thread_pays();
+                sim.actors_ahead = !a.realtime && dronecine_runtime::director_thread_pays();
                 let flight = SimFlight {
                     script,
                     source: &r.text,
@@ -462,7 +462,7 @@ impl Flight<'_> {
                     realtime: a.realtime,
                     interrupts: Some(&INTERRUPTS),
                 };
-                session::fly_simulated(&flight, log, display)
+                dronecine_runtime::fly_simulated(&flight, log, display)
             }
             Target::Hardware(crate::hardware::Target { drone, mocap, rig }) => {
                 let flight = HardwareFlight {
@@ -477,7 +477,7 @@ impl Flight<'_> {
                     rig,
                     interrupts: Some(&INTERRUPTS),
                 };
-                session::fly_hardware(&flight, log, display)
+                dronecine_runtime::fly_hardware(&flight, log, display)
             }
         }
     }
@@ -573,7 +573,7 @@ struct Display {
     told: EventTally,
     /// When the line's text was last set, and the phase and shot it showed: the loop offers
     /// progress every tick, and formatting the line each time (a string per tick, and the
-    /// bar's lock) took an hour's simulated flight from 0.93 to 1.27 s on a terminal.
+    /// bar's lock) would slow a simulated flight that runs as fast as it can.
     shown: Option<(Instant, Phase, Option<usize>)>,
 }
 
@@ -691,8 +691,8 @@ pub fn event_text(e: &Event, script_name: &str, script_text: &str) -> String {
 
 /// How many events of one kind the terminal shows. A loop that keeps missing its deadline on a
 /// loaded machine, or a controller refusing tick after tick, raises one event a tick: shown
-/// all, they scrolled the rest out of sight. The log keeps every one and the report counts
-/// them.
+/// all, they would scroll the rest out of sight. The log keeps every one and the report
+/// counts them.
 const SHOWN_PER_KIND: u32 = 10;
 
 /// What the terminal shows of a flight's events (`shoot` as they happen, `replay` from the

@@ -1,8 +1,9 @@
 //! Fuzz the flight-log reader on arbitrary files: `FlightLog::open` never panics, and what it
 //! returns is consistent: the damage it met is in file order, each skip resumes after the
 //! place it started, only the last entry may end the reading (and a log without its footer
-//! has one that does), and each damage's tick index lies within the ticks read. Seed it with real logs (`dronecine shoot … --log`), whole and
-//! damaged, so that it explores chunk framing and the search for the next intact chunk.
+//! has one that does), and each damage's tick index lies within the ticks read. Seed it with
+//! real logs (`dronecine shoot … --log`), whole and damaged, so that it explores chunk framing
+//! and the search for the next intact chunk.
 #![no_main]
 
 use std::io::Write;

@@ -1,17 +1,18 @@
 //! Fuzz what comes after the front end: any script that checks without errors is compiled
-//! (`compile`, at 20 Hz) and flown on the embedded simulator (`shoot`'s session, every
-//! effect on) without a panic. A script `compile` refuses must be refused by the flight too,
-//! and every sample either gives is finite. Scripts longer than 60 s are skipped (one input
-//! would otherwise take seconds). Seed it with the shipped shots (`../shots/*.psl`).
+//! (`compile`, at 20 Hz) and flown on the embedded simulator (as `shoot` flies it, every
+//! effect on but the battery) without a panic. A script `compile` refuses must be refused by
+//! the flight too, and every sample either gives is finite. Scripts longer than 60 s are
+//! skipped (one input would otherwise take seconds). Seed it with the shipped shots
+//! (`../shots/*.psl`).
 #![no_main]
 
-use dronecine_compiler::compile::{compile, Options, unflyable};
-use dronecine_profile::{BUILTIN_NAMES, Profile};
-use dronecine_grammar::{check, decode};
+use dronecine_compiler::compile::{compile, unflyable, Options};
 use dronecine_flight::NoObserver;
+use dronecine_grammar::{check, decode};
 use dronecine_mcap::record::NullSink;
-use dronecine_servo::setup::ControllerSetup;
+use dronecine_profile::{Profile, BUILTIN_NAMES};
 use dronecine_runtime::{fly_simulated, SimFlight};
+use dronecine_servo::setup::ControllerSetup;
 use dronecine_sim::SimConfig;
 use libfuzzer_sys::fuzz_target;
 
@@ -45,9 +46,16 @@ fuzz_target!(|data: &[u8]| {
         .unwrap_or("ardrone2");
     let profile = Profile::builtin(name).unwrap_or_else(|| Profile::builtin("ardrone2").unwrap());
     let compiled = compile(&script, &profile, &Options { rate_hz: 20.0 }, |s, _| {
-        let all = s.position_m.iter().chain(&s.velocity_mps).chain(&s.acceleration_mps2);
+        let all = s
+            .position_m
+            .iter()
+            .chain(&s.velocity_mps)
+            .chain(&s.acceleration_mps2);
         assert!(all.copied().all(f64::is_finite), "{s:?}");
-        assert!(s.heading_rad.is_finite() && s.camera_pitch_rad.is_finite(), "{s:?}");
+        assert!(
+            s.heading_rad.is_finite() && s.camera_pitch_rad.is_finite(),
+            "{s:?}"
+        );
         Ok::<(), ()>(())
     })
     .unwrap();

@@ -183,9 +183,8 @@ fn bench(c: &mut Criterion) {
         });
         tally.report(&name);
         // Each flight writes a new file, as `shoot` does (its default log name carries the
-        // time): the previous flight's file is removed before the clock starts. Truncating it
-        // inside the timed run instead (an hour's 400 MB of page cache to drop, some of it
-        // still being written back) added about 0.1 s that no flight pays.
+        // time): the previous flight's file is removed before the clock starts, so that the
+        // timed run does not drop the previous hour's page cache, which no flight pays.
         //
         // The log as `shoot` writes a simulated flight's, handed to the OS and not forced to
         // the disk (the file is removed before the OS writes it back: no disk write is

@@ -33,15 +33,11 @@ use dronecine_sim::{SimConfig, Simulator};
 /// without the drift (the approach then moves it out of an actor's distance it drifted
 /// into).
 ///
-/// The take-off is the drone's own, not the servo's, and gusts push it: on random script
-/// 594, seeds 1–60, it drifted 0.29 m on the median and 1.11 m at most, and standing the
-/// actor distance and the actors' reach from the mark it came to 0.13 m from the actor's
-/// body before the approach took it out.
-///
-/// Below a close-up the drone stood under the actor's nose: an MCU from 0.55 m, an actor
-/// standing 7 cm off the mark, and `shoot`'s pre-flight check refused the flight with
-/// "the drone stands 0.48 m from A: place it further away", which on the simulator nobody
-/// can do.
+/// The take-off is the drone's own, not the servo's, and gusts push it: standing clear of
+/// the drift keeps the drone out of the actors' way until the approach takes over. Below a
+/// close-up the spot under the framing is under an actor's nose, which `shoot`'s pre-flight
+/// check refuses ("place the drone further away"), and on the simulator nobody can move it: the
+/// spot is chosen clear instead.
 pub fn start_pose(
     script: &Script,
     scene: &Scene,
@@ -156,13 +152,9 @@ impl std::fmt::Display for SessionError {
 impl std::error::Error for SessionError {}
 
 /// Whether a simulated flight gains by stepping its director on a thread of its own
-/// ([`SimConfig::actors_ahead`]): when the machine has a second core. Measured on the hour's
-/// flight (the `flight` bench) on two cores, 2026-11-28: without its log 0.461 → 0.329 s
-/// with the director ahead; with its log 0.503 → 0.392 s (0.69 → 0.70 s of CPU on all
-/// threads; ahead, the actors are computed on the director's thread only). Before the log's
-/// plot topics were CDR (JSON text then), the log's writer needed
-/// the second core to itself and the director ahead made the flight with its log slower
-/// (0.512 → 0.695 s). On one core the threads only take turns. `shoot` asks it.
+/// ([`SimConfig::actors_ahead`]): when the machine has a second core, the director's thread
+/// steps the director and computes the actors while the loop flies its ticks (the same
+/// flight, bit for bit). On one core the threads only take turns. `shoot` asks it.
 pub fn director_thread_pays() -> bool {
     std::thread::available_parallelism().is_ok_and(|n| n.get() >= 2)
 }

@@ -73,7 +73,7 @@ fn calibrates_a_different_plant_on_the_ideal_simulator_and_writes_it() {
         assert!(stdout.contains(key), "{key} missing in\n{stdout}");
     }
     let got = load(&out_file);
-    // The written profile round-trips through TOML (degrees): 5 % is the bound.
+    // The written profile round-trips through TOML (degrees); every axis within 5 %.
     let (g, t) = (&got.model, &plant.model);
     close(
         "K_phi",
@@ -178,11 +178,9 @@ fn identifies_the_model_from_a_shoot_log() {
     let g = &got.model;
     // The square excites the drone's initial acceleration K/τ well, K and τ apart less: how
     // the fit splits K/τ between them moves with the reference flown, and the intervals it
-    // gives for K and τ do not cover that. Pitch K/τ within 1 %, K and τ within 5 % (0.5 %
-    // high, both); roll, excited only in the turns, the drone yawing at ~1.3 rad/s in closed
-    // loop, K/τ within 2 %, K and τ within 10 % (7 % high, both). Steering variants tried
-    // while the steering learned to stay on a target that speeds up or slows down moved
-    // pitch's K and τ 3 % low or 5 % high, and roll's 6 % low or 24 % high, K/τ within 1 %.
+    // gives for K and τ do not cover that. Pitch K/τ within 1 %, K and τ within 5 %; roll,
+    // excited only in the turns, the drone yawing at ~1.3 rad/s in closed loop, K/τ within
+    // 2 %, K and τ within 10 %.
     close(
         "K_theta/tau_theta",
         g.gain_pitch_mps_per_rad / g.tau_pitch_s,
@@ -260,8 +258,8 @@ fn bad_arguments_exit_1() {
             &["calibrate", "--axis", "sideways", "-o", OUT],
             "--axis `sideways`",
         ),
-        // The servo rates `shoot` flies, negative numbers included (a 5 Hz or a 1 GHz servo
-        // was flown before, and its fit written).
+        // The servo rates `shoot` flies, negative numbers included: a 5 Hz or a 1 GHz servo
+        // is refused, not flown and its fit written.
         (
             &["calibrate", "--rate", "5", "-o", OUT],
             "--rate 5 is outside 10–1000 Hz",
@@ -305,8 +303,8 @@ fn bad_arguments_exit_1() {
     }
 }
 
-/// An output that cannot be written is refused before the flight, not after minutes of
-/// tests (before, a missing folder was found only when the fitted profile was written).
+/// An output that cannot be written is refused before the flight, not found only when the
+/// fitted profile is written, after minutes of tests.
 #[test]
 fn an_output_that_cannot_be_written_is_refused_before_the_flight() {
     let dir = temp_dir("calibrate-out");

@@ -107,8 +107,8 @@ fn check_reports_unreadable_and_binary_files_without_panicking() {
 }
 
 /// `check` checks the profile file a script names, not only that it exists: a script whose
-/// profile `compile` would refuse fails `check` with the profile's own diagnostic (before,
-/// `check` printed the summary and exit 0). A folder named as a profile is called a folder.
+/// profile `compile` would refuse fails `check` with the profile's own diagnostic, not a
+/// clean summary and exit 0. A folder named as a profile is called a folder.
 #[test]
 fn check_checks_the_profile_file_a_script_names() {
     let dir = temp_dir("check-profile");
@@ -156,13 +156,17 @@ fn check_checks_the_profile_file_a_script_names() {
     assert!(d["file"].as_str().unwrap().ends_with("mine.toml"), "{d}");
     assert_eq!(
         (d["line"].as_u64(), d["column"].as_u64()),
-        (Some(21), Some(12))
+        (Some(line as u64), Some(12))
     );
     // As compile says it.
     let out = dir.join("x.mcap");
     let o = dronecine(&["compile", script, "-o", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("mine.toml:21:12"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("mine.toml:{line}:12")),
+        "{}",
+        stderr(&o)
+    );
 
     std::fs::remove_file(dir.join("mine.toml")).unwrap();
     std::fs::create_dir(dir.join("mine.toml")).unwrap();
@@ -282,8 +286,8 @@ fn compile_writes_mcap_csv_and_previews() {
 }
 
 /// `compile` tells the language's warnings with its own, in the script's order, and `shoot`
-/// counts them in its one line: both dropped them (`check` alone told them), so a move timed
-/// with `for` went unremarked.
+/// counts them in its one line, so that a move timed with `for` is remarked on by every
+/// command, not by `check` alone.
 #[test]
 fn compile_and_shoot_tell_the_languages_warnings_too() {
     let dir = temp_dir("compile-warnings");
@@ -346,8 +350,8 @@ fn compile_bad_inputs_are_clear_errors_not_panics() {
     let o = dronecine(&["compile", "shots/annotation.psl", "-o", outs]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("compile::no_scene"), "{}", stderr(&o));
-    // A scene without shots, and an empty file: nothing to fly, said so (the first panicked
-    // in the director, `compile` and `shoot` alike; the second was called a film annotation).
+    // A scene without shots, and an empty file: nothing to fly, said so (no panic in the
+    // director for the first; the second is not called a film annotation).
     let no_shots = dir.join("no-shots.psl");
     std::fs::write(
         &no_shots,
@@ -541,8 +545,8 @@ fn closed_pipes_and_full_disks_are_not_panics() {
 }
 
 /// `emulate --script` needs only the scene (stage, actors, blocking): a script without one is
-/// refused for that, with a help that asks for a set-up and no shot (it asked for a shot, as
-/// `compile` and `shoot` do).
+/// refused for that, with a help that asks for a set-up and no shot (unlike `compile` and
+/// `shoot`, which ask for a shot).
 #[test]
 fn emulate_refuses_a_script_without_a_scene_for_what_it_lacks() {
     let dir = temp_dir("emulate-bad");

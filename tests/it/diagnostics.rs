@@ -64,7 +64,7 @@ fn the_corpus_exercises_every_code() {
         seen.extend(checked.diagnostics.iter().map(|d| d.code));
     }
     // Only the language's codes: `profile::` and `compile::` are the compiler's, tested there.
-    // Not reachable from a UTF-8 file in this corpus: tested in tests/cli.rs and robustness.rs.
+    // Not reachable from a UTF-8 file in this corpus: tested in cli.rs and robustness.rs.
     let elsewhere = [
         PslCode::InvalidUtf8,
         PslCode::EmptyScript,

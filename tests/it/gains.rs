@@ -130,8 +130,8 @@ fn text_output_is_aligned() {
 }
 
 /// A tick far shorter than the model's time constants puts every pole within 1e-8 of 1: the
-/// text says how far below 1 (it printed `1.000000`, which reads as on the stability limit),
-/// and the JSON's magnitudes are all below 1.
+/// text says how far below 1 (`1.000000` would read as on the stability limit), and the
+/// JSON's magnitudes are all below 1.
 #[test]
 fn poles_next_to_one_print_their_distance_below_it() {
     let o = dronecine(&["gains", "--dt", "1e-9"]);
@@ -193,8 +193,8 @@ fn bad_weights_fail_with_exit_code_1() {
         "{}",
         stderr(&o)
     );
-    // The overrides are held to the profile's own ranges (before, `--tau 1000,1,1` printed
-    // gains for a model no profile file may have).
+    // The overrides are held to the profile's own ranges: `--tau 1000,1,1` would give gains
+    // for a model no profile file may have.
     for (args, says) in [
         (
             ["--tau", "1000,1,1"],

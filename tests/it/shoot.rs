@@ -231,8 +231,8 @@ fn bad_input_is_a_clear_error() {
     let o = dronecine(&["shoot", infeasible.to_str().unwrap(), "-q", "--rate", "50"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("cannot be flown"), "{}", stderr(&o));
-    // The help's command draws the flight (before, it named `compile --preview` alone,
-    // which writes nothing for such a script, and at compile's own rate).
+    // The help's command draws the flight: at the flight's rate, and with
+    // `--allow-infeasible`, without which `compile --preview` writes nothing for such a script.
     let help = format!(
         "`dronecine compile {} --rate 50 --allow-infeasible -o OUT.mcap --preview DIR`",
         infeasible.display()
@@ -309,8 +309,8 @@ fn bad_input_is_a_clear_error() {
         stderr(&o)
     );
     assert!(!stdout(&o).contains("flight log"), "{}", stdout(&o));
-    // A rig file with three mistakes: all three, each pointing into the file, before any
-    // connection is tried (before, only the first was told).
+    // A rig file with three mistakes: all three told, not only the first, each pointing into
+    // the file, before any connection is tried.
     let rig = dir.join("rig.toml");
     std::fs::write(
         &rig,
@@ -420,24 +420,20 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
 
 /// What the director finds against the live actors during a flight is told as it arises, as
 /// events in the log (and on the terminal): each repositioning flight, and an error such as a
-/// framing that takes the camera too close to an actor. The first version kept such findings
-/// to itself and the flight said only "completed". On seed 9, `scene.psl`'s shot 2 (a framing
-/// that follows Alice as she stops) takes the camera 0.49 m from Bob at a moment, where the
-/// drone keeps 0.50 m: told once, counted in the report, and counted again by the replay.
-/// (Seed 4 did the same until the repositioning routes kept clear of where walking actors
-/// pass; on it the drone now also reaches the pinned orbit late.) What the monitor finds over
-/// a shot is told when the shot is over: on seed 9 the reverse shot's framing (shot 5) goes
-/// 0.10 m outside the stage against the live actors, an error `compile` would have given.
-/// Before, the flight never told the monitor's findings. Its checks of what the framing
-/// demands, and of how far the reference is from it, are not told on set: against live
-/// actors the framing's motion is their noise differentiated (on this flight they gave an
-/// error on every shot that moves: 0.27 m "behind" the opening LS, "needs 12 m/s²").
+/// framing that takes the camera too close to an actor, so that a flight that says
+/// "completed" does not hide it. On seed 9, `scene.psl`'s shot 2 (a framing that follows
+/// Alice as she stops) takes the camera 0.49 m from Bob at a moment, where the drone keeps
+/// 0.50 m: told once, counted in the report, and counted again by the replay. What the
+/// monitor finds over a shot is told when the shot is over: on seed 9 the reverse shot's
+/// framing (shot 5) goes 0.10 m outside the stage against the live actors, an error `compile`
+/// would have given. Its checks of what the framing demands, and of how far the reference is
+/// from it, are not told on set: against live actors the framing's motion is their noise
+/// differentiated, and would give an error on every shot that moves.
 ///
-/// The scene's reverse over-the-shoulder shot (shot 5) used to be that finding on all seeds
-/// but a few: against live actors standing a few centimetres closer than blocked, its
-/// background actor's size was out of the toric circle's reach and the shot was held,
-/// unframed, for moments. It is now framed from the circle's farthest point: no director
-/// error on the default seed, and the shot is measured.
+/// The scene's reverse over-the-shoulder shot (shot 5), against live actors standing a few
+/// centimetres closer than blocked, puts its background actor's size out of the toric
+/// circle's reach: it is framed from the circle's farthest point, not held unframed, so the
+/// default seed has no director error and the shot is measured.
 #[test]
 fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
     let dir = temp_dir("director-events");
@@ -539,8 +535,8 @@ fn shoot_tells_what_the_director_finds_on_set_and_flies_on() {
         "json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    // Before take-off, one line for the warnings `compile` tells in full (before, `shoot`
-    // flew them without a word): each code `compile` prints, counted, but the repositioning
+    // Before take-off, one line for the warnings `compile` tells in full, so that none is
+    // flown without a word: each code `compile` prints, counted, but the repositioning
     // flights, which are the plan working as written.
     let compiled = dronecine(&[
         "compile",

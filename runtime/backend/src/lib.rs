@@ -8,7 +8,7 @@
 //! NatNet, the wall clock) implement the same traits. No method allocates on the per-tick
 //! path (`send`, `poll`, `now_s`, `sleep_until`, `telemetry`).
 //!
-//! - `frames`: **the axis and sign conventions** and the generic [`Command`](frames::Command).
+//! - `frames`: **the axis and sign conventions** and the generic [`frames::Command`].
 //! - `clock`: the wall clock and the paced clock.
 //! - `address`: the pieces of `scheme://host:port` addresses every backend parses.
 

@@ -10,10 +10,10 @@
 //! loop does and steps the director, tick after tick, filling batches of [`DirectedTick`]s
 //! that the loop takes in order; the loop flies the drone meanwhile. The same [`direct`] runs
 //! on the loop's thread when the mocap knows nothing ahead (hardware) or the simulator is
-//! not asked to ([`SimConfig::actors_ahead`](crate::sim::SimConfig)), so both fly the same
-//! flight to the bit: `tests/ahead.rs` flies the shipped scripts and flights cut short both
-//! ways and compares every tick's record and every event, `tests/random_flights.rs` the
-//! logs of the random scenes that fly, byte for byte.
+//! not asked to (the simulator's `SimConfig::actors_ahead`), so both fly the same flight to
+//! the bit: `runtime/tests/it/ahead.rs` flies the shipped scripts and flights cut short both
+//! ways and compares every tick's record and every event, `random_flights.rs` there the logs
+//! of the random scenes that fly, byte for byte.
 //!
 //! The loop takes the actors of each tick's frame from the director's tick ([`FeedFrame`]: the
 //! feed's frames are the mocap's, so the simulator need not compute its actors a second time;
@@ -27,10 +27,10 @@
 //! thread (once per flight, only when it is cut short).
 //!
 //! Batches of [`BATCH_TICKS`] go back and forth over two bounded channels, as the flight
-//! log's do ([`LogThread`](crate::log::LogThread)); their vectors are reused, so neither
-//! thread allocates per tick once the batches have grown (a tick with a finding allocates its
-//! messages, as on the loop's thread). Measured on the hour's flight (the `flight` bench):
-//! see `runtime/benches/README.md`.
+//! log's do (`dronecine_mcap::log::LogThread`); their vectors are reused, so neither thread
+//! allocates per tick once the batches have grown (a tick with a finding allocates its
+//! messages, as on the loop's thread). The `flight` bench measures the hour both ways
+//! (`docs/benchmarks.md`).
 
 use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::thread::JoinHandle;

@@ -67,7 +67,7 @@ pub struct Progress {
     pub shots: usize,
     /// Where the shots are on the script's clock as written (0 before they start, held at a
     /// shot's start during a repositioning flight inserted before it, the script's end after
-    /// the last: [`Director::written_t_s`]).
+    /// the last: `Director::written_t_s`).
     pub script_t_s: f64,
     /// Script duration as written.
     pub script_duration_s: f64,

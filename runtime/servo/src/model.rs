@@ -1,7 +1,7 @@
 //! The servo's plant models, discretised with the measured time step Δ.
 //!
 //! **Translation.** State `x1 = [v; p]` (world-frame velocity and position), input
-//! `u1 = [φ, θ, ż]` in the signs of [`crate::frames`]. Each body axis (forward, left, up) is a
+//! `u1 = [φ, θ, ż]` in the signs of [`dronecine_backend::frames`]. Each body axis (forward, left, up) is a
 //! first-order lag toward `K·u` mapped through [`frames::INPUT_TO_BODY`]; the lag acts on the
 //! **body-frame** velocity (the paper's world-frame lag is only right when τ_φ = τ_θ):
 //!

@@ -1,5 +1,5 @@
 //! The director stepped ahead of the loop on a thread of its own (`SimConfig::actors_ahead`,
-//! `runtime/src/ahead.rs`) flies the same flight as the director stepped on the loop's
+//! `runtime/flight/src/ahead.rs`) flies the same flight as the director stepped on the loop's
 //! thread, to the bit: every tick as the log records it (`/servo/tick`'s CDR: the input, the
 //! output, the command sent, the actors the director saw and the framing), every event in
 //! order, and the report. On every shipped script that has a scene to fly (two seeds each),

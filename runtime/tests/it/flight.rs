@@ -384,8 +384,8 @@ fn an_undisturbed_flight_completes_without_failsafes() {
         assert!(kinds.contains(&k), "{k} missing from {kinds:?}");
     }
     assert!(r.figures.rms_framing_error.is_some());
-    // The progress display follows the flight from its first tick: before, it showed nothing
-    // until the approach (the take-off, seconds on set, an empty bar).
+    // The progress display follows the flight from its first tick: the take-off, seconds on
+    // set, shows as a phase of its own, not as an empty bar.
     assert_eq!(
         rec.phases,
         [
@@ -439,8 +439,8 @@ fn losing_the_drone_hovers_then_lands() {
 
 /// A mocap body lost is a failsafe for an actor as for the drone (the drone cannot keep clear
 /// of an actor it does not see): hover after 0.5 s, land after 2 s; an actor tracked again
-/// before that lets the flight go on. Before, the director framed the actor's last pose for
-/// as long as they were lost, without a word.
+/// before that lets the flight go on. Framing a lost actor's last pose instead would fly on
+/// a stale actor for as long as they are lost, without a word.
 #[test]
 fn losing_an_actor_hovers_then_lands_and_finding_them_flies_on() {
     let lost_at = action_s() + 1.0;
@@ -984,13 +984,12 @@ fn preflight_refuses_a_scene_without_shots() {
 }
 
 /// A loop faster than the mocap (200 Hz against the simulator's 100 Hz frames: every other
-/// tick has no fresh frame) aims and sets off from the newest measurement. Before, a tick
-/// without a frame fell back to the director's heading and dropped the aim's rate, so the
-/// heading reference jumped between two sources every other tick (`two-actors.psl`: heading
-/// error 2.6° RMS against 0.29° at 100 Hz, framing error 0.061 against 0.023); and when
-/// "flying" was reported on such a tick the approach set off from the take-off pose on the
-/// ground (`scene.psl` at 200 Hz, every seed: its first reference 0.75 m below the drone,
-/// and a false `approach_not_clear`).
+/// tick has no fresh frame) aims and sets off from the newest measurement: its heading and
+/// framing errors stay under 1.5 times those at 100 Hz (the framing's under 0.05), and the
+/// approach sets off from the hover, not from the take-off pose on the ground, with no false
+/// `approach_not_clear`. Between frames the aim carries on at its last rate: falling back to
+/// the director's heading would make the heading reference jump between two sources every
+/// other tick.
 #[test]
 fn a_loop_faster_than_the_mocap_aims_and_sets_off_from_the_newest_measurement() {
     let src = std::fs::read_to_string(
@@ -1036,9 +1035,8 @@ fn a_loop_faster_than_the_mocap_aims_and_sets_off_from_the_newest_measurement() 
 
 /// The progress display's position runs on the script's clock as written: 0 until "action!",
 /// from 0 to the script's end over the shots, held at a shot's start while a repositioning
-/// flight inserted before it flies, and at the end while landing. Before, it was the flight's
-/// clock (the take-off's seconds shown as script time), and reached the end seconds before
-/// the shots did.
+/// flight inserted before it flies, and at the end while landing: the take-off's seconds
+/// are not script time, and the position reaches the end when the shots do.
 #[test]
 fn the_progress_runs_on_the_scripts_clock_as_written() {
     // A cut that needs a repositioning flight: the shots take longer than written.
@@ -1085,9 +1083,9 @@ fn the_progress_runs_on_the_scripts_clock_as_written() {
 
 /// An actor who steps off their mark after the approach was planned moves the first framing
 /// (here 0.4 m, as an LS of a drifting actor does on `scene.psl`): the drone settles onto it
-/// as it is, steered, and the reference never jumps. Before, the approach flew to the framing
-/// as planned and the reference jumped the difference at "action!" (`scene.psl`: 0.66 m of
-/// tracking error on seed 5; the first shot 11 % saturated on seed 1).
+/// as it is, steered, and the reference never jumps (under 0.02 m a tick); the first shot
+/// keeps within 0.10 m and under 1 % saturated. Flying to the framing as planned would make
+/// the reference jump the difference at "action!".
 #[test]
 fn a_first_framing_that_moves_after_the_approach_is_planned_is_steered_to() {
     // The approach is planned when the drone reports flying, a few seconds in.
