@@ -2,6 +2,7 @@
 //! corpus, the compiled shipped scripts, robustness against any input, and the architecture
 //! the build enforces.
 
+mod architecture;
 mod calibrate;
 mod cli;
 mod common;
