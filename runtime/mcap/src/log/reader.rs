@@ -25,7 +25,7 @@ use mcap::McapError;
 use serde::Deserialize;
 
 use super::exact::Num;
-use super::{cdr, topic, LogError, HEADER_METADATA};
+use super::{cdr, schema, topic, LogError, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, FramingRecord, Phase};
 use dronecine_backend::frames::Command;
 use dronecine_compiler::reference::ActorPose;
@@ -165,6 +165,7 @@ impl FlightLog {
         let limit = record_length_limit(len);
         let mut state = ReadState {
             path: path.to_path_buf(),
+            schemas: HashMap::new(),
             channels: HashMap::new(),
             header: None,
             ticks: Vec::new(),
@@ -582,6 +583,8 @@ fn describe(e: &McapError) -> String {
 
 struct ReadState {
     path: PathBuf,
+    /// The schemas' names by id, as their records come.
+    schemas: HashMap<u16, String>,
     channels: HashMap<u16, Wanted>,
     header: Option<FlightHeader>,
     ticks: Vec<LoggedTick>,
@@ -594,8 +597,35 @@ struct ReadState {
 }
 
 impl ReadState {
+    /// A topic this reader decodes must come under the schema it decodes: a log written with
+    /// another layout under its name (a newer dronecine's) is refused, not misread. A channel
+    /// whose schema record is not known (lost to damage) is read as the one it names.
+    fn check_schema(&self, channel: &mcap::records::Channel) -> Result<(), LogError> {
+        let (topic, expected) = match channel.topic.as_str() {
+            topic::SERVO_TICK => (topic::SERVO_TICK, cdr::SCHEMA_NAME),
+            topic::EVENTS => (topic::EVENTS, schema::EVENT),
+            _ => return Ok(()),
+        };
+        match self.schemas.get(&channel.schema_id) {
+            Some(name) if name != expected => Err(LogError::BadMessage {
+                path: self.path.clone(),
+                topic,
+                index: 0,
+                detail: format!(
+                    "its schema is `{}`; this dronecine reads `{expected}` (the log was written \
+                     by another dronecine: replay it with that version)",
+                    dronecine_diag::suggest::shorten(name)
+                ),
+            }),
+            _ => Ok(()),
+        }
+    }
+
     fn record(&mut self, record: Record) -> Result<(), LogError> {
         match record {
+            Record::Schema { header, .. } => {
+                self.schemas.insert(header.id, header.name);
+            }
             Record::Channel(channel) => {
                 let wanted = match channel.topic.as_str() {
                     topic::SERVO_TICK if channel.message_encoding != cdr::MESSAGE_ENCODING => {
@@ -621,6 +651,7 @@ impl ReadState {
                     _ => None,
                 };
                 if let Some(w) = wanted {
+                    self.check_schema(&channel)?;
                     self.channels.insert(channel.id, w);
                 }
             }

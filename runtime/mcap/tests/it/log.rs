@@ -1089,6 +1089,39 @@ fn a_json_servo_tick_from_an_older_dronecine_is_refused_by_name() {
     );
 }
 
+/// A log whose `/servo/tick` or `/events` comes under another schema (another layout under
+/// the topic's name, as a newer dronecine would write it) is refused by name, not misread.
+#[test]
+fn a_topic_under_another_schema_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    for (topic, schema_name, encoding) in [
+        ("/servo/tick", "dronecine/msg/ServoTick2", "cdr"),
+        ("/events", "dronecine.Event2", "json"),
+    ] {
+        let path = dir.path().join("newer.mcap");
+        let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+        let mut w = mcap::Writer::new(file).unwrap();
+        let schema = w.add_schema(schema_name, "ros2msg", b"").unwrap();
+        let channel = w
+            .add_channel(schema, topic, encoding, &BTreeMap::new())
+            .unwrap();
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: 0,
+            log_time: 0,
+            publish_time: 0,
+        };
+        w.write_to_known_channel(&header, b"").unwrap();
+        w.finish().unwrap();
+        drop(w);
+        let e = FlightLog::open(&path).unwrap_err().to_string();
+        assert!(
+            e.contains(topic) && e.contains(&format!("`{schema_name}`")),
+            "{topic}: {e}"
+        );
+    }
+}
+
 /// A log with fixed-length ticks — `/servo/tick` the 278-byte fixed part only, the framing on
 /// `/framing` (JSON) at every tick — replays: its framing is read from `/framing`.
 #[test]
