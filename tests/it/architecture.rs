@@ -377,7 +377,10 @@ fn prose_files() -> Vec<PathBuf> {
 fn the_docs_stand_alone() {
     // (This file names what it looks for.)
     let here = Path::new(file!()).file_name().expect("a file name");
-    for p in prose_files().into_iter().filter(|p| p.file_name() != Some(here)) {
+    for p in prose_files()
+        .into_iter()
+        .filter(|p| p.file_name() != Some(here))
+    {
         let text = std::fs::read_to_string(&p).unwrap_or_default();
         for outside in [
             "../shared/",
