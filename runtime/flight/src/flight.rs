@@ -14,10 +14,8 @@ use dronecine_compiler::route::{self, Keepout};
 use dronecine_compiler::steering::{self, Bodies, Body, Kinematics};
 use dronecine_grammar::script::Stage;
 use dronecine_math::wrap_angle_rad;
-use dronecine_mcap::record::{Event, FlightSink, FramingRecord, Phase, TickRecord};
-use dronecine_servo::control::{
-    Controller, Measurement, Reference, TickFault, TickInput, TickOutput,
-};
+use dronecine_mcap::record::{reference_of, Event, FlightSink, FramingRecord, Phase, TickRecord};
+use dronecine_servo::control::{Controller, Measurement, TickFault, TickInput, TickOutput};
 
 use crate::ahead::DirectedTick;
 use crate::code::{refusal, PreflightCode};
@@ -680,17 +678,6 @@ impl<'s, 'b> Flight<'s, 'b> {
 /// pre-flight check; kept total instead of panicking).
 pub(crate) fn unreachable_measurement(first: &Sample, t: f64) -> Sample {
     hover_sample(t, first)
-}
-
-/// What the servo tracks of a reference sample.
-fn reference_of(s: &Sample) -> Reference {
-    Reference {
-        position_m: s.position_m,
-        velocity_mps: s.velocity_mps,
-        acceleration_mps2: s.acceleration_mps2,
-        heading_rad: s.heading_rad,
-        heading_rate_radps: s.heading_rate_radps,
-    }
 }
 
 /// Whether `p` lies inside the stage less `margin_m`.

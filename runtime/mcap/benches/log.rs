@@ -17,8 +17,8 @@ use dronecine_compiler::camera::Lens;
 use dronecine_compiler::reference::{ActorPose, Sample};
 use dronecine_grammar::script::Stage;
 use dronecine_mcap::log::{FlightLog, FlightLogWriter, LogCompression, LogOptions, LogScene};
-use dronecine_mcap::record::{FlightHeader, FramingRecord, Phase, TickRecord};
-use dronecine_servo::control::{Estimate, Measurement, Reference, TickInput, TickOutput};
+use dronecine_mcap::record::{reference_of, FlightHeader, FramingRecord, Phase, TickRecord};
+use dronecine_servo::control::{Estimate, Measurement, TickInput, TickOutput};
 use dronecine_servo::setup::ControllerSetup;
 
 const RATE_HZ: f64 = 100.0;
@@ -95,13 +95,7 @@ fn ticks() -> Vec<Tick> {
                     t_s: t,
                     dt_s: 0.01 + noise(16.0) * 1e-3,
                     measurement: Some(measurement),
-                    reference: Reference {
-                        position_m: sample.position_m,
-                        velocity_mps: sample.velocity_mps,
-                        acceleration_mps2: sample.acceleration_mps2,
-                        heading_rad: sample.heading_rad,
-                        heading_rate_radps: sample.heading_rate_radps,
-                    },
+                    reference: reference_of(&sample),
                 },
                 sample,
                 output,

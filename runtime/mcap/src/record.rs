@@ -9,10 +9,22 @@
 use dronecine_backend::frames::Command;
 use dronecine_backend::{FlightState, MocapFrame};
 use dronecine_compiler::reference::{ActorPose, Sample};
-use dronecine_servo::control::{TickFault, TickInput, TickOutput};
+use dronecine_servo::control::{Reference, TickFault, TickInput, TickOutput};
 use dronecine_servo::setup::ControllerSetup;
 use serde::{Deserialize, Serialize};
 use std::io;
+
+/// What the servo tracks of a reference sample: the part of [`TickRecord::sample`] it is
+/// given as [`TickInput::reference`].
+pub fn reference_of(s: &Sample) -> Reference {
+    Reference {
+        position_m: s.position_m,
+        velocity_mps: s.velocity_mps,
+        acceleration_mps2: s.acceleration_mps2,
+        heading_rad: s.heading_rad,
+        heading_rate_radps: s.heading_rate_radps,
+    }
+}
 
 /// Where the flight record goes (the MCAP flight log, or nowhere).
 pub trait FlightSink {

@@ -16,10 +16,8 @@ use dronecine_mcap::log::{
 };
 use dronecine_mcap::output::mcap as compiled;
 use dronecine_mcap::output::{foxglove, McapWriter, RunInfo};
-use dronecine_mcap::record::{Event, FlightHeader, FramingRecord, Phase, TickRecord};
-use dronecine_servo::control::{
-    Estimate, Measurement, Reference, TickFault, TickInput, TickOutput,
-};
+use dronecine_mcap::record::{reference_of, Event, FlightHeader, FramingRecord, Phase, TickRecord};
+use dronecine_servo::control::{Estimate, Measurement, TickFault, TickInput, TickOutput};
 use dronecine_servo::setup::ControllerSetup;
 use proptest::prelude::*;
 
@@ -169,13 +167,7 @@ fn tick(k: usize, t_s: f64, x: [f64; 8]) -> Tick {
             t_s,
             dt_s: 0.01,
             measurement,
-            reference: Reference {
-                position_m: sample.position_m,
-                velocity_mps: sample.velocity_mps,
-                acceleration_mps2: sample.acceleration_mps2,
-                heading_rad: sample.heading_rad,
-                heading_rate_radps: sample.heading_rate_radps,
-            },
+            reference: reference_of(&sample),
         },
         sample,
         output,
