@@ -191,6 +191,14 @@ impl<'s, 'b> Flight<'s, 'b> {
         self.wait_tick_fed(t_next_s, None).map(|(now, _)| now)
     }
 
+    /// A tick that records nothing (the drone flies on its own, or has not taken off): the
+    /// log is told the time all the same, so that it keeps its records as on any tick.
+    pub(crate) fn idle(&mut self, t: f64) {
+        if let Err(err) = self.sink.idle(t) {
+            self.log_error.get_or_insert(err);
+        }
+    }
+
     /// [`Flight::wait_tick`] with the director's tick `ahead` (its thread steps ahead of the
     /// loop): the frame polled takes its actors from the frame the director's thread had from
     /// the mocap's feed at this tick ([`Mocap::actors_from_feed`]), and the tracked actors are

@@ -83,6 +83,7 @@ impl Flight<'_, '_> {
         let deadline = t + self.setup.safety.take_off_timeout_s;
         loop {
             t = self.wait_tick(t + self.period_s)?;
+            self.idle(t);
             // No reference yet (the drone climbs on its own): the display says so.
             self.observer.progress(&Progress {
                 t_s: t,
@@ -422,6 +423,7 @@ impl Flight<'_, '_> {
         let mut cut = false;
         loop {
             t = self.wait_tick(t + self.period_s)?;
+            self.idle(t);
             if self.interrupts() >= 2 && !cut {
                 cut = true;
                 self.failsafe(t, "interrupted twice: emergency motor cut");

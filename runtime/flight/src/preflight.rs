@@ -58,6 +58,7 @@ impl Flight<'_, '_> {
         let mut seen_drone: Option<Measurement> = None;
         while t - t_start <= self.setup.safety.mocap_wait_s {
             t = self.wait_tick(t + self.period_s)?;
+            self.idle(t);
             if let Some(m) = self.measured {
                 seen_drone = Some(m);
                 let actors = self.setup.scene.actors.len();

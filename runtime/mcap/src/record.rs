@@ -30,6 +30,12 @@ pub fn reference_of(s: &Sample) -> Reference {
 pub trait FlightSink {
     fn tick(&mut self, record: &TickRecord) -> io::Result<()>;
     fn event(&mut self, event: &Event) -> io::Result<()>;
+    /// The flight's clock reached `t_s` on a tick that records nothing (waiting for the
+    /// motion capture before take-off, the drone's own take-off and landing): a sink that
+    /// keeps its records by time (the log's chunks) keeps them as on any other tick.
+    fn idle(&mut self, _t_s: f64) -> io::Result<()> {
+        Ok(())
+    }
 }
 
 /// Records nothing (benchmarks, tests).
