@@ -7,7 +7,7 @@
 
 use std::path::Path;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::AtomicU32;
 
 use dronecine_backend::Backends;
 use dronecine_grammar::script::{Scene, Stage};
@@ -317,10 +317,9 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
     if let Err(e) = crate::files::prepare_output(&a.output, "-o") {
         return fail(e);
     }
-    // Ctrl-C lands, a second Ctrl-C cuts the motors (the calibration reads the count).
-    if let Err(e) = ctrlc::set_handler(|| {
-        INTERRUPTS.fetch_add(1, Ordering::Relaxed);
-    }) {
+    // Ctrl-C lands, a second Ctrl-C cuts the motors; SIGTERM and SIGHUP land (the
+    // calibration reads the count).
+    if let Err(e) = crate::signals::count_interrupts(&INTERRUPTS) {
         errln!("warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing");
     }
     let (sim, mut sim_backends, mut hardware);

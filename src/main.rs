@@ -19,6 +19,7 @@ mod gains;
 mod hardware;
 mod replay;
 mod shoot;
+mod signals;
 mod status;
 
 use std::io::IsTerminal;
@@ -164,7 +165,8 @@ enum Command {
         /// Rigid-body ids of the drone and the actors (TOML) [default: drone 1, actors 2, 3, …].
         #[arg(long, value_name = "FILE")]
         rig: Option<PathBuf>,
-        /// No progress display, no event lines.
+        /// No progress display; of the events, only the errors (a failsafe's reason, why a
+        /// flight ended early).
         #[arg(short, long)]
         quiet: bool,
     },

@@ -6,7 +6,7 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::AtomicU32;
 use std::time::{Duration, Instant};
 
 use dronecine_compiler::compile::{self, Options};
@@ -391,10 +391,9 @@ impl Flight<'_> {
     /// flight completed.
     fn fly(&self, mut log: LogThread, log_path: &Path) -> ExitCode {
         let a = self.a;
-        // Ctrl-C lands, a second Ctrl-C cuts the motors (the flight loop reads the count).
-        if let Err(e) = ctrlc::set_handler(|| {
-            INTERRUPTS.fetch_add(1, Ordering::Relaxed);
-        }) {
+        // Ctrl-C lands, a second Ctrl-C cuts the motors; SIGTERM and SIGHUP land (the flight
+        // loop reads the count).
+        if let Err(e) = crate::signals::count_interrupts(&INTERRUPTS) {
             errln!(
                 "warning: Ctrl-C cannot be caught ({e}); it will stop dronecine without landing"
             );
@@ -648,7 +647,8 @@ impl Observer for Display {
     }
 
     fn event(&mut self, e: &Event) {
-        if self.quiet {
+        // Quiet keeps the errors: a failsafe's reason, why a flight ended early.
+        if self.quiet && e.level != "error" {
             return;
         }
         let Some(line) = self.told.text(e) else {
@@ -795,11 +795,14 @@ pub fn render_report_as(
         ),
         None => writeln!(s, "  framing: no hold framed an actor"),
     };
-    let _ = writeln!(
-        s,
-        "  tracking: the drone kept within {rms} cm of its path (RMS; {max} cm at worst), its \
-         heading within {heading}° (RMS); the servo was at a limit on {saturated}% of ticks"
-    );
+    let _ = match r.figures.rms_position_error_m {
+        Some(_) => writeln!(
+            s,
+            "  tracking: the drone kept within {rms} cm of its path (RMS; {max} cm at worst), its \
+             heading within {heading}° (RMS); the servo was at a limit on {saturated}% of ticks"
+        ),
+        None => writeln!(s, "  tracking: no tick flew a path with the drone tracked"),
+    };
     if let Some(d) = r.figures.closest_actor_m {
         let _ = write!(
             s,

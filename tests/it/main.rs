@@ -14,4 +14,6 @@ mod gains;
 mod robustness;
 mod shoot;
 mod shots;
+#[cfg(unix)]
+mod signals;
 mod status;

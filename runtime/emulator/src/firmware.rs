@@ -131,6 +131,10 @@ pub struct AtCounters {
     pub config_refused: u64,
     /// Take-off requests the drone refused (battery, emergency).
     pub refused_take_offs: u64,
+    /// REF lines that asked a flying (or taking-off) drone to land.
+    pub land_requests: u64,
+    /// REF lines whose emergency toggle cut the motors.
+    pub motor_cuts: u64,
 }
 
 /// What the emulator must do after a datagram beyond what the firmware did itself.
@@ -314,6 +318,7 @@ impl Firmware {
                         out.clear_emergency = true;
                     } else {
                         let _ = drone.emergency();
+                        self.counters.motor_cuts += 1;
                     }
                     return;
                 }
@@ -328,6 +333,7 @@ impl Firmware {
                     }
                 } else if matches!(state, FlightState::Flying | FlightState::TakingOff) {
                     let _ = drone.land();
+                    self.counters.land_requests += 1;
                 }
             }
             AtCommand::Pcmd(_) | AtCommand::PcmdMag { .. } => match pcmd {

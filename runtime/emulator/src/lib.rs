@@ -231,6 +231,10 @@ pub struct Status {
     pub navdata_client: Option<SocketAddr>,
     /// Seconds of wall time since the start.
     pub uptime_s: f64,
+    /// When the first REF that asked the drone to land arrived (processed on receipt).
+    pub first_land_at: Option<Instant>,
+    /// When the first REF that cut the motors arrived.
+    pub first_cut_at: Option<Instant>,
 }
 
 /// The emulator: see the module docs.
@@ -581,10 +585,27 @@ impl Loop {
                 Err(_) => continue,
             };
             let now = self.now_s();
+            let before = self.fw.counters();
             let out = self.fw.datagram(&self.rx[..n], now, &mut self.world.drone);
             if out.clear_emergency {
                 self.clear_emergency(now);
             }
+            self.note_operator_commands(&before);
+        }
+    }
+
+    /// The arrival of the first land and motor-cut commands, for who measures how soon the
+    /// operator's command reached the drone.
+    fn note_operator_commands(&mut self, before: &AtCounters) {
+        let after = self.fw.counters();
+        let Ok(mut s) = self.status.lock() else {
+            return;
+        };
+        if after.land_requests > before.land_requests && s.first_land_at.is_none() {
+            s.first_land_at = Some(Instant::now());
+        }
+        if after.motor_cuts > before.motor_cuts && s.first_cut_at.is_none() {
+            s.first_cut_at = Some(Instant::now());
         }
     }
 

@@ -22,6 +22,7 @@ dronecine_diag::codes! {
         FirstFramingNearActor => "preflight::first_framing_near_actor": "The first framing puts the drone inside an actor's safety distance as the actors stand.",
         TakeOffEmergency => "preflight::take_off_emergency": "The drone went into emergency during take-off.",
         TakeOffTimeout => "preflight::take_off_timeout": "The drone did not report flying within the take-off timeout.",
+        Interrupted => "preflight::interrupted": "The operator interrupted the flight before take-off (Ctrl-C, SIGTERM or SIGHUP).",
     }
 }
 

@@ -66,6 +66,8 @@ pub(crate) struct Flight<'s, 'b> {
     pub(crate) hovering: bool,
     /// The first interrupt was handled (landing).
     pub(crate) interrupted: bool,
+    /// The second interrupt was handled: the motors are cut.
+    pub(crate) motors_cut: bool,
     /// The telemetry link was reported lost.
     pub(crate) link_lost: bool,
     pub(crate) log_error: Option<io::Error>,
@@ -160,6 +162,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             deadline_misses: 0,
             hovering: false,
             interrupted: false,
+            motors_cut: false,
             link_lost: false,
             log_error: None,
             script_duration_s,
@@ -460,6 +463,16 @@ impl<'s, 'b> Flight<'s, 'b> {
         land
     }
 
+    /// The operator's second interrupt: the motors cut, told once.
+    pub(crate) fn cut_motors(&mut self, t: f64) -> Result<(), FlightError> {
+        if !self.motors_cut {
+            self.motors_cut = true;
+            self.failsafe(t, "interrupted twice: emergency motor cut");
+            self.drone.emergency()?;
+        }
+        Ok(())
+    }
+
     /// The operator's interrupts: the first lands the drone, the second cuts its motors.
     fn watch_operator(&mut self, t: f64) -> Result<Operator, FlightError> {
         match self.interrupts() {
@@ -469,14 +482,14 @@ impl<'s, 'b> Flight<'s, 'b> {
                     self.interrupted = true;
                     self.failsafe(
                         t,
-                        "interrupted (Ctrl-C): landing; press Ctrl-C again to cut the motors",
+                        "interrupted (Ctrl-C or a stop signal): landing; press Ctrl-C again to \
+                         cut the motors",
                     );
                 }
                 Ok(Operator::Land)
             }
             _ => {
-                self.failsafe(t, "interrupted twice: emergency motor cut");
-                self.drone.emergency()?;
+                self.cut_motors(t)?;
                 Ok(Operator::MotorsCut)
             }
         }

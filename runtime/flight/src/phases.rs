@@ -51,7 +51,11 @@ impl Flight<'_, '_> {
     pub(crate) fn run(mut self) -> Result<FlightReport, FlightError> {
         let ground = self.preflight()?;
         let take_off_s = ground.t;
-        let t = self.take_off(ground.t)?;
+        let (t, outcome) = self.take_off(ground.t)?;
+        if let Outcome::Land = outcome {
+            let t = self.land(t)?;
+            return self.finish(t, take_off_s, false);
+        }
         let mut leg = self.approach(t, &ground)?;
         let mut director = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
         director.actors_measured();
@@ -76,14 +80,19 @@ impl Flight<'_, '_> {
         self.finish(t, take_off_s, completed)
     }
 
-    /// Take-off: the drone climbs on its own until it reports flying. The time it does.
-    fn take_off(&mut self, mut t: f64) -> Result<f64, FlightError> {
+    /// Take-off: the drone climbs on its own until it reports flying: the time it does. The
+    /// operator is obeyed here as in every phase: an interrupt lands the drone at once
+    /// (`Outcome::Land`), a second cuts its motors.
+    fn take_off(&mut self, mut t: f64) -> Result<(f64, Outcome), FlightError> {
         self.event(t, "info", "take_off", "taking off".into());
         self.drone.take_off()?;
         let deadline = t + self.setup.safety.take_off_timeout_s;
         loop {
             t = self.wait_tick(t + self.period_s)?;
             self.idle(t);
+            if let Outcome::Land = self.watch_operator_taking_off(t)? {
+                return Ok((t, Outcome::Land));
+            }
             // No reference yet (the drone climbs on its own): the display says so.
             self.observer.progress(&Progress {
                 t_s: t,
@@ -95,7 +104,7 @@ impl Flight<'_, '_> {
                 position_error_m: None,
             });
             match self.drone.telemetry().state {
-                FlightState::Flying => return Ok(t),
+                FlightState::Flying => return Ok((t, Outcome::Done)),
                 FlightState::Emergency => {
                     return Err(refusal(
                         PreflightCode::TakeOffEmergency,
@@ -115,6 +124,29 @@ impl Flight<'_, '_> {
                     ));
                 }
                 _ => {}
+            }
+        }
+    }
+
+    /// The operator's interrupts while the drone takes off on its own: the first lands it, a
+    /// second (at once, or later in the landing) cuts its motors.
+    fn watch_operator_taking_off(&mut self, t: f64) -> Result<Outcome, FlightError> {
+        match self.interrupts() {
+            0 => Ok(Outcome::Done),
+            1 => {
+                self.interrupted = true;
+                self.failsafe(
+                    t,
+                    "interrupted (Ctrl-C or a stop signal) during take-off: landing; press Ctrl-C \
+                     again to cut the motors",
+                );
+                self.drone.land()?;
+                Ok(Outcome::Land)
+            }
+            _ => {
+                self.interrupted = true;
+                self.cut_motors(t)?;
+                Ok(Outcome::Land)
             }
         }
     }
@@ -420,14 +452,11 @@ impl Flight<'_, '_> {
         self.event(t, "info", "landing", "landing".into());
         self.drone.land()?;
         let deadline = t + self.setup.safety.landing_timeout_s;
-        let mut cut = false;
         loop {
             t = self.wait_tick(t + self.period_s)?;
             self.idle(t);
-            if self.interrupts() >= 2 && !cut {
-                cut = true;
-                self.failsafe(t, "interrupted twice: emergency motor cut");
-                self.drone.emergency()?;
+            if self.interrupts() >= 2 {
+                self.cut_motors(t)?;
             }
             let state = self.drone.telemetry().state;
             if matches!(state, FlightState::Landed | FlightState::Emergency) {

@@ -40,6 +40,7 @@ impl Flight<'_, '_> {
         self.check_the_drone_is_clear_of_the_actors(&m0)?;
         self.check_the_battery()?;
         let first = self.check_the_first_framing()?;
+        self.check_the_operator()?;
         Ok(Ground {
             t,
             drone: m0,
@@ -57,6 +58,7 @@ impl Flight<'_, '_> {
         let mut t = t_start;
         let mut seen_drone: Option<Measurement> = None;
         while t - t_start <= self.setup.safety.mocap_wait_s {
+            self.check_the_operator()?;
             t = self.wait_tick(t + self.period_s)?;
             self.idle(t);
             if let Some(m) = self.measured {
@@ -153,6 +155,18 @@ impl Flight<'_, '_> {
         .with_help(
             "place the drone further away, below its first framing",
         )]))
+    }
+
+    /// No interrupt from the operator: one before take-off keeps the drone on the ground.
+    fn check_the_operator(&self) -> Result<(), FlightError> {
+        if self.interrupts() == 0 {
+            return Ok(());
+        }
+        Err(refusal(
+            PreflightCode::Interrupted,
+            "interrupted before take-off: the drone stays on the ground".into(),
+            "run `dronecine shoot` again when the set is ready",
+        ))
     }
 
     /// A battery that can fly the take-off.

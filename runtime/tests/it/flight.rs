@@ -676,6 +676,139 @@ fn ctrl_c_lands_and_a_second_one_cuts_the_motors() {
     assert_eq!(state, FlightState::Emergency);
 }
 
+/// The drone, with the time of every land and motor-cut command sent to it.
+struct Obeying<D: Drone, C: Clock> {
+    inner: D,
+    clock: C,
+    sent: std::rc::Rc<std::cell::RefCell<Vec<(f64, &'static str)>>>,
+}
+
+impl<D: Drone, C: Clock> Drone for Obeying<D, C> {
+    fn take_off(&mut self) -> Result<(), BackendError> {
+        self.inner.take_off()
+    }
+    fn land(&mut self) -> Result<(), BackendError> {
+        self.sent.borrow_mut().push((self.clock.now_s(), "land"));
+        self.inner.land()
+    }
+    fn emergency(&mut self) -> Result<(), BackendError> {
+        self.sent
+            .borrow_mut()
+            .push((self.clock.now_s(), "emergency"));
+        self.inner.emergency()
+    }
+    fn send(&mut self, c: &dronecine_backend::frames::Command) -> Result<(), BackendError> {
+        self.inner.send(c)
+    }
+    fn hover(&mut self) -> Result<(), BackendError> {
+        self.inner.hover()
+    }
+    fn telemetry(&mut self) -> dronecine_backend::Telemetry {
+        self.inner.telemetry()
+    }
+}
+
+/// Flies SCRIPT with the operator pressing Ctrl-C at `presses`: the flight's result, its
+/// events, and the land and motor-cut commands with their times.
+fn fly_pressed(
+    presses: Vec<f64>,
+    count: &'static std::sync::atomic::AtomicU32,
+) -> (
+    Result<FlightReport, FlightError>,
+    Recorder,
+    Vec<(f64, &'static str)>,
+) {
+    let sent = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let log = std::rc::Rc::clone(&sent);
+    let (r, rec, _) = fly_on(
+        SCRIPT,
+        |_| {},
+        Some(count),
+        |sim| Rig {
+            drone: Box::new(Obeying {
+                inner: sim.drone(),
+                clock: sim.clock(),
+                sent: log,
+            }),
+            clock: Box::new(Presses {
+                inner: sim.clock(),
+                at_s: presses,
+                count,
+            }),
+            ..Rig::plain(sim)
+        },
+    );
+    let sent = sent.borrow().clone();
+    (r, rec, sent)
+}
+
+/// The operator is obeyed in every phase, within one control tick (10 ms at 100 Hz): one
+/// Ctrl-C lands the drone (before take-off: keeps it on the ground), a second cuts its motors.
+#[test]
+fn an_interrupt_is_obeyed_within_a_tick_in_every_phase() {
+    use std::sync::atomic::AtomicU32;
+    const TICK_S: f64 = 0.01;
+    // The phases' starts, from an undisturbed flight.
+    let (r, rec) = fly_with(Faults::default(), None, |_| {});
+    assert!(r.unwrap().completed);
+    let at = |kind: &str| rec.first(kind).unwrap_or_else(|| panic!("no {kind}")).t_s;
+    let (take_off, approach, settle, action) =
+        (at("take_off"), at("approach"), at("settle"), at("action"));
+    let (back, landing) = (at("return"), at("landing"));
+    assert!(take_off < approach && approach < settle && settle < action && action < back);
+
+    // Before take-off: refused, on the ground.
+    static BEFORE: AtomicU32 = AtomicU32::new(0);
+    let (r, rec, sent) = fly_pressed(vec![take_off / 2.0], &BEFORE);
+    let d = refused_before_take_off(r, &rec);
+    assert_eq!(codes(&d), [PreflightCode::Interrupted.code()], "{d:?}");
+    assert!(sent.is_empty(), "{sent:?}");
+
+    // In flight: the land command within a tick of the press, and the motor cut within a
+    // tick of the second press.
+    static PRESSED: [AtomicU32; 7] = [const { AtomicU32::new(0) }; 7];
+    let phases = [
+        ("take-off", (take_off + approach) / 2.0),
+        ("approach", (approach + settle) / 2.0),
+        ("settle", settle + 0.5),
+        ("shots", action + 1.0),
+        ("return", back + 0.5),
+        ("landing", landing + 0.5),
+        ("hold", back - 0.5),
+    ];
+    for ((phase, press_s), count) in phases.into_iter().zip(&PRESSED) {
+        let cut_s = press_s + 0.2;
+        let (r, rec, sent) = fly_pressed(vec![press_s, cut_s], count);
+        let r = r.unwrap_or_else(|e| panic!("{phase}: {e}"));
+        // (A flight whose shots are over and which lands is complete, pressed or not.)
+        assert_eq!(r.completed, phase == "landing", "{phase}");
+        let first = |what: &str, after: f64| {
+            (sent.iter())
+                .find(|(t, w)| *w == what && *t >= after - 1e-9)
+                .map(|(t, _)| *t)
+                .unwrap_or_else(|| panic!("{phase}: no {what} after {after} s: {sent:?}"))
+        };
+        if phase != "landing" {
+            let land = first("land", press_s);
+            assert!(
+                land - press_s <= TICK_S + 1e-9,
+                "{phase}: land {land} s, pressed {press_s} s"
+            );
+        }
+        let cut = first("emergency", cut_s);
+        assert!(
+            cut - cut_s <= TICK_S + 1e-9,
+            "{phase}: cut {cut} s, pressed {cut_s} s"
+        );
+        let cuts = rec
+            .events
+            .iter()
+            .filter(|e| e.message.contains("motor cut"))
+            .count();
+        assert_eq!(cuts, 1, "{phase}: the cut is told once");
+    }
+}
+
 /// The drone's telemetry goes silent from `lost_from_s` on (its link age grows).
 struct Silent<D: dronecine_backend::Drone, C: Clock> {
     inner: D,
