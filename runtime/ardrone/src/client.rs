@@ -26,12 +26,17 @@
 //! with [`ArDroneClient::monitor`] sends no REF until asked to fly (only COMWDG).
 //!
 //! One [`AtEncoder`]: one global, strictly increasing sequence number, starting at 1.
-//! Navdata: packets from another address, malformed ones (checksum, layout) and old ones
-//! ([`NavdataSequence`]) are counted and dropped; when none arrived for 200 ms the trigger is
-//! re-sent and the sequence rule reset. Nothing blocks: sockets are non-blocking, reads drain
-//! until `WouldBlock`, a send that would block drops the datagram (counted) — the next tick
-//! sends the set-points again. The per-tick path (`send`, `hover`, `telemetry`) allocates
-//! nothing.
+//! Navdata: packets from another address, rejected ones (by kind: [`NavdataReject`]) and old
+//! ones ([`NavdataSequence`]) are counted and dropped; when none arrived for 200 ms the
+//! trigger is re-sent and the sequence rule reset. A drone whose packets all arrive rejected
+//! fails the start-up with the count of each kind, not as a silent drone. Nothing blocks:
+//! sockets are non-blocking, reads drain until `WouldBlock`, a send that would block drops the
+//! datagram (counted) — the next tick sends the set-points again. The per-tick path (`send`,
+//! `hover`, `telemetry`) allocates nothing.
+//!
+//! **Status** ([`ArDroneClient::status`]): the last values, the packets received and rejected
+//! since the previous read-out, and the problems that make the read-out untrustworthy:
+//! rejected packets, fields no working AR.Drone sends ([`implausible`]) and a silent link.
 
 use std::io::ErrorKind;
 use std::net::{SocketAddr, UdpSocket};
@@ -41,7 +46,10 @@ use dronecine_profile::Profile;
 use serde::Serialize;
 
 use crate::at::{AtCommand, AtEncoder, Datagram, Pcmd, PcmdLimits, REF_BASE};
-use crate::navdata::{self, Demo, DroneState, MajorState, Navdata, NavdataSequence};
+use crate::navdata::{
+    self, Demo, DroneState, MajorState, Navdata, NavdataError, NavdataSequence, CHECKSUM_SIZE,
+    DEMO_MIN_SIZE, TAG_CHECKSUM, TAG_DEMO, TAG_TIME, TIME_SIZE,
+};
 use crate::url::ArDroneUrl;
 use dronecine_backend::frames::Command;
 use dronecine_backend::{BackendError, Drone, FlightState, Telemetry};
@@ -97,13 +105,156 @@ enum RefGoal {
     Emergency,
 }
 
+/// The kinds of navdata packet the decoder rejects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NavdataReject {
+    /// The checksum option does not match the bytes before it.
+    BadChecksum,
+    /// The datagram ends before the packet does: inside the header or an option, before the
+    /// checksum option, or an option shorter than its fields.
+    Truncated,
+    /// Not navdata: an unknown header word.
+    Unknown,
+    /// A layout the protocol does not allow: an option size under 4, a time or checksum
+    /// option over 8 bytes, data after the checksum, a packet over 4096 bytes.
+    Malformed,
+}
+
+impl NavdataReject {
+    pub const ALL: [NavdataReject; 4] = [
+        NavdataReject::BadChecksum,
+        NavdataReject::Truncated,
+        NavdataReject::Unknown,
+        NavdataReject::Malformed,
+    ];
+
+    /// The kind of the decoder's error on a packet of `len` bytes.
+    pub fn of(e: &NavdataError, len: usize) -> Self {
+        match *e {
+            NavdataError::ChecksumMismatch { .. } => NavdataReject::BadChecksum,
+            NavdataError::Truncated
+            | NavdataError::TruncatedOption { .. }
+            | NavdataError::MissingChecksum => NavdataReject::Truncated,
+            NavdataError::BadOptionSize { size, offset, .. }
+                if size >= 4 && offset + usize::from(size) > len =>
+            {
+                NavdataReject::Truncated
+            }
+            NavdataError::BadKnownOptionSize { tag, size }
+                if size
+                    < match tag {
+                        TAG_DEMO => DEMO_MIN_SIZE,
+                        TAG_TIME => TIME_SIZE,
+                        TAG_CHECKSUM => CHECKSUM_SIZE,
+                        _ => 0,
+                    } =>
+            {
+                NavdataReject::Truncated
+            }
+            NavdataError::BadHeader(_) => NavdataReject::Unknown,
+            NavdataError::BadOptionSize { .. }
+            | NavdataError::BadKnownOptionSize { .. }
+            | NavdataError::TooLarge
+            | NavdataError::DataAfterChecksum
+            | NavdataError::BufferFull
+            | NavdataError::BadOption => NavdataReject::Malformed,
+        }
+    }
+
+    /// What happened to `n` packets of this kind, after "N of M packets received".
+    fn says(self, n: u64) -> &'static str {
+        match (self, n == 1) {
+            (NavdataReject::BadChecksum, _) => "had a bad checksum",
+            (NavdataReject::Truncated, true) => "was truncated",
+            (NavdataReject::Truncated, false) => "were truncated",
+            (NavdataReject::Unknown, true) => "was not navdata",
+            (NavdataReject::Unknown, false) => "were not navdata",
+            (NavdataReject::Malformed, true) => "was malformed",
+            (NavdataReject::Malformed, false) => "were malformed",
+        }
+    }
+}
+
+/// Rejected navdata packets, by kind ([`NavdataReject`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct NavdataRejected {
+    pub bad_checksum: u64,
+    pub truncated: u64,
+    pub unknown: u64,
+    pub malformed: u64,
+}
+
+impl NavdataRejected {
+    pub fn count(&self, kind: NavdataReject) -> u64 {
+        match kind {
+            NavdataReject::BadChecksum => self.bad_checksum,
+            NavdataReject::Truncated => self.truncated,
+            NavdataReject::Unknown => self.unknown,
+            NavdataReject::Malformed => self.malformed,
+        }
+    }
+
+    fn add(&mut self, kind: NavdataReject) {
+        let n = match kind {
+            NavdataReject::BadChecksum => &mut self.bad_checksum,
+            NavdataReject::Truncated => &mut self.truncated,
+            NavdataReject::Unknown => &mut self.unknown,
+            NavdataReject::Malformed => &mut self.malformed,
+        };
+        *n += 1;
+    }
+
+    pub fn total(&self) -> u64 {
+        self.bad_checksum + self.truncated + self.unknown + self.malformed
+    }
+
+    fn since(&self, base: &NavdataRejected) -> NavdataRejected {
+        NavdataRejected {
+            bad_checksum: self.bad_checksum - base.bad_checksum,
+            truncated: self.truncated - base.truncated,
+            unknown: self.unknown - base.unknown,
+            malformed: self.malformed - base.malformed,
+        }
+    }
+}
+
+/// The last rejected packet of each kind, indexed by `NavdataReject as usize` (the order of
+/// [`NavdataReject::ALL`]): the decoder's error and the packet's length.
+type LastRejects = [Option<(NavdataError, usize)>; 4];
+
+/// One sentence per kind of rejected packet: "N of M packets received had a bad checksum
+/// (the last, 180 bytes: …)".
+fn reject_sentences(rejected: &NavdataRejected, received: u64, last: &LastRejects) -> Vec<String> {
+    NavdataReject::ALL
+        .iter()
+        .zip(last)
+        .filter(|(k, _)| rejected.count(**k) > 0)
+        .map(|(&k, last)| {
+            let n = rejected.count(k);
+            let packets = if received == 1 { "packet" } else { "packets" };
+            let detail = match last {
+                Some((e, len)) => {
+                    let e = e.to_string();
+                    let e = e.strip_prefix("navdata: ").unwrap_or(&e).to_string();
+                    format!(" (the last, {len} bytes: {e})")
+                }
+                None => String::new(),
+            };
+            format!("{n} of {received} {packets} received {}{detail}", k.says(n))
+        })
+        .collect()
+}
+
 /// Counters of what the client dropped (for logs and tests).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct LinkStats {
     /// Navdata packets accepted.
     pub navdata_accepted: u64,
-    /// Navdata packets that did not decode (layout, checksum).
+    /// Navdata packets that did not decode, of every kind (`navdata_rejected` has them by
+    /// kind).
     pub navdata_malformed: u64,
+    /// The packets of `navdata_malformed`, by kind.
+    pub navdata_rejected: NavdataRejected,
     /// Navdata packets not newer than the last one (the sequence rule).
     pub navdata_stale: u64,
     /// Datagrams from an address other than the drone's.
@@ -114,6 +265,99 @@ pub struct LinkStats {
     pub at_dropped: u64,
     /// Navdata triggers sent.
     pub triggers: u64,
+}
+
+impl LinkStats {
+    /// Navdata packets from the drone's address: accepted, old and rejected.
+    pub fn navdata_received(&self) -> u64 {
+        self.navdata_accepted + self.navdata_stale + self.navdata_malformed
+    }
+}
+
+/// Largest plausible battery charge: a percentage.
+pub const BATTERY_MAX_PERCENT: u32 = 100;
+/// Largest plausible |θ|, |φ|, |ψ|: an Euler angle names an attitude within half a turn
+/// either way (the firmware sends ψ in ±180°).
+pub const ANGLE_MAX_DEG: f64 = 180.0;
+/// Largest plausible |altitude|: the AR.Drone measures it with an ultrasound sensor (to about
+/// 6 m) and a barometer, and flies within reach of its Wi-Fi (about 100 m); a kilometre is
+/// beyond it.
+pub const ALTITUDE_MAX_M: f64 = 1000.0;
+/// Largest plausible |vx|, |vy|, |vz|: ten times the AR.Drone 2.0's top speed (about 5 m/s),
+/// and more than a fall from 100 m reaches (44 m/s).
+pub const SPEED_MAX_MPS: f64 = 50.0;
+/// Oldest plausible navdata: the drone sends demo navdata at 15 Hz (a packet every 67 ms),
+/// so half a second without a valid packet (seven missed) is a broken link, and the values
+/// shown are not the drone's present state.
+pub const NAVDATA_AGE_MAX_S: f64 = 0.5;
+
+/// A field of the demo option with a value no working AR.Drone sends.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Implausible {
+    /// The field's key in [`ArDroneStatus`] (`theta_deg`, `velocity_mps[2]`, …).
+    pub field: &'static str,
+    /// The value as read, as text (JSON has no NaN or infinity).
+    pub value: String,
+    /// Why no drone sends it (`not a number`, `over 100 %`, …).
+    pub reason: String,
+}
+
+/// A number as text: exponent notation from a million on, so that a huge value stays short.
+fn number(v: f64) -> String {
+    if v.is_finite() && v.abs() >= 1e6 {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// The fields of a demo option no working AR.Drone sends, field by field: NaN or infinite
+/// numbers, a battery over [`BATTERY_MAX_PERCENT`], angles beyond [`ANGLE_MAX_DEG`], an
+/// altitude beyond [`ALTITUDE_MAX_M`], speeds beyond [`SPEED_MAX_MPS`], a control state the
+/// SDK does not name.
+pub fn implausible(demo: &Demo) -> Vec<Implausible> {
+    let mut out = Vec::new();
+    if let MajorState::Unknown(v) = demo.ctrl_state.major {
+        out.push(Implausible {
+            field: "ctrl_state",
+            value: format!("unknown({v})"),
+            reason: "not a control state the SDK names (0 to 9)".into(),
+        });
+    }
+    if demo.battery_percent > BATTERY_MAX_PERCENT {
+        out.push(Implausible {
+            field: "battery_percent",
+            value: demo.battery_percent.to_string(),
+            reason: format!("over {BATTERY_MAX_PERCENT} %"),
+        });
+    }
+    let [vx, vy, vz] = demo.velocity_mps();
+    let fields = [
+        ("theta_deg", demo.pitch_deg(), ANGLE_MAX_DEG, "°"),
+        ("phi_deg", demo.roll_deg(), ANGLE_MAX_DEG, "°"),
+        ("psi_deg", demo.yaw_deg(), ANGLE_MAX_DEG, "°"),
+        ("altitude_m", demo.altitude_m(), ALTITUDE_MAX_M, " m"),
+        ("velocity_mps[0]", vx, SPEED_MAX_MPS, " m/s"),
+        ("velocity_mps[1]", vy, SPEED_MAX_MPS, " m/s"),
+        ("velocity_mps[2]", vz, SPEED_MAX_MPS, " m/s"),
+    ];
+    for (field, v, max, unit) in fields {
+        let reason = if v.is_nan() {
+            "not a number".to_string()
+        } else if v.is_infinite() {
+            "infinite".to_string()
+        } else if v.abs() > max {
+            format!("beyond ±{max}{unit}")
+        } else {
+            continue;
+        };
+        out.push(Implausible {
+            field,
+            value: number(v),
+            reason,
+        });
+    }
+    out
 }
 
 /// What a person checks before a flight (`dronecine status`).
@@ -139,6 +383,17 @@ pub struct ArDroneStatus {
     pub navdata_sequence: u32,
     /// Seconds since the last valid navdata.
     pub link_age_s: f64,
+    /// Navdata packets from the drone's address since the previous read-out (the first:
+    /// since connecting): used, old and rejected.
+    pub navdata_received: u64,
+    /// The rejected ones among them, by kind.
+    pub navdata_rejected: NavdataRejected,
+    /// The fields of the values above that no working AR.Drone sends ([`implausible`]).
+    pub implausible: Vec<Implausible>,
+    /// What makes this read-out untrustworthy, one sentence each: rejected packets (how
+    /// many, of how many received), implausible fields, navdata older than
+    /// [`NAVDATA_AGE_MAX_S`]. Empty when all is well.
+    pub problems: Vec<String>,
 }
 
 /// The name of a major control state.
@@ -207,6 +462,10 @@ pub struct ArDroneClient {
     goal: RefGoal,
     options: ArDroneOptions,
     stats: LinkStats,
+    /// The counters at the previous status read-out.
+    readout_stats: LinkStats,
+    /// The last rejected packet of each kind since the previous status read-out.
+    last_rejects: LastRejects,
 }
 
 impl std::fmt::Debug for ArDroneClient {
@@ -284,6 +543,8 @@ impl ArDroneClient {
             goal: RefGoal::Land,
             options: options.clone(),
             stats: LinkStats::default(),
+            readout_stats: LinkStats::default(),
+            last_rejects: [None; 4],
         };
         client.start_navdata()?;
         Ok(client)
@@ -308,10 +569,35 @@ impl ArDroneClient {
         &self.navdata
     }
 
-    /// Drains navdata and returns what a person checks before a flight.
+    /// Drains navdata and returns what a person checks before a flight, with the packets
+    /// received since the previous read-out (the first: since connecting) and the problems.
     pub fn status(&mut self) -> ArDroneStatus {
         let telemetry = self.telemetry();
         let demo = self.demo.unwrap_or_default();
+        let received = self.stats.navdata_received() - self.readout_stats.navdata_received();
+        let rejected = self
+            .stats
+            .navdata_rejected
+            .since(&self.readout_stats.navdata_rejected);
+        let implausible = implausible(&demo);
+        let mut problems: Vec<String> = reject_sentences(&rejected, received, &self.last_rejects)
+            .into_iter()
+            .map(|s| format!("navdata: {s}"))
+            .collect();
+        problems.extend(
+            implausible
+                .iter()
+                .map(|i| format!("implausible {} {}: {}", i.field, i.value, i.reason)),
+        );
+        if telemetry.link_age_s > NAVDATA_AGE_MAX_S {
+            problems.push(format!(
+                "navdata: no valid packet for {:.1} s (over {NAVDATA_AGE_MAX_S} s): the values \
+                 shown are that old",
+                telemetry.link_age_s
+            ));
+        }
+        self.readout_stats = self.stats;
+        self.last_rejects = [None; 4];
         ArDroneStatus {
             ctrl_state: major_state_name(demo.ctrl_state.major),
             ctrl_minor: demo.ctrl_state.minor,
@@ -325,7 +611,21 @@ impl ArDroneClient {
             flight_state: telemetry.state,
             navdata_sequence: self.navdata.sequence,
             link_age_s: telemetry.link_age_s,
+            navdata_received: received,
+            navdata_rejected: rejected,
+            implausible,
+            problems,
         }
+    }
+
+    /// The packets rejected so far, one sentence per kind, joined; empty when none was.
+    fn rejects_so_far(&self) -> String {
+        reject_sentences(
+            &self.stats.navdata_rejected,
+            self.stats.navdata_received(),
+            &self.last_rejects,
+        )
+        .join("; ")
     }
 
     // -----------------------------------------------------------------------------------
@@ -388,8 +688,11 @@ impl ArDroneClient {
                 self.stats.foreign += 1;
                 continue;
             }
-            if navdata::decode(&self.rx_buf[..n], &mut self.scratch).is_err() {
+            if let Err(e) = navdata::decode(&self.rx_buf[..n], &mut self.scratch) {
                 self.stats.navdata_malformed += 1;
+                let kind = NavdataReject::of(&e, n);
+                self.stats.navdata_rejected.add(kind);
+                self.last_rejects[kind as usize] = Some((e, n));
                 continue;
             }
             if !self
@@ -464,6 +767,16 @@ impl ArDroneClient {
             |c, _| c.retrigger_if_quiet(),
             |c| c.last_navdata.is_some(),
         )?;
+        if !got && self.stats.navdata_malformed > 0 {
+            return Err(link(format!(
+                "navdata arrives from the AR.Drone at {} but no packet was valid within {:.1} s: \
+                 {} ({})",
+                self.nav_addr,
+                timeout.as_secs_f64(),
+                self.rejects_so_far(),
+                self.url
+            )));
+        }
         if !got {
             return Err(link(format!(
                 "no navdata from the AR.Drone at {} within {:.1} s (trigger sent {} times): is \
@@ -480,11 +793,13 @@ impl ArDroneClient {
             self.configure("general:navdata_demo", "TRUE")?;
             let got = self.wait_until(timeout, |c, _| c.keep_alive(), demo_mode)?;
             if !got {
+                let rejects = self.rejects_so_far();
                 return Err(link(format!(
                     "the AR.Drone at {} acknowledged general:navdata_demo but sent no demo \
-                     navdata within {:.1} s",
+                     navdata within {:.1} s{}{rejects}",
                     self.nav_addr,
-                    timeout.as_secs_f64()
+                    timeout.as_secs_f64(),
+                    if rejects.is_empty() { "" } else { ": " },
                 )));
             }
         }

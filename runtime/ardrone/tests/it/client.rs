@@ -12,8 +12,13 @@ use std::time::{Duration, Instant};
 use dronecine_ardrone::at::{
     parse_datagram, ref_emergency, ref_take_off, AtCommand, Pcmd, PcmdLimits, PCMD_PROGRESSIVE,
 };
-use dronecine_ardrone::client::{ArDroneClient, ArDroneOptions, ConfigIds};
-use dronecine_ardrone::navdata::{ControlState, Demo, DroneState, MajorState, NavdataWriter};
+use dronecine_ardrone::client::{
+    implausible, ArDroneClient, ArDroneOptions, ConfigIds, NavdataReject, ALTITUDE_MAX_M,
+    ANGLE_MAX_DEG, BATTERY_MAX_PERCENT, SPEED_MAX_MPS,
+};
+use dronecine_ardrone::navdata::{
+    self, ControlState, Demo, DroneState, MajorState, Navdata, NavdataWriter,
+};
 use dronecine_ardrone::url::ArDroneUrl;
 use dronecine_backend::frames::Command;
 use dronecine_backend::{BackendError, Drone, FlightState};
@@ -31,6 +36,8 @@ struct Behaviour {
     watchdog: bool,
     /// Also sends a corrupt packet and an old one with every packet.
     garbage: bool,
+    /// Sends only packets whose checksum does not match.
+    corrupt_all: bool,
 }
 
 const NORMAL: Behaviour = Behaviour {
@@ -39,6 +46,7 @@ const NORMAL: Behaviour = Behaviour {
     start_in_demo: false,
     watchdog: false,
     garbage: false,
+    corrupt_all: false,
 };
 
 #[derive(Clone, Debug, PartialEq)]
@@ -194,6 +202,9 @@ impl FakeDrone {
                             let mut bad = out[..n].to_vec();
                             bad[5] ^= 0x40; // the checksum no longer matches
                             let _ = nav.send_to(&bad, to);
+                        }
+                        if b.corrupt_all {
+                            out[5] ^= 0x40;
                         }
                         let _ = nav.send_to(&out[..n], to);
                         if b.garbage && seq > 3 {
@@ -591,6 +602,200 @@ fn telemetry_skips_malformed_and_old_navdata() {
     assert_eq!(s.altitude_m, 1.234);
     assert!((s.velocity_mps[1] + 0.2).abs() < 1e-9);
     assert!(s.flags.contains(&"navdata_demo"), "{:?}", s.flags);
+}
+
+#[test]
+fn status_counts_rejected_packets_since_the_previous_read_out() {
+    let fake = FakeDrone::start(Behaviour {
+        garbage: true,
+        ..NORMAL
+    });
+    let mut client = connect(&fake);
+    let first = client.status();
+    std::thread::sleep(Duration::from_millis(50));
+    let second = client.status();
+    let stats = client.stats();
+    // The read-outs split the packets since connecting between them.
+    assert_eq!(
+        first.navdata_received + second.navdata_received,
+        stats.navdata_received()
+    );
+    assert_eq!(
+        first.navdata_rejected.bad_checksum + second.navdata_rejected.bad_checksum,
+        stats.navdata_rejected.bad_checksum
+    );
+    assert_eq!(stats.navdata_rejected.total(), stats.navdata_malformed);
+    // The fake sends one packet with a bad checksum with each good one; its old ones are valid.
+    let r = second.navdata_rejected;
+    assert!(r.bad_checksum > 0, "{r:?}");
+    assert_eq!((r.truncated, r.unknown, r.malformed), (0, 0, 0));
+    let sentence = format!(
+        "navdata: {} of {} packets received had a bad checksum (the last, ",
+        r.bad_checksum, second.navdata_received
+    );
+    assert_eq!(second.problems.len(), 1, "{:?}", second.problems);
+    assert!(
+        second.problems[0].starts_with(&sentence),
+        "{:?}",
+        second.problems
+    );
+    assert!(second.implausible.is_empty());
+}
+
+#[test]
+fn a_drone_whose_packets_all_fail_their_checksum_is_not_called_silent() {
+    let fake = FakeDrone::start(Behaviour {
+        corrupt_all: true,
+        ..NORMAL
+    });
+    let err = ArDroneClient::monitor(&fake.url(), &fast()).unwrap_err();
+    let BackendError::Link(m) = err else {
+        panic!("{err:?}")
+    };
+    assert!(!m.contains("no navdata"), "{m}");
+    assert!(m.contains("navdata arrives"), "{m}");
+    // "N of N packets received had a bad checksum": every packet, counted.
+    let (counts, _) = m
+        .split_once(" packets received had a bad checksum")
+        .unwrap_or_else(|| panic!("{m}"));
+    let words: Vec<&str> = counts.rsplitn(4, ' ').collect();
+    assert_eq!(words[1], "of", "{m}");
+    let (n, of): (u64, u64) = (words[2].parse().unwrap(), words[0].parse().unwrap());
+    assert!(n > 10 && n == of, "{m}");
+}
+
+#[test]
+fn status_of_a_clean_drone_has_no_problem() {
+    let fake = FakeDrone::start(NORMAL);
+    let mut client = ArDroneClient::monitor(&fake.url(), &fast()).unwrap();
+    std::thread::sleep(Duration::from_millis(20));
+    let s = client.status();
+    assert!(s.navdata_received > 0);
+    assert_eq!(s.navdata_rejected.total(), 0);
+    assert!(s.implausible.is_empty() && s.problems.is_empty(), "{s:?}");
+}
+
+/// A valid demo packet.
+fn packet() -> Vec<u8> {
+    let mut out = [0u8; 512];
+    let mut w = NavdataWriter::new(&mut out, DroneState(DroneState::NAVDATA_DEMO), 7, 0).unwrap();
+    w.demo(&Demo::default()).unwrap();
+    let n = w.finish().unwrap();
+    out[..n].to_vec()
+}
+
+fn kind_of(p: &[u8]) -> Option<NavdataReject> {
+    let mut nav = Navdata::default();
+    navdata::decode(p, &mut nav)
+        .err()
+        .map(|e| NavdataReject::of(&e, p.len()))
+}
+
+#[test]
+fn each_decoder_error_has_its_kind() {
+    use NavdataReject::*;
+    let good = packet();
+    let demo_end = 16 + 148;
+    assert_eq!(kind_of(&good), None);
+    let with = |f: &dyn Fn(&mut Vec<u8>)| {
+        let mut p = good.clone();
+        f(&mut p);
+        kind_of(&p)
+    };
+    // A flipped bit anywhere before the checksum.
+    assert_eq!(with(&|p| p[40] ^= 1), Some(BadChecksum));
+    assert_eq!(with(&|p| p[5] ^= 0x40), Some(BadChecksum));
+    // Cut by the end of the datagram: in the header, in an option header, inside the demo
+    // option, right before the checksum option, inside the checksum option.
+    for cut in [10, 18, 100, demo_end, demo_end + 6] {
+        assert_eq!(kind_of(&good[..cut]), Some(Truncated), "cut at {cut}");
+    }
+    // A demo option that declares itself shorter than its fields (checksum made right).
+    let mut short = good[..16].to_vec();
+    short.extend_from_slice(&[0, 0, 40, 0]);
+    short.extend_from_slice(&[0; 36]);
+    let sum = navdata::checksum(&short);
+    short.extend_from_slice(&[0xFF, 0xFF, 8, 0]);
+    short.extend_from_slice(&sum.to_le_bytes());
+    assert_eq!(kind_of(&short), Some(Truncated));
+    // Not navdata.
+    assert_eq!(with(&|p| p[0] = 0), Some(Unknown));
+    assert_eq!(kind_of(b"hello, drone"), Some(Unknown));
+    assert_eq!(kind_of(b"GET / HTTP/1.1\r\n\r\n"), Some(Unknown));
+    // A layout the protocol does not allow.
+    assert_eq!(with(&|p| p.extend_from_slice(&[0; 4])), Some(Malformed));
+    assert_eq!(with(&|p| p[18] = 2), Some(Malformed)); // demo option size 2
+    assert_eq!(with(&|p| p.resize(5000, 0)), Some(Malformed));
+}
+
+#[test]
+fn implausible_names_each_field_beyond_its_bound() {
+    let ok = Demo {
+        ctrl_state: ControlState::from_raw(4 << 16),
+        battery_percent: BATTERY_MAX_PERCENT,
+        theta_mdeg: (ANGLE_MAX_DEG * 1000.0) as f32,
+        phi_mdeg: -(ANGLE_MAX_DEG * 1000.0) as f32,
+        psi_mdeg: 180_000.0,
+        altitude_mm: (ALTITUDE_MAX_M * 1000.0) as i32,
+        vx_mmps: (SPEED_MAX_MPS * 1000.0) as f32,
+        vy_mmps: -(SPEED_MAX_MPS * 1000.0) as f32,
+        vz_mmps: 0.0,
+        num_frames: 0,
+    };
+    // The bounds themselves are plausible.
+    assert_eq!(implausible(&ok), []);
+    let fields = |d: Demo| -> Vec<(&str, String)> {
+        implausible(&d)
+            .into_iter()
+            .map(|i| (i.field, i.reason))
+            .collect()
+    };
+    assert_eq!(
+        fields(Demo {
+            battery_percent: 101,
+            ..ok
+        }),
+        [("battery_percent", "over 100 %".to_string())]
+    );
+    assert_eq!(
+        fields(Demo {
+            phi_mdeg: f32::NAN,
+            psi_mdeg: 180_001.0,
+            ..ok
+        }),
+        [
+            ("phi_deg", "not a number".to_string()),
+            ("psi_deg", "beyond ±180°".to_string())
+        ]
+    );
+    assert_eq!(
+        fields(Demo {
+            altitude_mm: -1_000_001,
+            vy_mmps: f32::NEG_INFINITY,
+            vz_mmps: 50_001.0,
+            ..ok
+        }),
+        [
+            ("altitude_m", "beyond ±1000 m".to_string()),
+            ("velocity_mps[1]", "infinite".to_string()),
+            ("velocity_mps[2]", "beyond ±50 m/s".to_string())
+        ]
+    );
+    assert_eq!(
+        fields(Demo {
+            ctrl_state: ControlState::from_raw(12 << 16),
+            ..ok
+        }),
+        [(
+            "ctrl_state",
+            "not a control state the SDK names (0 to 9)".to_string()
+        )]
+    );
+    let nan = implausible(&Demo {
+        theta_mdeg: f32::NAN,
+        ..ok
+    });
+    assert_eq!(nan[0].value, "NaN");
 }
 
 #[test]
