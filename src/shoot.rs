@@ -383,7 +383,12 @@ impl Flight<'_> {
         match created.and_then(|w| LogThread::spawn(w, a.rate_hz)) {
             Ok(w) => Ok((w, path)),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(log_exists(&path)),
-            Err(e) => Err(e.to_string()),
+            Err(e) => {
+                // Created new here, and not whole (a full disk): not left in the way of the
+                // retry.
+                let _ = std::fs::remove_file(&path);
+                Err(e.to_string())
+            }
         }
     }
 
@@ -405,22 +410,27 @@ impl Flight<'_> {
         let finished = log.finish();
         let report = match result {
             Ok(report) => report,
+            Err(SessionError::Flight(FlightError::Log(e, report))) => {
+                // The flight was flown (and landed for it): its report first.
+                let _ = self.tell_report(&report);
+                return fail(format!(
+                    "the flight log could not be written ({e}): the drone was landed\n  help: \
+                     the log keeps the flight up to the failure (`dronecine replay {}` reads \
+                     it); free space on its disk, or give --log a place that has some",
+                    log_path.display()
+                ));
+            }
             Err(e) => return self.not_flown(e, log_path),
         };
         if let Err(e) = finished {
+            let _ = self.tell_report(&report);
             return fail(format!(
                 "the flight log `{}` is incomplete: {e}",
                 log_path.display()
             ));
         }
-        if a.json {
-            match serde_json::to_string_pretty(&report) {
-                Ok(s) => outln!("{s}"),
-                Err(e) => return fail(e),
-            }
-        } else {
-            let profile = &self.loaded.profile.name;
-            out!("{}", render_report(&report, profile, a.controller));
+        if let Err(code) = self.tell_report(&report) {
+            return code;
         }
         errln!("flight log: {}", log_path.display());
         if report.completed {
@@ -428,6 +438,20 @@ impl Flight<'_> {
         } else {
             ExitCode::FAILURE
         }
+    }
+
+    /// The report, as text or JSON.
+    fn tell_report(&self, report: &FlightReport) -> Result<(), ExitCode> {
+        if self.a.json {
+            match serde_json::to_string_pretty(report) {
+                Ok(s) => outln!("{s}"),
+                Err(e) => return Err(fail(e)),
+            }
+        } else {
+            let profile = &self.loaded.profile.name;
+            out!("{}", render_report(report, profile, self.a.controller));
+        }
+        Ok(())
     }
 
     /// The flight on the simulator or on the hardware the command line names.
@@ -496,20 +520,43 @@ impl Flight<'_> {
                     "error: `{}` was not flown: the drone is on the ground",
                     r.name
                 );
-                errln!("flight log: {}", log_path.display());
+                self.keep_or_remove(log_path, took_off(&refusals));
                 ExitCode::FAILURE
             }
-            e @ SessionError::Flight(FlightError::Log(_)) => fail(format!(
-                "{e}\n  help: the log keeps the flight up to the failure (`dronecine replay {}` \
-                 reads it); free space on its disk, or give --log a place that has some",
-                log_path.display()
-            )),
+            // Nothing connected: nothing flew.
+            e @ SessionError::Setup(_) => {
+                self.keep_or_remove(log_path, false);
+                fail(e)
+            }
             e => {
                 errln!("flight log: {}", log_path.display());
                 fail(e)
             }
         }
     }
+
+    /// The log of a flight that never started is removed: nothing was recorded that the
+    /// script, the profile and the set do not say again, and a `--log` given again must not
+    /// find it in the way. A take-off that failed is a flight: its log stays.
+    fn keep_or_remove(&self, log_path: &Path, took_off: bool) {
+        if took_off {
+            errln!("flight log: {}", log_path.display());
+        } else if let Err(e) = std::fs::remove_file(log_path) {
+            errln!(
+                "warning: the log of the flight not flown, `{}`, cannot be removed: {e}",
+                log_path.display()
+            );
+        }
+    }
+}
+
+/// Whether a refused flight had taken off (a refusal of the take-off itself, not of a check
+/// before it).
+fn took_off(refusals: &[diag::Diagnostic]) -> bool {
+    use dronecine_flight::PreflightCode;
+    refusals.iter().any(|d| {
+        d.code == PreflightCode::TakeOffEmergency || d.code == PreflightCode::TakeOffTimeout
+    })
 }
 
 /// `<script>-<UTC timestamp>.mcap` (in `flights/`, or the folder `--log` names).

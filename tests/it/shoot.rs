@@ -361,29 +361,19 @@ fn bad_input_is_a_clear_error() {
     assert!(stderr(&o).contains("garbage.mcap"), "{}", stderr(&o));
 }
 
-/// A disk that fills during the flight (here a file size limit on the process, which makes
-/// writes past it fail with `EFBIG`, as `ENOSPC` would): the drone is landed, `shoot` says
-/// why and exits 1, and the log keeps the flight up to the failure, readable by `replay`.
+/// `cmd` with a file size limit on its process: writes past it fail with `EFBIG`, as a full
+/// disk's fail with `ENOSPC`.
 #[cfg(target_os = "linux")]
-#[test]
-fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
+fn on_a_disk_of(cmd: &mut Command, limit_bytes: u64) {
     use std::os::unix::process::CommandExt;
-    const LIMIT_BYTES: u64 = 1_000_000;
-    let dir = temp_dir("full-disk");
-    let log = dir.join("two-actors.mcap");
-    let log_s = log.to_str().unwrap();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_dronecine"));
-    cmd.args(["shoot", "shots/two-actors.psl", "--log", log_s, "-q"])
-        .current_dir(crate::common::workspace())
-        .env("NO_COLOR", "1");
     // SAFETY: between fork and exec the closure only calls `setrlimit` and `signal`, both
     // async-signal-safe, on the child's own limits and dispositions; it touches no memory
     // shared with the parent. (An ignored SIGXFSZ stays ignored across exec.)
     unsafe {
-        cmd.pre_exec(|| {
+        cmd.pre_exec(move || {
             let limit = libc::rlimit {
-                rlim_cur: LIMIT_BYTES as libc::rlim_t,
-                rlim_max: LIMIT_BYTES as libc::rlim_t,
+                rlim_cur: limit_bytes as libc::rlim_t,
+                rlim_max: limit_bytes as libc::rlim_t,
             };
             if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
                 return Err(std::io::Error::last_os_error());
@@ -392,6 +382,23 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
             Ok(())
         });
     }
+}
+
+/// A disk that fills during the flight: the drone is landed, `shoot` prints the flight's
+/// report, says why it ended and exits 1, and the log keeps the flight up to the failure,
+/// readable by `replay`.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
+    const LIMIT_BYTES: u64 = 1_000_000;
+    let dir = temp_dir("full-disk");
+    let log = dir.join("two-actors.mcap");
+    let log_s = log.to_str().unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_dronecine"));
+    cmd.args(["shoot", "shots/two-actors.psl", "--log", log_s, "-q"])
+        .current_dir(crate::common::workspace())
+        .env("NO_COLOR", "1");
+    on_a_disk_of(&mut cmd, LIMIT_BYTES);
     let o = cmd.output().unwrap();
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
@@ -403,6 +410,9 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
             && err.contains(&format!("dronecine replay {log_s}")),
         "{err}"
     );
+    let out = stdout(&o);
+    assert!(out.starts_with("ABORTED flight with ardrone2"), "the report: {out}");
+    assert!(err.contains("the flight log cannot be written: landing"), "-q tells failsafes: {err}");
     assert_eq!(std::fs::metadata(&log).unwrap().len(), LIMIT_BYTES);
 
     // What was written is a flight: replay reads it, says it ends early, and reproduces
@@ -416,6 +426,31 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
     assert_eq!(r["mismatches"], 0, "{r}");
     assert!(r["ticks"].as_u64().unwrap() > 100, "{r}");
     assert_eq!(r["report"]["completed"], false, "{r}");
+}
+
+/// A disk too full to start the log: `shoot` refuses before take-off and leaves no file, so
+/// that the same command runs at once when there is room.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_start_refused_for_a_full_disk_leaves_nothing_in_the_way() {
+    let dir = temp_dir("full-at-start");
+    let log = dir.join("square.mcap");
+    let log_s = log.to_str().unwrap();
+    let shoot = || {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_dronecine"));
+        cmd.args(["shoot", "shots/square.psl", "--log", log_s, "-q"])
+            .current_dir(crate::common::workspace());
+        cmd
+    };
+    let mut cmd = shoot();
+    on_a_disk_of(&mut cmd, 256);
+    let o = cmd.output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains(log_s), "{}", stderr(&o));
+    assert!(!log.exists(), "a partial log is left in the way");
+    let o = shoot().output().unwrap();
+    assert!(o.status.success(), "the retry: {}", stderr(&o));
+    assert!(log.exists());
 }
 
 /// What the director finds against the live actors during a flight is told as it arises, as

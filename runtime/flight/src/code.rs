@@ -23,6 +23,7 @@ dronecine_diag::codes! {
         TakeOffEmergency => "preflight::take_off_emergency": "The drone went into emergency during take-off.",
         TakeOffTimeout => "preflight::take_off_timeout": "The drone did not report flying within the take-off timeout.",
         Interrupted => "preflight::interrupted": "The operator interrupted the flight before take-off (Ctrl-C, SIGTERM or SIGHUP).",
+        TelemetryImplausible => "preflight::telemetry_implausible": "The drone reports a value no drone has (a battery level outside 0–100 %).",
     }
 }
 

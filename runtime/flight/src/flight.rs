@@ -440,7 +440,8 @@ impl<'s, 'b> Flight<'s, 'b> {
         let mut land = false;
         let telemetry = self.drone.telemetry();
         let battery = telemetry.battery_percent;
-        if battery < self.setup.safety.battery_land_percent {
+        // Not a number: the level is not known, and may be low.
+        if !(battery >= self.setup.safety.battery_land_percent) {
             self.failsafe(t, &format!("battery at {battery:.0}%: landing"));
             land = true;
         }

@@ -140,8 +140,9 @@ pub enum FlightError {
     /// about the script (an actor, the first shot).
     Preflight(Vec<Diagnostic>),
     Backend(BackendError),
-    /// The flight log could not be written; the drone was landed.
-    Log(io::Error),
+    /// The flight log could not be written; the drone was landed. The report of the flight
+    /// as flown.
+    Log(io::Error, Box<FlightReport>),
 }
 
 impl std::fmt::Display for FlightError {
@@ -152,7 +153,7 @@ impl std::fmt::Display for FlightError {
                 write!(f, "pre-flight check failed: {}", said.join("; "))
             }
             FlightError::Backend(e) => write!(f, "drone backend: {e}"),
-            FlightError::Log(e) => write!(
+            FlightError::Log(e, _) => write!(
                 f,
                 "the flight log could not be written ({e}): the drone was landed"
             ),

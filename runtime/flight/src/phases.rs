@@ -495,11 +495,9 @@ impl Flight<'_, '_> {
                 t - take_off_s
             ),
         );
-        if let Some(e) = self.log_error.take() {
-            return Err(FlightError::Log(e));
-        }
+        let log_error = self.log_error.take();
         let labels = crate::report::shot_labels(self.setup.script, self.setup.source);
-        Ok(self.metrics.report(
+        let report = self.metrics.report(
             &labels,
             Counts {
                 completed,
@@ -509,7 +507,11 @@ impl Flight<'_, '_> {
                 faults: self.faults,
                 deadline_misses: self.deadline_misses,
             },
-        ))
+        );
+        match log_error {
+            Some(e) => Err(FlightError::Log(e, Box::new(report))),
+            None => Ok(report),
+        }
     }
 
     /// The flight back over the take-off spot after the last shot, at the altitude the shots

@@ -172,7 +172,16 @@ impl Flight<'_, '_> {
     /// A battery that can fly the take-off.
     fn check_the_battery(&mut self) -> Result<(), FlightError> {
         let telemetry = self.drone.telemetry();
-        if telemetry.battery_percent < self.setup.safety.battery_land_percent {
+        let battery = telemetry.battery_percent;
+        // A level no battery has is not one to fly on: the drone's telemetry is broken.
+        if !(0.0..=100.0).contains(&battery) {
+            return Err(refusal(
+                PreflightCode::TelemetryImplausible,
+                format!("the drone reports its battery at {battery}%: no battery reads that"),
+                "check the drone with `dronecine status`, which names what it reports wrong",
+            ));
+        }
+        if battery < self.setup.safety.battery_land_percent {
             return Err(refusal(
                 PreflightCode::BatteryLow,
                 format!(

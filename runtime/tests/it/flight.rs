@@ -809,6 +809,66 @@ fn an_interrupt_is_obeyed_within_a_tick_in_every_phase() {
     }
 }
 
+/// The drone, reporting `battery_percent` from `from_s` on.
+struct Battery<D: Drone, C: Clock> {
+    inner: D,
+    clock: C,
+    from_s: f64,
+    battery_percent: f64,
+}
+
+impl<D: Drone, C: Clock> Drone for Battery<D, C> {
+    fn take_off(&mut self) -> Result<(), BackendError> {
+        self.inner.take_off()
+    }
+    fn land(&mut self) -> Result<(), BackendError> {
+        self.inner.land()
+    }
+    fn emergency(&mut self) -> Result<(), BackendError> {
+        self.inner.emergency()
+    }
+    fn send(&mut self, c: &dronecine_backend::frames::Command) -> Result<(), BackendError> {
+        self.inner.send(c)
+    }
+    fn hover(&mut self) -> Result<(), BackendError> {
+        self.inner.hover()
+    }
+    fn telemetry(&mut self) -> dronecine_backend::Telemetry {
+        let mut t = self.inner.telemetry();
+        if self.clock.now_s() >= self.from_s {
+            t.battery_percent = self.battery_percent;
+        }
+        t
+    }
+}
+
+/// A battery level no battery has is broken telemetry: refused before take-off; in flight a
+/// level that is not a number lands the drone (it may be low).
+#[test]
+fn implausible_battery_levels_are_refused_and_an_unknown_one_lands() {
+    let with_battery = |from_s: f64, battery_percent: f64| {
+        fly_on(SCRIPT, |_| {}, None, |sim| Rig {
+            drone: Box::new(Battery {
+                inner: sim.drone(),
+                clock: sim.clock(),
+                from_s,
+                battery_percent,
+            }),
+            ..Rig::plain(sim)
+        })
+    };
+    for level in [4_294_967_295.0, -1.0, f64::NAN] {
+        let (r, rec, _) = with_battery(0.0, level);
+        let d = refused_before_take_off(r, &rec);
+        assert_eq!(codes(&d), [PreflightCode::TelemetryImplausible.code()], "{level}: {d:?}");
+    }
+    let (r, rec, state) = with_battery(action_s() + 1.0, f64::NAN);
+    assert!(!r.unwrap().completed);
+    let e = rec.first("failsafe").expect("a failsafe");
+    assert!(e.message.contains("battery"), "{}", e.message);
+    assert_eq!(state, FlightState::Landed);
+}
+
 /// The drone's telemetry goes silent from `lost_from_s` on (its link age grows).
 struct Silent<D: dronecine_backend::Drone, C: Clock> {
     inner: D,
