@@ -131,6 +131,11 @@ fn check_profile(path: &std::path::Path, checked: &Checked) -> Option<ProfileChe
     })
 }
 
+/// The command that lists every diagnostic of the script `name` (its profile's included).
+pub fn lister(name: &str) -> String {
+    format!("dronecine check --format json {name}")
+}
+
 fn summary_line(name: &str, s: &Script) -> String {
     let actors = s.cast.len();
     let shots = s.timeline.len();
@@ -204,12 +209,28 @@ pub fn run(inputs: &[PathBuf], json: bool, color: bool) -> ExitCode {
                     .extend(diag::to_json(&p.name, &p.text, &p.diagnostics));
             }
         } else {
+            // Past the first diagnostics, `--format json` lists every one.
+            let lister = lister(&r.name);
             if !r.checked.diagnostics.is_empty() {
-                let text = diag::render(&r.name, &r.text, &r.checked.diagnostics, color, 100);
+                let text = diag::render_listed(
+                    &r.name,
+                    &r.text,
+                    &r.checked.diagnostics,
+                    color,
+                    100,
+                    Some(&lister),
+                );
                 let _ = stderr.lock().write_all(text.as_bytes());
             }
             if let Some(p) = &profile {
-                let text = diag::render(&p.name, &p.text, &p.diagnostics, color, 100);
+                let text = diag::render_listed(
+                    &p.name,
+                    &p.text,
+                    &p.diagnostics,
+                    color,
+                    100,
+                    Some(&lister),
+                );
                 let _ = stderr.lock().write_all(text.as_bytes());
             }
             let bad_profile = profile

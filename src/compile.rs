@@ -170,9 +170,17 @@ pub fn with_script_warnings(
 pub fn load_scene(path: &Path, color: bool, what: &str, shots: bool) -> Result<Loaded, ExitCode> {
     let r = check::check_file(path);
     if r.checked.has_errors() || r.checked.script.is_none() {
+        let lister = check::lister(&r.name);
         err!(
             "{}",
-            diag::render(&r.name, &r.text, &r.checked.diagnostics, color, 100)
+            diag::render_listed(
+                &r.name,
+                &r.text,
+                &r.checked.diagnostics,
+                color,
+                100,
+                Some(&lister)
+            )
         );
         errln!("error: `{}` has errors; nothing was {what}", r.name);
         return Err(ExitCode::FAILURE);

@@ -74,6 +74,74 @@ fn check_json_gives_code_message_file_line_column_help() {
     assert_eq!(files[1]["duration_s"], 42.0);
 }
 
+/// A script with hundreds of mistakes: `check` quotes the first 100 in the file's order and
+/// ends with one line counting the others, by severity, and naming the command that lists
+/// them; that command lists every one. `compile` says the same before refusing.
+#[test]
+fn many_diagnostics_show_the_first_100_and_count_the_rest() {
+    let dir = temp_dir("many-diagnostics");
+    let script = dir.join("many.psl");
+    let mut text = String::from(
+        "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n",
+    );
+    for _ in 0..120 {
+        // An error (psl::unknown_actor), then a warning (psl::duration_keyword).
+        text.push_str("MS on Nobody for 4s\nthen dolly to MS on A back for 4s\n");
+    }
+    std::fs::write(&script, text).unwrap();
+    let name = script.to_str().unwrap();
+    let not_shown = format!(
+        "… 70 more errors and 70 more warnings in `{name}` not shown; \
+         `dronecine check --format json {name}` lists every one"
+    );
+
+    let o = dronecine(&["check", name]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    let codes: Vec<&str> = err.lines().filter(|l| l.starts_with("psl::")).collect();
+    assert_eq!(codes.len(), 100, "{err}");
+    assert_eq!(
+        (codes[0], codes[1], codes[99]),
+        (
+            "psl::unknown_actor",
+            "psl::duration_keyword",
+            "psl::duration_keyword"
+        )
+    );
+    assert!(err.contains(&format!("[{name}:102:")), "{err}");
+    assert!(!err.contains(&format!("[{name}:104:")), "{err}");
+    let tail: Vec<&str> = err.lines().rev().take(2).collect();
+    assert_eq!(
+        tail,
+        ["error: 1 of 1 file failed the check", not_shown.as_str()],
+        "{err}"
+    );
+
+    let o = dronecine(&["check", "--format", "json", name]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("valid JSON");
+    assert_eq!(v["diagnostics"].as_array().unwrap().len(), 240);
+    assert_eq!(
+        (
+            v["files"][0]["errors"].as_u64(),
+            v["files"][0]["warnings"].as_u64()
+        ),
+        (Some(120), Some(120))
+    );
+
+    let out = dir.join("many.mcap");
+    let o = dronecine(&["compile", name, "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert_eq!(
+        err.lines().filter(|l| l.starts_with("psl::")).count(),
+        100,
+        "{err}"
+    );
+    let tail: Vec<&str> = err.lines().rev().take(2).collect();
+    let refused = format!("error: `{name}` has errors; nothing was compiled");
+    assert_eq!(tail, [refused.as_str(), not_shown.as_str()], "{err}");
+}
+
 #[test]
 fn check_reports_unreadable_and_binary_files_without_panicking() {
     let o = dronecine(&["check", "no/such/file.psl"]);

@@ -320,14 +320,33 @@ pub fn to_json(file: &str, src: &str, diagnostics: &[Diagnostic]) -> Vec<JsonDia
 /// Lines longer than this are shown as a window around the span, not whole.
 const MAX_SHOWN_LINE: usize = 400;
 
+/// How many of one file's diagnostics [`render`] quotes in full; one line after them counts
+/// the rest. A file with thousands of mistakes is fixed from its first ones, and a screen of
+/// quotes is all a person reads.
+pub const MAX_RENDERED: usize = 100;
+
 /// Render diagnostics the way a person reads them: message, code, the quoted source with the
-/// span underlined, and the help line. Plain text (no colour) unless `color` is set.
+/// span underlined, and the help line. Plain text (no colour) unless `color` is set. The first
+/// [`MAX_RENDERED`] are rendered, in the order given; a last line counts the others.
 pub fn render(
     file: &str,
     src: &str,
     diagnostics: &[Diagnostic],
     color: bool,
     width: usize,
+) -> String {
+    render_listed(file, src, diagnostics, color, width, None)
+}
+
+/// [`render`], whose line counting the diagnostics not shown names `lister`, a command that
+/// lists every one (`dronecine check --format json FILE`).
+pub fn render_listed(
+    file: &str,
+    src: &str,
+    diagnostics: &[Diagnostic],
+    color: bool,
+    width: usize,
+    lister: Option<&str>,
 ) -> String {
     let theme = if color {
         miette::GraphicalTheme::unicode()
@@ -337,22 +356,102 @@ pub fn render(
     let handler = miette::GraphicalReportHandler::new_themed(theme)
         .with_width(width)
         .with_context_lines(1);
-    let shown = Arc::new(display_safe(src));
+    let shown = Lines::new(Arc::new(display_safe(src)));
     let index = LineIndex::new(src);
+    let (rendered, rest) = diagnostics.split_at(diagnostics.len().min(MAX_RENDERED));
     let mut out = String::new();
-    for d in diagnostics {
+    for d in rendered {
         let report = windowed(file, &shown, &index, d);
         if handler.render_report(&mut out, &report).is_err() {
             out.push_str(&format!("{}: {} [{}]\n", file, d.message, d.code));
         }
     }
+    if !rest.is_empty() {
+        out.push_str(&not_shown(file, rest, lister));
+    }
     out
+}
+
+/// The line after the rendered diagnostics that counts the others, by severity:
+/// "… 49900 more errors and 1 more warning in `x.psl` not shown", then what lists them.
+fn not_shown(file: &str, rest: &[Diagnostic], lister: Option<&str>) -> String {
+    let errors = rest.iter().filter(|d| d.is_error()).count();
+    let counts: Vec<String> = [(errors, "error"), (rest.len() - errors, "warning")]
+        .into_iter()
+        .filter(|&(n, _)| n > 0)
+        .map(|(n, what)| format!("{n} more {what}{}", if n == 1 { "" } else { "s" }))
+        .collect();
+    let mut line = format!("… {} in `{file}` not shown", counts.join(" and "));
+    if let Some(lister) = lister {
+        line.push_str(&format!("; `{lister}` lists every one"));
+    }
+    line.push('\n');
+    line
+}
+
+/// A text with its line starts, the source miette quotes. miette's own reading of a text
+/// walks it from its first byte to the span; this one starts a few lines before the span
+/// (found in the line starts), so that a diagnostic costs what its own lines cost, not what
+/// the text before it does.
+#[derive(Clone)]
+struct Lines {
+    text: Arc<String>,
+    /// Where each line starts, with miette's line breaks: `\n`, `\r\n` and a lone `\r`.
+    starts: Arc<Vec<usize>>,
+}
+
+impl Lines {
+    fn new(text: Arc<String>) -> Lines {
+        let mut starts = vec![0];
+        let mut bytes = text.bytes().enumerate().peekable();
+        while let Some((i, b)) = bytes.next() {
+            let next = match b {
+                b'\r' if bytes.next_if(|&(_, n)| n == b'\n').is_some() => i + 2,
+                b'\r' | b'\n' => i + 1,
+                _ => continue,
+            };
+            starts.push(next);
+        }
+        Lines {
+            text,
+            starts: Arc::new(starts),
+        }
+    }
+}
+
+impl miette::SourceCode for Lines {
+    /// miette's reading of the text from the start of a line above the span's context: what
+    /// it reads there is what it reads from the text's first byte (the same bytes, the same
+    /// lines kept for context), with offsets and line numbers shifted by what is skipped.
+    fn read_span<'a>(
+        &'a self,
+        span: &miette::SourceSpan,
+        before: usize,
+        after: usize,
+    ) -> Result<Box<dyn miette::SpanContents<'a> + 'a>, miette::MietteError> {
+        let line = self.starts.partition_point(|&s| s <= span.offset()) - 1;
+        // One line more than the context: an empty span at the very start of what miette
+        // reads is read as ending there, not as the line it starts.
+        let first = line.saturating_sub(before + 1);
+        let base = self.starts[first];
+        let local = miette::SourceSpan::new((span.offset() - base).into(), span.len());
+        let read =
+            <str as miette::SourceCode>::read_span(&self.text[base..], &local, before, after)?;
+        let at = miette::SourceSpan::new((read.span().offset() + base).into(), read.span().len());
+        Ok(Box::new(miette::MietteSpanContents::new(
+            read.data(),
+            at,
+            read.line() + first,
+            read.column(),
+            read.line_count() + first,
+        )))
+    }
 }
 
 /// A diagnostic with its source, as miette wants it.
 struct Report {
     diagnostic: Diagnostic,
-    source: miette::NamedSource<Arc<String>>,
+    source: miette::NamedSource<Lines>,
 }
 
 impl fmt::Debug for Report {
@@ -416,12 +515,12 @@ impl miette::Diagnostic for Report {
 
 /// Build the report for one diagnostic. Spans on a very long line are shown in a window cut
 /// out of that line (the file name then carries the true line and column).
-fn windowed(file: &str, shown: &Arc<String>, index: &LineIndex, d: &Diagnostic) -> Report {
-    let src = shown.as_str();
+fn windowed(file: &str, shown: &Lines, index: &LineIndex, d: &Diagnostic) -> Report {
+    let src = shown.text.as_str();
     if !d.span.is_placed() {
         return Report {
             diagnostic: d.clone(),
-            source: miette::NamedSource::new(file, Arc::clone(shown)),
+            source: miette::NamedSource::new(file, shown.clone()),
         };
     }
     let (line, col) = index.line_col(src, d.span.start);
@@ -433,7 +532,7 @@ fn windowed(file: &str, shown: &Arc<String>, index: &LineIndex, d: &Diagnostic) 
     if line_span.len() <= MAX_SHOWN_LINE || related_elsewhere {
         return Report {
             diagnostic: d.clone(),
-            source: miette::NamedSource::new(file, Arc::clone(shown)),
+            source: miette::NamedSource::new(file, shown.clone()),
         };
     }
     let lo = floor_char(src, d.span.start.saturating_sub(60).max(line_span.start));
@@ -452,7 +551,10 @@ fn windowed(file: &str, shown: &Arc<String>, index: &LineIndex, d: &Diagnostic) 
     diagnostic.related.clear();
     Report {
         diagnostic,
-        source: miette::NamedSource::new(format!("{file}:{line}:{col}"), Arc::new(text)),
+        source: miette::NamedSource::new(
+            format!("{file}:{line}:{col}"),
+            Lines::new(Arc::new(text)),
+        ),
     }
 }
 
@@ -535,6 +637,117 @@ mod tests {
         assert!(!out.contains("stage"), "{out}");
         let json = to_json("x.psl", "stage 8m x 6m x 3m\n", &[d]);
         assert_eq!((json[0].line, json[0].column), (0, 0));
+    }
+
+    #[test]
+    fn lines_read_what_miette_reads_from_the_whole_text() {
+        use miette::SourceCode;
+        let texts = [
+            "",
+            "a",
+            "\n",
+            "ab\ncd\n",
+            "one\ntwo\n\n\nfive\nsix",
+            "x\r\ny\rz\n\r\n\rlast",
+            "é\nßx\n\n日本\n",
+        ];
+        for text in texts {
+            let lines = Lines::new(Arc::new(text.to_string()));
+            for start in 0..=text.len() {
+                for len in 0..=text.len() - start {
+                    for (before, after) in [(0, 0), (1, 1), (2, 0), (0, 2), (3, 3)] {
+                        let span = miette::SourceSpan::new(start.into(), len);
+                        let whole = text.read_span(&span, before, after);
+                        let read = lines.read_span(&span, before, after);
+                        let at = format!("{text:?} at {start}+{len}, context {before}/{after}");
+                        match (whole, read) {
+                            (Ok(w), Ok(r)) => assert_eq!(
+                                (w.data(), w.span(), w.line(), w.column(), w.line_count()),
+                                (r.data(), r.span(), r.line(), r.column(), r.line_count()),
+                                "{at}"
+                            ),
+                            (Err(_), Err(_)) => {}
+                            (w, r) => panic!("{at}: {:?} / {:?}", w.is_ok(), r.is_ok()),
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A script of `n` lines, each with a diagnostic: errors, and a warning every `warn_every`.
+    fn numbered(n: usize, warn_every: usize) -> (String, Vec<Diagnostic>) {
+        let mut src = String::new();
+        let mut diagnostics = Vec::new();
+        for i in 0..n {
+            let at = src.len();
+            src.push_str(&format!("MS on Nobody{i} for 4s\n"));
+            let span = Span::new(at + 6, at + 12 + i.to_string().len());
+            diagnostics.push(match i % warn_every == warn_every - 1 {
+                true => Diagnostic::warning(TestCode::Second, span, format!("warning {i}")),
+                false => Diagnostic::error(TestCode::First, span, format!("error {i}")),
+            });
+        }
+        (src, diagnostics)
+    }
+
+    #[test]
+    fn many_diagnostics_render_the_first_ones_and_count_the_rest() {
+        let (src, diagnostics) = numbered(250, 5);
+        let out = render_listed(
+            "f.psl",
+            &src,
+            &diagnostics,
+            false,
+            100,
+            Some("dronecine check --format json f.psl"),
+        );
+        let quoted = out.lines().filter(|l| l.starts_with("test::")).count();
+        assert_eq!(quoted, MAX_RENDERED, "{out}");
+        assert!(
+            out.contains("× error 98") && out.contains("⚠ warning 99"),
+            "{out}"
+        );
+        assert!(!out.contains("error 100"), "{out}");
+        // Of the 150 left out (lines 101 to 250), every fifth is a warning.
+        assert!(
+            out.ends_with(
+                "\n… 120 more errors and 30 more warnings in `f.psl` not shown; \
+                 `dronecine check --format json f.psl` lists every one\n"
+            ),
+            "{out}"
+        );
+        let out = render("f.psl", &src, &diagnostics[..MAX_RENDERED + 1], false, 100);
+        assert!(
+            out.ends_with("\n… 1 more error in `f.psl` not shown\n"),
+            "{out}"
+        );
+        let out = render("f.psl", &src, &diagnostics[..MAX_RENDERED], false, 100);
+        assert!(!out.contains("not shown"), "{out}");
+        let (src, diagnostics) = numbered(MAX_RENDERED + 2, 1);
+        let out = render("f.psl", &src, &diagnostics, false, 100);
+        assert!(
+            out.ends_with("\n… 2 more warnings in `f.psl` not shown\n"),
+            "{out}"
+        );
+    }
+
+    #[test]
+    fn a_diagnostic_deep_in_a_file_is_quoted_with_its_line_numbers() {
+        let (src, diagnostics) = numbered(50_000, 7);
+        let out = render("f.psl", &src, &diagnostics[49_990..49_991], false, 100);
+        let expected = "test::first
+
+  × error 49990
+       ╭─[f.psl:49991:7]
+ 49990 │ MS on Nobody49989 for 4s
+ 49991 │ MS on Nobody49990 for 4s
+       ·       ─────┬─────
+       ·            ╰── error 49990
+ 49992 │ MS on Nobody49991 for 4s
+       ╰────
+";
+        assert_eq!(out, expected);
     }
 
     #[test]
