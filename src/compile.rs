@@ -247,10 +247,16 @@ pub fn run(a: &Args) -> ExitCode {
         stage: scene.stage,
         actor_names: &actor_names,
     };
-    if let Err(e) = crate::files::prepare_output(a.out, "-o").and_then(|()| {
-        a.csv
-            .map_or(Ok(()), |c| crate::files::prepare_output(c, "--csv"))
-    }) {
+    // Every output's place first: a command that cannot write all its outputs writes none.
+    let places = a
+        .preview
+        .map_or(Ok(()), |d| crate::files::prepare_folder(d, "--preview"))
+        .and_then(|()| crate::files::prepare_output(a.out, "-o"))
+        .and_then(|()| {
+            a.csv
+                .map_or(Ok(()), |c| crate::files::prepare_output(c, "--csv"))
+        });
+    if let Err(e) = places {
         return fail(e);
     }
     let mut mcap = match McapWriter::create(a.out, &info) {
@@ -303,14 +309,8 @@ pub fn run(a: &Args) -> ExitCode {
         );
         return ExitCode::FAILURE;
     }
-    if let Err(e) = mcap.finish() {
-        return fail(e);
-    }
-    if let Some(c) = csv {
-        if let Err(e) = c.finish() {
-            return fail(e);
-        }
-    }
+    // The previews before the reference and the table are renamed into place: previews that
+    // fail leave neither (a writer dropped unfinished removes its temporary file).
     let mut written: Vec<PathBuf> = vec![a.out.to_path_buf()];
     written.extend(a.csv.map(Path::to_path_buf));
     if let Some(dir) = a.preview {
@@ -328,6 +328,14 @@ pub fn run(a: &Args) -> ExitCode {
         match preview::write_previews(dir, &input) {
             Ok(paths) => written.extend(paths),
             Err(e) => return fail(format!("cannot write previews to `{}`: {e}", dir.display())),
+        }
+    }
+    if let Err(e) = mcap.finish() {
+        return fail(e);
+    }
+    if let Some(c) = csv {
+        if let Err(e) = c.finish() {
+            return fail(e);
         }
     }
     outln!(

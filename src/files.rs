@@ -82,9 +82,56 @@ pub fn prepare_output(path: &Path, flag: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Makes the output folder `dir` (for `flag`), or says why it cannot be: a file stands there
+/// or in its way, or the folder cannot be written. Checked before any output is written, so
+/// that a command that cannot write all its outputs writes none.
+pub fn prepare_folder(dir: &Path, flag: &str) -> Result<(), String> {
+    let cannot =
+        |e: std::io::Error| format!("{flag} `{}`: cannot make the folder: {e}", dir.display());
+    if dir.exists() && !dir.is_dir() {
+        return Err(format!(
+            "{flag} `{}` is a file, not a folder",
+            dir.display()
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(cannot)?;
+    // Written to before anything else is: a folder it cannot write to fails now.
+    let probe = dir.join(format!(".dronecine-probe-{}", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .and_then(|_| std::fs::remove_file(&probe))
+        .map_err(|e| {
+            format!(
+                "{flag} `{}`: cannot write in the folder: {e}",
+                dir.display()
+            )
+        })
+}
+
 #[cfg(test)]
 mod tests {
-    use super::prepare_output;
+    use super::{prepare_folder, prepare_output};
+
+    #[test]
+    fn an_output_folder_is_made_or_refused_before_anything_is_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let deep = dir.path().join("a/b");
+        prepare_folder(&deep, "--preview").unwrap();
+        assert!(deep.is_dir());
+        assert_eq!(
+            std::fs::read_dir(&deep).unwrap().count(),
+            0,
+            "the probe is gone"
+        );
+        let file = dir.path().join("afile");
+        std::fs::write(&file, "x").unwrap();
+        let e = prepare_folder(&file, "--preview").unwrap_err();
+        assert!(e.contains("is a file"), "{e}");
+        let e = prepare_folder(&file.join("prev"), "--preview").unwrap_err();
+        assert!(e.contains("cannot make the folder"), "{e}");
+    }
 
     #[test]
     fn an_output_gets_its_folder_and_a_folder_is_refused() {

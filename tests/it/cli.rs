@@ -665,3 +665,26 @@ fn shoot_sync_log_writes_the_same_log() {
     let o = dronecine(&["replay", synced.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// A compile that cannot write all its outputs writes none: previews under a file refuse the
+/// command before the reference and the table are written.
+#[test]
+fn compile_writes_all_its_outputs_or_none() {
+    let dir = temp_dir("all-or-none");
+    let afile = dir.join("afile");
+    std::fs::write(&afile, "x").unwrap();
+    let (mcap, csv) = (dir.join("out/s.mcap"), dir.join("out/s.csv"));
+    let o = dronecine(&[
+        "compile",
+        "shots/square.psl",
+        "-o",
+        mcap.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--preview",
+        afile.join("prev").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--preview"), "{}", stderr(&o));
+    assert!(!mcap.exists() && !csv.exists(), "partial outputs left");
+}
