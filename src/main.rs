@@ -193,10 +193,10 @@ enum Command {
         #[arg(long)]
         watch: bool,
         /// One JSON object per line (keys ctrl_state, battery_percent, theta_deg, phi_deg,
-        /// psi_deg, altitude_m, velocity_mps, flags, …).
+        /// psi_deg, altitude_m, velocity_mps, flags, navdata_rejected, implausible, problems, …).
         #[arg(long)]
         json: bool,
-        /// Seconds to wait for the drone's navdata before giving up.
+        /// Seconds to wait for the drone's first valid navdata packet before giving up.
         #[arg(
             long,
             value_name = "SECONDS",
