@@ -19,6 +19,7 @@ dronecine_diag::codes! {
         ProfileOff => "compile::profile_off": "An over-the-shoulder hold sees an actor from a side far from the profile the script names.",
         InMargin => "compile::in_margin": "A framing puts the camera inside the stage's safety margin: the drone is held at the margin, off its framing.",
         BeyondReach => "compile::beyond_reach": "An over-the-shoulder's background size is just out of reach where the actors stand: the actor is framed a little larger.",
+        TooShortForRate => "compile::too_short_for_rate": "A shot is shorter than one control period at the rate it is compiled or flown at: it has no tick of its own.",
     }
 }
 

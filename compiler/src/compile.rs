@@ -62,6 +62,7 @@ pub fn compile<E>(
         });
     };
     let mut diagnostics = static_warnings(script, profile);
+    diagnostics.extend(shorter_than_a_tick(script, opts.rate_hz));
     let blocking = Blocking::new(scene);
     diagnostics.extend(collisions(&blocking));
     let mut director = Director::new(script, scene, profile);
@@ -197,6 +198,42 @@ fn collisions(blocking: &Blocking) -> Vec<Diagnostic> {
         })
         .collect()
 }
+
+/// The shots shorter than one control period at `rate_hz`: between two ticks, such a shot
+/// is never flown (or flown for one tick, as if it were longer).
+fn shorter_than_a_tick(script: &Script, rate_hz: f64) -> Vec<Diagnostic> {
+    // Seconds as a person reads them: to the microsecond.
+    let micro = |s: f64| (s * 1e6).round() / 1e6;
+    let period_s = micro(1.0 / rate_hz);
+    script
+        .timeline
+        .iter()
+        .filter(|shot| (shot.end_s - shot.start_s) * rate_hz < 1.0 - 1e-9)
+        .map(|shot| {
+            let lasts_s = micro(shot.end_s - shot.start_s);
+            // The rate that gives the shot a tick, where a command can fly at it.
+            let needed_hz = (1.0 / lasts_s).ceil();
+            let faster = if needed_hz <= MAX_RATE_HZ {
+                format!(", or compile and shoot it at `--rate {needed_hz}` or faster")
+            } else {
+                String::new()
+            };
+            Diagnostic::error(
+                CompileCode::TooShortForRate,
+                shot.span,
+                format!(
+                    "this shot lasts {lasts_s} s, less than one control period at {rate_hz} Hz \
+                     ({period_s} s): it has no tick of its own"
+                ),
+            )
+            .with_label(format!("shorter than a tick at {rate_hz} Hz"))
+            .with_help(format!("make it last at least {period_s}s{faster}"))
+        })
+        .collect()
+}
+
+/// The fastest control rate a command takes (`compile --rate`, `shoot --rate`).
+const MAX_RATE_HZ: f64 = 1000.0;
 
 /// Warnings that need no flight: camera angles a drone without a gimbal cannot render.
 fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {

@@ -15,11 +15,29 @@ use dronecine_grammar::script::{OrbitCenter, PathShape};
 use crate::camera::Vec3;
 use crate::reference::ActorPose;
 
+/// `x` held within `lo..=hi`, as `f64::clamp` holds it, except that bounds the wrong way
+/// round (or NaN) do not panic: the upper bound wins over the lower, and a NaN bound holds
+/// nothing. The paths are planned from a script's numbers, whatever they are.
+pub(crate) fn bounded(x: f64, lo: f64, hi: f64) -> f64 {
+    let mut v = x;
+    if v < lo {
+        v = lo;
+    }
+    if v > hi {
+        v = hi;
+    }
+    v
+}
+
 /// Fraction of the path (0 → 1) and its rate (1/s) at `t_s` into a path of `duration_s`,
-/// with ramps of `ramp_s` at each end.
+/// with ramps of `ramp_s` at each end. A path without a positive, finite length of time
+/// jumps from its start to its end at 0 s.
 pub fn ease(t_s: f64, duration_s: f64, ramp_s: f64) -> (f64, f64) {
-    let t = t_s.clamp(0.0, duration_s);
-    let r = ramp_s.clamp(1e-9, duration_s / 2.0);
+    let t = bounded(t_s, 0.0, duration_s);
+    let r = bounded(ramp_s, 1e-9, duration_s / 2.0);
+    if !(r > 0.0 && duration_s - r > 0.0 && duration_s.is_finite()) {
+        return (if t_s > 0.0 { 1.0 } else { 0.0 }, 0.0);
+    }
     // Ramp speed factor σ(u) (min-jerk), its integral Σ(u) = 2.5u⁴ − 3u⁵ + u⁶ (Σ(1) = ½).
     let sigma = |u: f64| u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
     let big_sigma = |u: f64| u.powi(4) * (2.5 - 3.0 * u + u * u);
@@ -124,12 +142,23 @@ impl Piece {
                 sweep_rad,
             } => {
                 let sign = sweep_rad.signum();
-                let ang = start_rad + sign * s / radius;
+                // A corner without a radius (a square without a side) is a point: it turns
+                // the tangent without moving.
+                let ang = if radius > 0.0 {
+                    start_rad + sign * s / radius
+                } else {
+                    start_rad
+                };
                 let (sn, cs) = math::sin_cos(ang);
+                let curvature = if radius > 0.0 {
+                    [-cs / radius, -sn / radius]
+                } else {
+                    [0.0, 0.0]
+                };
                 (
                     [center[0] + radius * cs, center[1] + radius * sn],
                     [-sign * sn, sign * cs],
-                    [-cs / radius, -sn / radius],
+                    curvature,
                 )
             }
         }
@@ -166,7 +195,14 @@ impl PathPlan {
             } => {
                 let perimeter = 4.0 * side_m;
                 let cruise = perimeter / (duration_s - ramp);
-                let r = (cruise * cruise / (0.5 * accel_mps2)).clamp(0.02, side_m / 2.0 * 0.9);
+                // A square too small for the smallest corner takes the largest it has room
+                // for; one without room (or a speed that is no number) has sharp corners.
+                let r = bounded(
+                    cruise * cruise / (0.5 * accel_mps2),
+                    0.02,
+                    side_m / 2.0 * 0.9,
+                );
+                let r = if r >= 0.0 { r } else { 0.0 };
                 Geometry::Rounded {
                     pieces: rounded_square(*side_m, *center_m, r, *clockwise),
                     length_m: 0.0,
@@ -245,7 +281,11 @@ impl PathPlan {
         for _ in 0..4 {
             let cruise = length / (duration_s - plan.ramp_s);
             let wanted = 1.875 * cruise / (0.5 * accel_mps2);
-            plan.ramp_s = wanted.clamp(ramp, duration_s / 3.0);
+            // A path of no length in no time keeps the shortest ramps.
+            if wanted.is_nan() {
+                break;
+            }
+            plan.ramp_s = bounded(wanted, ramp, duration_s / 3.0);
         }
         plan
     }
@@ -531,6 +571,114 @@ mod tests {
         for t in [0.3, 1.2, 1.5, 7.0, 18.9, 19.7] {
             let num = (ease(t + h, d, r).0 - ease(t - h, d, r).0) / (2.0 * h);
             assert!((num - ease(t, d, r).1).abs() < 1e-6, "{t}");
+        }
+    }
+
+    /// Numbers at the extremes of an `f64`, and the ordinary ones between.
+    const EXTREMES: [f64; 16] = [
+        0.0,
+        -0.0,
+        5e-324,
+        2.2e-308,
+        1e-12,
+        1e-9,
+        2e-9,
+        1e-3,
+        0.01,
+        1.0,
+        20.0,
+        1e9,
+        1e308,
+        -1.0,
+        f64::INFINITY,
+        f64::NAN,
+    ];
+
+    /// `ease` never panics, whatever its arguments; with a duration and a time that are
+    /// numbers, its fraction stays within 0..=1 and its rate is a number.
+    #[test]
+    fn ease_takes_any_numbers() {
+        for t in EXTREMES {
+            for d in EXTREMES {
+                for r in EXTREMES {
+                    let (s, v) = ease(t, d, r);
+                    if !(t.is_nan() || d.is_nan()) {
+                        assert!((0.0..=1.0).contains(&s), "ease({t}, {d}, {r}) = {s}");
+                        assert!(v.is_finite() && v >= 0.0, "ease({t}, {d}, {r}) rate {v}");
+                    }
+                }
+            }
+        }
+        // A path that takes no time is at its start at 0 s and at its end after.
+        assert_eq!(ease(0.0, 0.0, 1.5), (0.0, 0.0));
+        assert_eq!(ease(1.0, 0.0, 1.5), (1.0, 0.0));
+        assert_eq!(ease(1.0, -3.0, 1.5), (1.0, 0.0));
+    }
+
+    /// A plan is made and evaluated without a panic for every shape at any size and
+    /// duration; for sizes and durations the language accepts, every point is finite.
+    #[test]
+    fn paths_take_any_numbers() {
+        let shapes = |x: f64| {
+            [
+                PathShape::Square {
+                    side_m: x,
+                    center_m: [0.0, 0.0],
+                    altitude_m: 1.5,
+                    clockwise: false,
+                },
+                PathShape::Square {
+                    side_m: 2.0,
+                    center_m: [x, -x],
+                    altitude_m: x,
+                    clockwise: true,
+                },
+                PathShape::Helix {
+                    radius_m: x,
+                    center_m: [0.0, 0.0],
+                    from_m: 1.0,
+                    to_m: x,
+                    turns: x,
+                    clockwise: false,
+                },
+                PathShape::Orbit {
+                    center: OrbitCenter::Point { at_m: [x, 0.0] },
+                    radius_m: x,
+                    altitude_m: 1.5,
+                    turns: x,
+                    clockwise: true,
+                },
+                PathShape::Waypoints {
+                    file: "x.csv".into(),
+                    points_m: vec![[0.0, 0.0, 1.0], [x, x, 1.0], [x, 0.0, x]],
+                },
+                PathShape::Waypoints {
+                    file: "x.csv".into(),
+                    points_m: vec![[x, 0.0, 1.0]],
+                },
+            ]
+        };
+        // What the language accepts: lengths 0.01..=1000 m, turns up to 100, durations from
+        // 1 ms to a day.
+        let accepted =
+            |x: f64, d: f64| (0.01..=100.0).contains(&x) && (1e-3..=86_400.0).contains(&d);
+        for x in EXTREMES {
+            for d in EXTREMES {
+                for shape in shapes(x) {
+                    let plan =
+                        PathPlan::new(&shape, d, 1.0, Vec3::new(1.0, 0.0, 1.0), |_| None, &[]);
+                    for t in [0.0, d / 3.0, d / 2.0, d, d + 1.0, -1.0] {
+                        let p = plan.at(t, &[]);
+                        if accepted(x, d) {
+                            let all = [p.p, p.v, p.a];
+                            assert!(
+                                all.iter().all(|v| v.iter().all(|c| c.is_finite())),
+                                "{shape:?} for {d} s at {t} s: {p:?}"
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 

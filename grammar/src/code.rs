@@ -45,6 +45,7 @@ dronecine_diag::codes! {
         InvalidUtf8 => "psl::invalid_utf8": "The file is not UTF-8 text.",
         Internal => "psl::internal": "The parser met a case it does not handle; please report it.",
         ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
+        TooShort => "psl::too_short": "A duration is shorter than 1 ms, the shortest control period dronecine flies at.",
     }
 }
 

@@ -33,6 +33,19 @@ pub struct Options<'o> {
 const MAX_TIME_S: f64 = 86_400.0;
 const EPS_S: f64 = 1e-9;
 
+/// Shortest duration the language accepts: one control period at the fastest rate dronecine
+/// flies (`shoot --rate` takes up to 1000 Hz). A shorter shot or movement has no tick of its
+/// own.
+pub const MIN_DURATION_S: f64 = 0.001;
+
+/// Smallest size of a number other than 0: a non-zero digit within nine after the point, as
+/// nine digits before it bound the largest. Smaller numbers (subnormals among them) are slips
+/// of the keyboard, and no later stage is built for them.
+pub const MIN_MAGNITUDE: f64 = 1e-9;
+
+/// Shortest path length (side, radius, altitude): a drone holds its place to centimetres.
+pub const MIN_PATH_LENGTH_M: f64 = 0.01;
+
 /// Resolve a parsed file. Returns the script when no diagnostic is an error.
 pub fn resolve<'a>(file: &ast::File<'a>, opts: &Options<'_>) -> (Option<Script>, Vec<Diagnostic>) {
     let mut failed_lines = Vec::new();
@@ -145,6 +158,8 @@ struct Resolver<'o, 'a> {
 
 fn fmt_num(v: f64) -> String {
     let r = (v * 1000.0).round() / 1000.0;
+    // A small number that rounds to 0 is shown in full, not as the 0 it is not.
+    let r = if r == 0.0 && v != 0.0 { v } else { r };
     let s = format!("{r}");
     if s == "-0" {
         "0".into()
@@ -170,7 +185,24 @@ impl<'o, 'a> Resolver<'o, 'a> {
         what: &str,
         unit_optional: bool,
     ) -> Option<f64> {
-        let mut value = q.value;
+        let value = self.measure(q, dim, what, unit_optional)?;
+        self.not_tiny(q, what)?;
+        Some(if dim == Dim::Angle {
+            value.to_radians()
+        } else {
+            value
+        })
+    }
+
+    /// [`Self::quantity`] before its conversion to radians and its check against numbers
+    /// too close to 0: the unit and the largest size.
+    fn measure(
+        &mut self,
+        q: &Quantity<'_>,
+        dim: Dim,
+        what: &str,
+        unit_optional: bool,
+    ) -> Option<f64> {
         match q.unit {
             None if !unit_optional => {
                 self.err(
@@ -213,7 +245,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 return None;
             }
         }
-        if !value.is_finite() || value.abs() > 1e9 {
+        if !q.value.is_finite() || q.value.abs() > 1e9 {
             self.err(
                 Diagnostic::error(
                     PslCode::OutOfRange,
@@ -224,10 +256,25 @@ impl<'o, 'a> Resolver<'o, 'a> {
             );
             return None;
         }
-        if dim == Dim::Angle {
-            value = value.to_radians();
+        Some(q.value)
+    }
+
+    /// Refuse a number other than 0 smaller in size than [`MIN_MAGNITUDE`].
+    fn not_tiny(&mut self, q: &Quantity<'_>, what: &str) -> Option<()> {
+        if q.value != 0.0 && q.value.abs() < MIN_MAGNITUDE {
+            self.err(
+                Diagnostic::error(
+                    PslCode::OutOfRange,
+                    q.span,
+                    format!("{what} `{}` is too small", shorten(q.number)),
+                )
+                .with_help(
+                    "write 0 where 0 is meant, or a number with a non-zero digit within nine after the point",
+                ),
+            );
+            return None;
         }
-        Some(value)
+        Some(())
     }
 
     /// A unitless number (turns, screen coordinates).
@@ -244,13 +291,17 @@ impl<'o, 'a> Resolver<'o, 'a> {
             return None;
         }
         if !q.value.is_finite() || q.value.abs() > 1e9 {
-            self.err(Diagnostic::error(
-                PslCode::OutOfRange,
-                q.span,
-                format!("{what} `{}` is too large", shorten(q.number)),
-            ));
+            self.err(
+                Diagnostic::error(
+                    PslCode::OutOfRange,
+                    q.span,
+                    format!("{what} `{}` is too large", shorten(q.number)),
+                )
+                .with_help("write a number of at most nine digits before the point"),
+            );
             return None;
         }
+        self.not_tiny(q, what)?;
         Some(q.value)
     }
 
@@ -296,7 +347,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
     }
 
     fn duration(&mut self, d: &ast::Duration<'_>) -> Option<f64> {
-        let v = self.quantity(&d.value, Dim::Time, "the duration", false)?;
+        let v = self.measure(&d.value, Dim::Time, "the duration", false)?;
         if v <= 0.0 {
             self.err(
                 Diagnostic::error(
@@ -309,6 +360,25 @@ impl<'o, 'a> Resolver<'o, 'a> {
                 )
                 .with_label("not a positive duration")
                 .with_help("give it a positive length such as `for 4s`"),
+            );
+            return None;
+        }
+        if v < MIN_DURATION_S {
+            self.err(
+                Diagnostic::error(
+                    PslCode::TooShort,
+                    d.value.span,
+                    format!(
+                        "the duration `{}s` is shorter than 1 ms, one control period at the \
+                         fastest rate",
+                        shorten(d.value.number)
+                    ),
+                )
+                .with_label("shorter than one tick")
+                .with_help(
+                    "make it at least `0.001s`, one tick at 1000 Hz (a shot on film lasts \
+                     seconds, such as `4s`)",
+                ),
             );
             return None;
         }
@@ -1236,7 +1306,20 @@ impl<'o, 'a> Resolver<'o, 'a> {
             }
             Some(_) => return bad(self, "has more than three digits of milliseconds"),
         };
-        Some((h * 3600 + m * 60 + s) as f64 + frac_s)
+        let at_s = (h * 3600 + m * 60 + s) as f64 + frac_s;
+        if at_s > MAX_TIME_S {
+            self.err(
+                Diagnostic::error(
+                    PslCode::BadTimecode,
+                    t.span,
+                    format!("timecode `{}` is past 24:00:00", t.text),
+                )
+                .with_label("more than a day")
+                .with_help("a script runs at most a day: write a timecode up to `24:00:00`"),
+            );
+            return None;
+        }
+        Some(at_s)
     }
 
     fn shot_body(
@@ -1867,6 +1950,25 @@ impl<'o, 'a> Resolver<'o, 'a> {
             match nums.as_slice() {
                 [Some(x), Some(y), Some(z)] => {
                     let p = [*x, *y, *z];
+                    let tiny = p.iter().position(|v| *v != 0.0 && v.abs() < MIN_MAGNITUDE);
+                    if let Some(k) = tiny {
+                        self.err(
+                            Diagnostic::error(
+                                PslCode::OutOfRange,
+                                file.span,
+                                format!(
+                                    "`{}` line {}: `{}` is too small",
+                                    file.text,
+                                    i + 1,
+                                    shorten(fields[k])
+                                ),
+                            )
+                            .with_help(
+                                "write 0 where 0 is meant, or a number with a non-zero digit within nine after the point",
+                            ),
+                        );
+                        return None;
+                    }
                     if stage.is_some_and(|s| !s.contains(p)) {
                         self.err(
                             Diagnostic::error(
@@ -1952,8 +2054,8 @@ impl PathParams<'_, '_> {
         false
     }
 
-    /// The length given as `key` in metres, if given and valid; `positive`: at most 1000 m
-    /// and more than 0.
+    /// The length given as `key` in metres, if given and valid; `positive`: from
+    /// [`MIN_PATH_LENGTH_M`] to 1000 m.
     fn length(
         &self,
         r: &mut Resolver<'_, '_>,
@@ -1968,7 +2070,12 @@ impl PathParams<'_, '_> {
         };
         let v = r.quantity(q, Dim::Length, what, false)?;
         if positive {
-            r.range(v, q.span, what, Bounds::above(0.0, 1000.0, "m"))
+            r.range(
+                v,
+                q.span,
+                what,
+                Bounds::closed(MIN_PATH_LENGTH_M, 1000.0, "m"),
+            )
         } else {
             Some(v)
         }

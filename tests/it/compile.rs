@@ -1583,3 +1583,64 @@ fn an_over_the_shoulder_just_out_of_reach_is_told_with_a_fix_that_works() {
     let codes: Vec<dronecine_diag::Code> = c.diagnostics.iter().map(|d| d.code).collect();
     assert_eq!(codes, [CompileCode::Unframeable], "{:?}", c.diagnostics);
 }
+
+/// A shot shorter than one control period at the compile's rate is an error on its line,
+/// whose help names the rate that gives it a tick: there it compiles. A shot of exactly one
+/// period is flown for its tick.
+#[test]
+fn a_shot_shorter_than_a_tick_is_an_error_on_its_line() {
+    let src = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+               MS on A front for 4s\n\
+               cut to path square side 2m center (0, 0) altitude 1.5m for 0.004s\n\
+               cut to MS on A front for 0.01s\n";
+    let script = script_of(src);
+    let compile_at = |rate_hz: f64| {
+        compile::<()>(&script, &ardrone(), &Options { rate_hz }, |s, _| {
+            assert!(s.position_m.iter().all(|x| x.is_finite()), "{s:?}");
+            Ok(())
+        })
+        .unwrap()
+    };
+    let c = compile_at(100.0);
+    let told = with_code(&c, CompileCode::TooShortForRate);
+    assert_eq!(told.len(), 1, "{:?}", c.diagnostics);
+    let d = told[0];
+    assert!(d.is_error());
+    assert_eq!(
+        &src[d.span.start..d.span.end],
+        "cut to path square side 2m center (0, 0) altitude 1.5m for 0.004s"
+    );
+    assert!(d.message.contains("0.004 s"), "{}", d.message);
+    let help = d.help.as_deref().unwrap();
+    assert!(help.contains("`--rate 250`"), "{help}");
+    // At 250 Hz the path has its tick (and the 10 ms shot too); at 50 Hz neither has.
+    let c = compile_at(250.0);
+    assert!(
+        with_code(&c, CompileCode::TooShortForRate).is_empty(),
+        "{:?}",
+        c.diagnostics
+    );
+    let c = compile_at(50.0);
+    assert_eq!(with_code(&c, CompileCode::TooShortForRate).len(), 2);
+    // The shortest shot the language takes has its tick at 1000 Hz, and no suggested rate
+    // below it.
+    let one_ms = script_of(
+        "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) facing 0deg\n\
+         MS on A front for 0.001s\n",
+    );
+    let c = compile::<()>(&one_ms, &ardrone(), &Options { rate_hz: 1000.0 }, |_, _| {
+        Ok(())
+    })
+    .unwrap();
+    assert!(
+        with_code(&c, CompileCode::TooShortForRate).is_empty(),
+        "{:?}",
+        c.diagnostics
+    );
+    let c = compile::<()>(&one_ms, &ardrone(), &Options::default(), |_, _| Ok(())).unwrap();
+    let help = with_code(&c, CompileCode::TooShortForRate)[0]
+        .help
+        .clone()
+        .unwrap();
+    assert!(help.contains("`--rate 1000`"), "{help}");
+}

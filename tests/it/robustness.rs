@@ -250,3 +250,130 @@ fn binary_input_is_reported_not_parsed() {
     assert!(err.1.iter().all(|d| d.code == PslCode::InvalidUtf8));
     exercise(&bytes);
 }
+
+/// Numbers as a script may write them at the extremes: 0 and -0, subnormals, 1e-12, the
+/// edges of each range (1 ms, 1 cm, 1000 m, a day, nine digits) and past them, 1e308.
+fn extreme_number() -> impl Strategy<Value = String> {
+    let subnormal = format!("0.{}5", "0".repeat(323));
+    let huge = format!("1{}", "0".repeat(308));
+    let fixed: Vec<String> = [
+        "0",
+        "-0",
+        "0.000000000001",
+        "0.000000001",
+        "0.0009999",
+        "0.001",
+        "0.002",
+        "0.0099",
+        "0.01",
+        "0.05",
+        "1",
+        "2",
+        "4",
+        "100",
+        "100.5",
+        "999.999",
+        "1000",
+        "1000.001",
+        "86400",
+        "86400.001",
+        "999999999",
+        "1000000000",
+        "-1",
+        "-0.000000001",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .chain([subnormal, huge])
+    .collect();
+    prop_oneof![
+        3 => prop::sample::select(fixed),
+        // Any number between, written as Rust writes it: in full, never with an exponent.
+        1 => (-2000.0f64..2000.0).prop_map(|v| format!("{v}")),
+    ]
+}
+
+/// A scene whose durations and path numbers are ordinary but for one to three, which come
+/// from [`extreme_number`].
+fn extreme_script() -> impl Strategy<Value = String> {
+    // side or radius, centre x and y, altitude or start height, end height, turns, the
+    // path's duration, the first shot's, the walk's start and its duration, A's facing.
+    const ORDINARY: [&str; 11] = [
+        "2", "0.5", "-0.5", "1.5", "2.5", "1", "10", "4", "1", "2", "0",
+    ];
+    (
+        prop::sample::select(&["8m x 6m x 3m", "1000m x 1000m x 1000m"][..]),
+        0usize..6,
+        prop::collection::vec((0..ORDINARY.len(), extreme_number()), 1..=3),
+    )
+        .prop_map(|(stage, shape, extremes)| {
+            let mut n: Vec<String> = ORDINARY.iter().map(|s| s.to_string()).collect();
+            for (slot, value) in extremes {
+                n[slot] = value;
+            }
+            let [a, b, c, d, e, f, t0, t1, t2, t3, facing] = &n[..] else {
+                unreachable!()
+            };
+            let path = match shape {
+                0 => format!("path square side {a}m center ({b}, {c}) altitude {d}m for {t0}s"),
+                1 => format!(
+                    "path helix radius {a}m center ({b}, {c}) from {d}m to {e}m turns {f} for {t0}s"
+                ),
+                2 => format!(
+                    "path orbit around A radius {a}m altitude {d}m turns {f} clockwise for {t0}s"
+                ),
+                3 => format!(
+                    "path orbit radius {a}m center ({b}, {c}) altitude {d}m turns {f} for {t0}s"
+                ),
+                4 => format!("MS on A front for {t0}s\nthen dolly to MS on A back over {t3}s"),
+                _ => format!("MS on A front screen ({b}, {c}) for {t0}s\nthen hold for {t3}s"),
+            };
+            format!(
+                "stage {stage}\ndrone ardrone2\nactor A height 1.8m at (0, 0) facing {facing}deg\n\
+                 at {t2}s A walks to ({b}, {c}) over {t3}s\n\
+                 MS on A front for {t1}s\ncut to {path}\n"
+            )
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// A script with extreme durations and path numbers is refused with diagnostics (each
+    /// with a place and a help line), or it compiles without a panic, at every rate a
+    /// command takes, to finite samples; a shot shorter than one tick at the rate is an
+    /// error on its line.
+    #[test]
+    fn extreme_numbers_are_refused_or_compile(src in extreme_script(), rate in prop::sample::select(&[1.0, 10.0, 100.0, 1000.0][..])) {
+        use dronecine_compiler::compile::{compile, Options as Rate};
+        use dronecine_compiler::CompileCode;
+        let checked = check(&src, &Options::default());
+        let script = if checked.has_errors() { None } else { checked.script.clone() };
+        let Some(script) = script else {
+            prop_assert!(checked.has_errors(), "{src}");
+            for d in &checked.diagnostics {
+                prop_assert!(d.span.end <= src.len() && d.help.is_some(), "{src}\n{d:?}");
+            }
+            return Ok(());
+        };
+        // Compiled at the rates a command takes, where that stays quick.
+        if script.duration_s * rate > 50_000.0 {
+            return Ok(());
+        }
+        let profile = dronecine_profile::Profile::builtin("ardrone2").unwrap();
+        let c = compile(&script, &profile, &Rate { rate_hz: rate }, |s, _| {
+            let all = s.position_m.iter().chain(&s.velocity_mps).chain(&s.acceleration_mps2);
+            assert!(all.copied().all(f64::is_finite), "{src}\n{s:?}");
+            assert!(s.heading_rad.is_finite() && s.camera_pitch_rad.is_finite(), "{src}\n{s:?}");
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        for shot in &script.timeline {
+            let short = (shot.end_s - shot.start_s) * rate < 1.0 - 1e-9;
+            let told = c.diagnostics.iter().any(|d| {
+                d.code == CompileCode::TooShortForRate && d.span == shot.span && d.is_error()
+            });
+            prop_assert_eq!(short, told, "{}\n{:?}", src, c.diagnostics);
+        }
+    }
+}

@@ -235,3 +235,104 @@ fn a_then_hold_to_another_composition_is_a_move() {
             .contains(&PslCode::DurationKeyword)
     );
 }
+
+/// Every duration is at least one tick at the fastest control rate (1 ms): shots, moves,
+/// holds, paths and actor movements alike; 1 ms itself is a duration.
+#[test]
+fn durations_shorter_than_a_millisecond_are_refused() {
+    use dronecine_grammar::resolve::MIN_DURATION_S;
+    assert_eq!(MIN_DURATION_S, 0.001);
+    for body in [
+        "MS on A for 0.0009s\n",
+        "MS on A for 0.000000001s\n",
+        "MS on A for 4s\nthen dolly to MS on A back over 0.0005s\n",
+        "MS on A for 4s\nthen hold for 0.0001s\n",
+        "path square side 2m altitude 1.5m for 0.000000001s\n",
+        "path helix radius 1m from 1m to 2m for 0.0009999s\n",
+        "path orbit around A radius 1m altitude 1.5m for 0.0009s\n",
+        "at 1s A walks to (1, 1) over 0.0001s\nMS on A for 4s\n",
+        "at 1s A turns to 90deg over 0.000000001s\nMS on A for 4s\n",
+    ] {
+        assert_eq!(codes(body), [PslCode::TooShort], "{body}");
+    }
+    let s = ok("MS on A for 0.001s\nat 1s cut to MS on B for 4s\n");
+    assert_eq!(s.timeline[0].end_s, 0.001);
+    // Zero and below keep their own code.
+    assert_eq!(codes("MS on A for 0s\n"), [PslCode::NonPositiveDuration]);
+    assert_eq!(codes("MS on A for -0s\n"), [PslCode::NonPositiveDuration]);
+}
+
+/// A number other than 0 is at least 0.000000001 in size, wherever it stands; 0 and -0 are
+/// 0.
+#[test]
+fn numbers_too_close_to_zero_are_refused() {
+    let subnormal = format!("0.{}5", "0".repeat(320));
+    for body in [
+        "actor C height 1.8m at (0.0000000001, 1) facing 0deg\nMS on C for 4s\n".to_string(),
+        "actor C height 1.8m at (1, 1) facing -0.0000000001deg\nMS on C for 4s\n".into(),
+        format!("actor C height 1.8m at (1, {subnormal}) facing 0deg\nMS on C for 4s\n"),
+        "MS on A screen (0.00000000001, 0) for 4s\n".into(),
+        format!("at {subnormal}s A walks to (1, 1) over 1s\nMS on A for 4s\n"),
+        "at 0.0000000001s MS on A for 4s\n".into(),
+        format!("path orbit around A radius 1m altitude 1.5m turns {subnormal} for 10s\n"),
+    ] {
+        assert_eq!(codes(&body), [PslCode::OutOfRange], "{body}");
+    }
+    let s = ok("actor C height 1.8m at (-1, 0.000000001) facing -0deg\nMS on C for 4s\n");
+    let c = &s.scene.unwrap().actors[2];
+    assert_eq!(c.position_m, [-1.0, 0.000000001]);
+}
+
+/// A path's side, radius and altitude are at least 1 cm.
+#[test]
+fn path_lengths_are_at_least_a_centimetre() {
+    for body in [
+        "path square side 0.009m altitude 1.5m for 20s\n",
+        "path square side 2m altitude 0.000000001m for 20s\n",
+        "path helix radius 0.0099m from 1m to 2m for 20s\n",
+        "path orbit around A radius 0.001m altitude 1.5m for 20s\n",
+    ] {
+        assert_eq!(codes(body), [PslCode::OutOfRange], "{body}");
+    }
+    let s = ok("path square side 0.01m altitude 0.01m for 20s\n");
+    assert!(matches!(
+        s.timeline[0].content,
+        ShotContent::Path(Path { shape: PathShape::Square { side_m, altitude_m, .. }, .. })
+            if side_m == 0.01 && altitude_m == 0.01
+    ));
+}
+
+/// A timecode past a day is refused: the script's clock runs a day at most.
+#[test]
+fn timecodes_past_a_day_are_refused() {
+    let c = check(
+        "1 00:00:01 --> 24:00:00 MS on Rick front\n2 24:00:00 --> 999999:00:00 MS on Ilsa\n",
+        &Options::default(),
+    );
+    let got: Vec<_> = c.diagnostics.iter().map(|d| d.code).collect();
+    assert_eq!(got, [PslCode::BadTimecode], "{:?}", c.diagnostics);
+    assert!(c.diagnostics[0].message.contains("999999:00:00"));
+    assert!(c.diagnostics[0].help.is_some());
+}
+
+/// A waypoint number closer to 0 than 0.000000001 (a subnormal among them) is refused; 0
+/// and -0 are 0.
+#[test]
+fn waypoint_numbers_too_close_to_zero_are_refused() {
+    let dir = std::env::temp_dir().join(format!("dronecine-wp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("tiny.csv"), "0, 0, 1\n1e-320, 1, 1\n").unwrap();
+    std::fs::write(dir.join("zero.csv"), "-0, 0, 1\n1e-9, 1, 1\n").unwrap();
+    let opts = Options {
+        known_drones: &[],
+        base_dir: Some(&dir),
+    };
+    let run = |file: &str| check(&format!("{HEAD}path waypoints \"{file}\" for 10s\n"), &opts);
+    let tiny = run("tiny.csv");
+    let got: Vec<_> = tiny.diagnostics.iter().map(|d| d.code).collect();
+    assert_eq!(got, [PslCode::OutOfRange], "{:?}", tiny.diagnostics);
+    assert!(tiny.diagnostics[0].message.contains("line 2"));
+    let zero = run("zero.csv");
+    assert!(!zero.has_errors(), "{:?}", zero.diagnostics);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
