@@ -13,8 +13,17 @@ from collections import Counter
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-# Topics whose message carries its own time (`t_s`) equal to the log time.
-TIMED = {"/reference", "/actors", "/estimate", "/command", "/framing", "/servo/tick"}
+# Topics whose message carries its own time (`t_s`) equal to the log time (a key frame on
+# `/servo/state`: the time of the tick whose state it holds).
+TIMED = {
+    "/reference",
+    "/actors",
+    "/estimate",
+    "/command",
+    "/framing",
+    "/servo/tick",
+    "/servo/state",
+}
 
 
 def check(path):

@@ -1,5 +1,7 @@
 //! `dronecine replay`: re-run the controller of a flight log on its logged inputs, check that
-//! it gives the logged commands bit for bit, and print the flight's report again.
+//! it gives the logged commands bit for bit, and print the flight's report again. After damage
+//! in the log it resumes at the next key frame (the controller's state the log keeps at the
+//! start of each chunk) and says so.
 
 use std::path::Path;
 use std::process::ExitCode;
@@ -32,6 +34,8 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
         let value = serde_json::json!({
             "ticks": r.ticks,
             "unreplayed": r.unreplayed,
+            "resumed": r.resumed,
+            "state_mismatches": r.state_mismatches,
             "damage": log.damage.iter().map(|d| serde_json::json!({
                 "offset": d.offset,
                 "detail": d.detail,
@@ -74,6 +78,7 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             )
         );
     }
+    let mut ok = true;
     match &r.first_mismatch {
         None => {
             if r.ticks > 0 {
@@ -91,19 +96,9 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
                      first tick, or the log was cut before it): nothing to check"
                 );
             }
-            if r.unreplayed == 0 {
-                return ExitCode::SUCCESS;
-            }
-            let at = log.ticks.get(r.ticks).map_or(f64::NAN, |t| t.input.t_s);
-            errln!(
-                "error: the {} ticks after the damage (from t = {at:.3} s) are in the report but \
-                 were not replayed: the controller's state after a gap depends on the ticks lost \
-                 in it",
-                r.unreplayed
-            );
-            ExitCode::FAILURE
         }
         Some(m) => {
+            ok = false;
             errln!(
                 "error: replay differs from the log on {} of {} ticks; first at tick {} \
                  (t = {:.3} s): logged {:?}, replayed {:?}",
@@ -114,8 +109,38 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
                 m.logged,
                 m.replayed
             );
-            ExitCode::FAILURE
         }
+    }
+    if r.resumed > 0 {
+        errln!(
+            "replay: resumed after {} {} in the log from the controller's state logged at the \
+             start of the next intact chunk (the ticks lost in the damage are not checked)",
+            r.resumed,
+            if r.resumed == 1 { "gap" } else { "gaps" }
+        );
+    }
+    if r.state_mismatches > 0 {
+        ok = false;
+        errln!(
+            "error: the replayed controller's state differs from the state the log keeps at {} \
+             of its chunk starts",
+            r.state_mismatches
+        );
+    }
+    if let Some(k) = r.first_unreplayed {
+        ok = false;
+        let at = log.ticks.get(k).map_or(f64::NAN, |t| t.input.t_s);
+        errln!(
+            "error: {} ticks after damage (the first at t = {at:.3} s) are in the report but \
+             were not replayed: the controller's state after a gap depends on the ticks lost in \
+             it, and no key frame after the gap gives it (a log written without key frames)",
+            r.unreplayed
+        );
+    }
+    if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
     }
 }
 
@@ -128,15 +153,26 @@ pub fn damage_warnings(file: &Path, log: &FlightLog) -> Vec<String> {
         .iter()
         .map(|d| match d.resumed_at {
             Some(resumed) => {
+                // Consecutive ticks on either side, or the flight's first tick after it (its
+                // start mark read): no tick was in what was skipped.
+                let period_s = 1.0 / log.header.rate_hz;
+                let first = log
+                    .key_frames
+                    .first()
+                    .is_some_and(|f| f.tick == 0 && f.state.is_none());
                 let lost = match (d.tick.checked_sub(1).and_then(t), t(d.tick)) {
-                    (Some(a), Some(b)) => format!("the ticks between t = {a:.3} s and {b:.3} s"),
-                    (None, Some(b)) => format!("the ticks before t = {b:.3} s"),
-                    (Some(a), None) => format!("the ticks after t = {a:.3} s"),
-                    (None, None) => "no tick".to_string(),
+                    (Some(a), Some(b)) if b - a < 1.5 * period_s => "no tick is lost".to_string(),
+                    (None, Some(_)) if first => "no tick is lost".to_string(),
+                    (Some(a), Some(b)) => {
+                        format!("the ticks between t = {a:.3} s and {b:.3} s are lost")
+                    }
+                    (None, Some(b)) => format!("the ticks before t = {b:.3} s are lost"),
+                    (Some(a), None) => format!("the ticks after t = {a:.3} s are lost"),
+                    (None, None) => "no tick was read around it".to_string(),
                 };
                 format!(
                     "warning: `{name}` is damaged at byte {} ({}): skipped {} bytes to the next \
-                     intact chunk, at byte {resumed}; {lost} are lost",
+                     intact record, at byte {resumed}; {lost}",
                     d.offset,
                     d.detail,
                     resumed - d.offset

@@ -63,11 +63,12 @@ fn shoot_reports_json_logs_the_flight_and_replay_reproduces_it() {
     assert_eq!(replayed["report"], r, "replay gives the flight's report");
 
     // One flipped bit in a chunk in the middle: the rest of the log is still read, the
-    // damage named, the replay stops at it and says so (exit 1: not all of it was checked).
+    // damage named with the ticks it cost, and the replay resumes after it from the next
+    // chunk's key frame and checks every tick it read (exit 0) and says so.
     let damaged = dir.join("damaged.mcap");
     let offset = crate::common::damage_middle_chunk(&log, &damaged);
     let o = dronecine(&["replay", damaged.to_str().unwrap(), "--report", "json"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
         err.contains(&format!(
@@ -75,16 +76,40 @@ fn shoot_reports_json_logs_the_flight_and_replay_reproduces_it() {
         )),
         "{err}"
     );
-    assert!(err.contains("intact chunk, at byte"), "{err}");
-    assert!(err.contains("were not replayed"), "{err}");
+    assert!(err.contains("intact record, at byte"), "{err}");
+    assert!(err.contains("s are lost"), "{err}");
+    assert!(err.contains("resumed after 1 gap"), "{err}");
     let replayed = report(&o);
     assert_eq!(replayed["mismatches"], 0);
-    assert!(replayed["unreplayed"].as_u64().unwrap() > 0, "{replayed}");
+    assert_eq!(replayed["unreplayed"], 0, "{replayed}");
+    assert_eq!(replayed["resumed"], 1, "{replayed}");
+    assert!(replayed["ticks"].as_u64().unwrap() > 1000, "{replayed}");
     assert_eq!(replayed["damage"][0]["offset"], offset);
     assert_eq!(
         replayed["report"]["completed"], true,
         "read past the damage"
     );
+
+    // One flipped bit in the header's metadata record, before the first tick: the header is
+    // read from its copy under a CRC, and every tick is replayed.
+    let bytes = std::fs::read(&log).unwrap();
+    let at = bytes
+        .windows(21)
+        .position(|w| w == b"gain_roll_mps_per_rad")
+        .unwrap();
+    let mut flipped = bytes.clone();
+    flipped[at] ^= 0x20;
+    let header = dir.join("header.mcap");
+    std::fs::write(&header, &flipped).unwrap();
+    let o = dronecine(&["replay", header.to_str().unwrap(), "--report", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no tick is lost"), "{}", stderr(&o));
+    let replayed = report(&o);
+    assert_eq!(
+        (&replayed["unreplayed"], &replayed["mismatches"]),
+        (&0.into(), &0.into())
+    );
+    assert_eq!(replayed["report"], r, "the flight's report, whole");
 
     // Cut inside its first chunk: no tick to check, and replay says so.
     let (first, _) = crate::common::chunks(&log)[0];
@@ -411,8 +436,14 @@ fn a_full_disk_lands_the_drone_and_keeps_what_was_written() {
         "{err}"
     );
     let out = stdout(&o);
-    assert!(out.starts_with("ABORTED flight with ardrone2"), "the report: {out}");
-    assert!(err.contains("the flight log cannot be written: landing"), "-q tells failsafes: {err}");
+    assert!(
+        out.starts_with("ABORTED flight with ardrone2"),
+        "the report: {out}"
+    );
+    assert!(
+        err.contains("the flight log cannot be written: landing"),
+        "-q tells failsafes: {err}"
+    );
     assert_eq!(std::fs::metadata(&log).unwrap().len(), LIMIT_BYTES);
 
     // What was written is a flight: replay reads it, says it ends early, and reproduces

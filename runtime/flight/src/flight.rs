@@ -538,7 +538,16 @@ impl<'s, 'b> Flight<'s, 'b> {
             drone_state: state,
             latency_s,
         };
-        if let Err(e) = self.sink.tick(&record) {
+        // A log that starts a chunk after this tick opens it with the controller's state (a
+        // key frame), from which replay resumes after a gap.
+        let written = self.sink.tick(&record).and_then(|()| {
+            if self.sink.wants_key_frame() {
+                self.sink.key_frame(&self.controller.state())
+            } else {
+                Ok(())
+            }
+        });
+        if let Err(e) = written {
             self.log_error.get_or_insert(e);
             self.failsafe(t, "the flight log cannot be written: landing");
             land = true;

@@ -1,5 +1,6 @@
 //! The flight log's cost: writing ticks (per tick, and one hour = 360,000 ticks at 100 Hz with
-//! two actors), with and without LZ4 chunks, and reading the hour back; and what each group of
+//! two actors, a key frame at each chunk's start), with and without LZ4 chunks, and reading
+//! the hour back; and what each group of
 //! plot topics (`/tf`, `/measurement`, the 10 Hz plots; CDR) adds to the hour
 //! (`log_hour_without`: the hour with that group's rate set to nothing, so the difference with
 //! `log_hour/write_none` is the group's cost).
@@ -18,7 +19,8 @@ use dronecine_compiler::reference::{ActorPose, Sample};
 use dronecine_grammar::script::Stage;
 use dronecine_mcap::log::{FlightLog, FlightLogWriter, LogCompression, LogOptions, LogScene};
 use dronecine_mcap::record::{reference_of, FlightHeader, FramingRecord, Phase, TickRecord};
-use dronecine_servo::control::{Estimate, Measurement, TickInput, TickOutput};
+use dronecine_servo::control::{Controller, Estimate, Measurement, TickInput, TickOutput};
+use dronecine_servo::lqg::{LqgServo, ServoOptions};
 use dronecine_servo::setup::ControllerSetup;
 
 const RATE_HZ: f64 = 100.0;
@@ -188,6 +190,12 @@ fn write_with(path: &Path, ticks: &[Tick], n: usize, options: LogOptions) -> Dur
         actor_heights_m: &[1.7, 1.8],
     };
     let mut log = FlightLogWriter::create_with(path, &header(&names), &scene, options).unwrap();
+    // The controller's state, for the key frame at each chunk's start (as the flight loop
+    // gives it when the log asks).
+    let profile = dronecine_profile::Profile::builtin("ardrone2").unwrap();
+    let state = LqgServo::new(&profile, ServoOptions::default())
+        .unwrap()
+        .state();
     let (start, start_cpu) = (Instant::now(), cpu_time());
     for k in 0..n {
         let tick = &ticks[k % ticks.len()];
@@ -207,6 +215,9 @@ fn write_with(path: &Path, ticks: &[Tick], n: usize, options: LogOptions) -> Dur
             latency_s: Some(0.002),
         };
         log.write_tick(black_box(&record)).unwrap();
+        if log.wants_key_frame() {
+            log.write_key_frame(black_box(&state));
+        }
     }
     let ticking = match (start_cpu, cpu_time()) {
         (Some(a), Some(b)) => b.saturating_sub(a),

@@ -9,7 +9,7 @@
 use dronecine_backend::frames::Command;
 use dronecine_backend::{FlightState, MocapFrame};
 use dronecine_compiler::reference::{ActorPose, Sample};
-use dronecine_servo::control::{Reference, TickFault, TickInput, TickOutput};
+use dronecine_servo::control::{ControllerState, Reference, TickFault, TickInput, TickOutput};
 use dronecine_servo::setup::ControllerSetup;
 use serde::{Deserialize, Serialize};
 use std::io;
@@ -34,6 +34,16 @@ pub trait FlightSink {
     /// motion capture before take-off, the drone's own take-off and landing): a sink that
     /// keeps its records by time (the log's chunks) keeps them as on any other tick.
     fn idle(&mut self, _t_s: f64) -> io::Result<()> {
+        Ok(())
+    }
+    /// Whether the sink wants the controller's state after the tick it was just given (a
+    /// key frame: the log starts a chunk after that tick, and replay resumes from its key
+    /// frame after a gap). The flight loop asks after each tick it records.
+    fn wants_key_frame(&self) -> bool {
+        false
+    }
+    /// The controller's state after the tick last given, when the sink wants it.
+    fn key_frame(&mut self, _state: &ControllerState) -> io::Result<()> {
         Ok(())
     }
 }

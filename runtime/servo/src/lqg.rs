@@ -33,7 +33,8 @@ use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 use serde::Serialize;
 
 use crate::control::{
-    Controller, Estimate, Measurement, Reference, TickFault, TickInput, TickOutput,
+    Controller, ControllerState, Estimate, FilterState, LqgState, Measurement, Reference,
+    TickFault, TickInput, TickOutput,
 };
 use crate::dare::{self, DareError};
 use crate::model::{rotation6, Matrix6x3, ModelParams};
@@ -471,6 +472,30 @@ impl Estimator {
             velocity_mps: [self.x[0], self.x[1], self.x[2]],
             heading_rad: self.c,
         }
+    }
+
+    /// What the filters carry from tick to tick (the model and the noises are fixed at
+    /// construction).
+    pub fn filter_state(&self) -> FilterState {
+        FilterState {
+            x: rows(&self.x.transpose())[0],
+            p: rows(&self.p),
+            heading_rad: self.c,
+            heading_variance_rad2: self.pc,
+            lag_dt_s: self.lag_dt_s,
+            lag_body: rows(&self.lag_body.transpose())[0],
+        }
+    }
+
+    /// Puts the filters in `state` (from [`Estimator::filter_state`] of filters built the
+    /// same way).
+    pub fn restore_filter(&mut self, state: &FilterState) {
+        self.x = Vector9::from_fn(|i, _| state.x[i]);
+        self.p = Matrix9::from_fn(|i, j| state.p[i][j]);
+        self.c = state.heading_rad;
+        self.pc = state.heading_variance_rad2;
+        self.lag_dt_s = state.lag_dt_s;
+        self.lag_body = Vector3::from(state.lag_body);
     }
 }
 
@@ -926,6 +951,37 @@ impl Controller for LqgServo {
             estimate: self.estimator.estimate(),
             saturated,
         })
+    }
+
+    fn state(&self) -> ControllerState {
+        ControllerState::Lqg(LqgState {
+            filter: self.estimator.filter_state(),
+            sent_input: [self.sent[0], self.sent[1], self.sent[2]],
+            sent_yaw_rate_radps: self.sent_yaw_radps,
+            heading_pole_dt_s: self.k2_dt_s,
+            heading_pole: self.k2,
+            body_gain_dt_s: self.k_body_dt_s,
+            body_gain: rows(&self.k_body),
+            world_gain: rows(&self.k_world),
+        })
+    }
+
+    fn restore(&mut self, state: &ControllerState) -> Result<(), String> {
+        let ControllerState::Lqg(s) = state else {
+            return Err(format!(
+                "the state of a {} controller cannot be restored into the LQG servo",
+                state.kind()
+            ));
+        };
+        self.estimator.restore_filter(&s.filter);
+        self.sent = Vector3::from(s.sent_input);
+        self.sent_yaw_radps = s.sent_yaw_rate_radps;
+        self.k2_dt_s = s.heading_pole_dt_s;
+        self.k2 = s.heading_pole;
+        self.k_body_dt_s = s.body_gain_dt_s;
+        self.k_body = Gain::from_fn(|i, j| s.body_gain[i][j]);
+        self.k_world = Gain::from_fn(|i, j| s.world_gain[i][j]);
+        Ok(())
     }
 }
 

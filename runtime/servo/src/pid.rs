@@ -19,7 +19,9 @@
 use dronecine_profile::Profile;
 use nalgebra::Vector3;
 
-use crate::control::{Controller, Measurement, TickFault, TickInput, TickOutput};
+use crate::control::{
+    Controller, ControllerState, Measurement, PidState, TickFault, TickInput, TickOutput,
+};
 use crate::lqg::Estimator;
 use dronecine_backend::frames::{self, Command};
 
@@ -133,5 +135,28 @@ impl Controller for PidController {
             estimate: self.estimator.estimate(),
             saturated,
         })
+    }
+
+    fn state(&self) -> ControllerState {
+        ControllerState::Pid(PidState {
+            filter: self.estimator.filter_state(),
+            sent_input: [self.sent[0], self.sent[1], self.sent[2]],
+            sent_yaw_rate_radps: self.sent_yaw_radps,
+            integral_z_ms: self.integral_z_ms,
+        })
+    }
+
+    fn restore(&mut self, state: &ControllerState) -> Result<(), String> {
+        let ControllerState::Pid(s) = state else {
+            return Err(format!(
+                "the state of a {} controller cannot be restored into the PID baseline",
+                state.kind()
+            ));
+        };
+        self.estimator.restore_filter(&s.filter);
+        self.sent = Vector3::from(s.sent_input);
+        self.sent_yaw_radps = s.sent_yaw_rate_radps;
+        self.integral_z_ms = s.integral_z_ms;
+        Ok(())
     }
 }

@@ -847,20 +847,29 @@ impl<D: Drone, C: Clock> Drone for Battery<D, C> {
 #[test]
 fn implausible_battery_levels_are_refused_and_an_unknown_one_lands() {
     let with_battery = |from_s: f64, battery_percent: f64| {
-        fly_on(SCRIPT, |_| {}, None, |sim| Rig {
-            drone: Box::new(Battery {
-                inner: sim.drone(),
-                clock: sim.clock(),
-                from_s,
-                battery_percent,
-            }),
-            ..Rig::plain(sim)
-        })
+        fly_on(
+            SCRIPT,
+            |_| {},
+            None,
+            |sim| Rig {
+                drone: Box::new(Battery {
+                    inner: sim.drone(),
+                    clock: sim.clock(),
+                    from_s,
+                    battery_percent,
+                }),
+                ..Rig::plain(sim)
+            },
+        )
     };
     for level in [4_294_967_295.0, -1.0, f64::NAN] {
         let (r, rec, _) = with_battery(0.0, level);
         let d = refused_before_take_off(r, &rec);
-        assert_eq!(codes(&d), [PreflightCode::TelemetryImplausible.code()], "{level}: {d:?}");
+        assert_eq!(
+            codes(&d),
+            [PreflightCode::TelemetryImplausible.code()],
+            "{level}: {d:?}"
+        );
     }
     let (r, rec, state) = with_battery(action_s() + 1.0, f64::NAN);
     assert!(!r.unwrap().completed);

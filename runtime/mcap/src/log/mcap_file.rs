@@ -26,9 +26,10 @@
 //! # What it writes (the MCAP spec's records, little-endian)
 //!
 //! Magic; Header (profile, library); then, in the order called: Schema and Channel records
-//! (outside chunks, each once), Metadata and Attachment records (the open chunk is closed
-//! first, so the file keeps the calls' order), and Chunks (no compression or LZ4 frames,
-//! `uncompressed_crc` always set, no message indexes); at [`McapFile::finish`]: Data End
+//! (outside chunks, each once, and again inside the open chunk when asked:
+//! [`McapFile::repeat_schemas_and_channels`]), Metadata and Attachment records (the open chunk
+//! is closed first, so the file keeps the calls' order), and Chunks (no compression or LZ4
+//! frames, `uncompressed_crc` always set, no message indexes); at [`McapFile::finish`]: Data End
 //! (`data_section_crc` 0: not computed; a crash-cut log has no Data End to hold one), the
 //! summary section (schemas, channels, statistics, chunk indexes, attachment indexes,
 //! metadata indexes, each a group with its Summary Offset), the Footer with the summary's
@@ -369,12 +370,24 @@ impl McapFile {
         self.write_message_with(header, |c| c.extend_from_slice(data))
     }
 
+    /// Writes every schema and channel registered so far into the open chunk: a second copy
+    /// of them under the chunk's CRC (the first, outside chunks, has none), for a reader
+    /// whose first copy is damaged.
+    pub fn repeat_schemas_and_channels(&mut self) {
+        for (i, s) in self.schemas.iter().enumerate() {
+            write_schema(&mut self.chunk, i as u16 + 1, s);
+        }
+        self.chunk.extend_from_slice(&self.channel_records);
+    }
+
     /// Closes the open chunk (if it holds anything) in place, after the closed chunks before
     /// it; they are all handed to `out` once they reach [`McapFile::hand_over_bytes`].
     fn close_chunk(&mut self) -> io::Result<()> {
-        let Some((start_ns, end_ns)) = self.chunk_times.take() else {
+        if self.chunk.len() == self.closed + CHUNK_PREFIX {
             return Ok(());
-        };
+        }
+        // A chunk of schemas and channels only has no message time: 0.
+        let (start_ns, end_ns) = self.chunk_times.take().unwrap_or((0, 0));
         let at = self.closed;
         let uncompressed = &self.chunk[at + CHUNK_PREFIX..];
         let uncompressed_crc = crc32fast::hash(uncompressed);

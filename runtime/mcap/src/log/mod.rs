@@ -7,11 +7,13 @@
 //! [`FlightHeader`](crate::record::FlightHeader) under its own name, each value the field's
 //! JSON text (`"script_name"` → `"\"orbit.psl\""`, `"seed"` → `"42"` or `"null"`,
 //! `"sim_effects_off"` → `["wind","battery"]`, `[]` or `"null"` (absent from logs that do
-//! not record it), `"controller"` → `{"kind":"lqg",…}`). Attachment: the script
-//! text (`text/plain`, named after the script). The per-tick topics are CDR with `ros2msg`
-//! schemas (`/servo/tick`: [`cdr`]; the plot topics: [`plots`], and compile's writers for
-//! `/reference`, `/actors` and `/tf`); `/events` and the topics written once are JSON with
-//! JSON schemas. `log_time = publish_time =` the tick's `input.t_s` in nanoseconds (negative
+//! not record it), `"controller"` → `{"kind":"lqg",…}`). Attachments: the script
+//! text (`text/plain`, named after the script), and the header again as one JSON object
+//! ([`HEADER_ATTACHMENT`], under the attachment's CRC, which the metadata record lacks). The
+//! first chunk repeats every schema and channel (under its CRC). The per-tick topics are CDR
+//! with `ros2msg` schemas (`/servo/tick`: [`cdr`]; `/servo/state`: [`key_frame`]; the plot
+//! topics: [`plots`], and compile's writers for `/reference`, `/actors` and `/tf`); `/events`
+//! and the topics written once are JSON with JSON schemas. `log_time = publish_time =` the tick's `input.t_s` in nanoseconds (negative
 //! or non-finite times: 0).
 //!
 //! | topic | schema | when | fields |
@@ -25,6 +27,7 @@
 //! | `/framing` | `dronecine/msg/Framing` (CDR) | 10 Hz: ticks with framing records | `t_s`, `shot` (−1: none), `actors[] {name, actor, screen, requested, has_screen, has_requested}` |
 //! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message`; a finding of the director's also `line` (the script's, 1-based) and `help` (its fix, as compile says it) |
 //! | `/servo/tick` | `dronecine/msg/ServoTick` (CDR, [`cdr::SCHEMA`]) | every tick | the phase, the shot, the [`TickInput`](dronecine_servo::control::TickInput), the [`TickOutput`](dronecine_servo::control::TickOutput) or the fault, the command sent, the drone's state, the latency, the actors as the director saw them, the framing records: 514 bytes with two actors framed |
+//! | `/servo/state` | `dronecine/msg/ServoState` (CDR, [`key_frame::SCHEMA`]) | before the first tick of each chunk | a key frame: the [`ControllerState`](dronecine_servo::control::ControllerState) after the tick before, every float bit for bit (before the log's first tick, the mark that the controller starts there) |
 //! | `/tf/drone`, `/tf/camera`, `/tf/actor/NAME`, `/tf/reference` | `foxglove_msgs/msg/FrameTransforms` (CDR) | 30 Hz (a frame when it moved) | `world→drone` (the estimate), `drone→camera`, `world→actor/NAME`, `world→reference` |
 //! | `/scene/stage`, `/scene/drone`, `/scene/actors` | `foxglove.SceneUpdate` | once (actors again when a height changes) | as compile |
 //! | `/camera_calibration` | `foxglove.CameraCalibration` | once | as compile |
@@ -52,9 +55,11 @@
 //! The log is written in place, not through a temporary file: whatever reached the disk stays
 //! readable after a crash. Chunks are built in memory and written whole; a chunk is closed and
 //! the file flushed (to the OS, without `fsync`) every `flush_period_s` of flight time
-//! ([`LogOptions`]). `shoot` writes through [`LogThread`], which hands the ticks to a writer
-//! thread every quarter second (taken up within 20 ms) and closes chunks every 0.73 s, so a
-//! crash of the process in a flight in real time loses at most the last second (a simulated
+//! ([`LogOptions`]), the ticks that record nothing included ([`FlightLogWriter::idle`]: before
+//! take-off, the drone's own take-off and landing). `shoot` writes through [`LogThread`],
+//! which hands the ticks to a writer thread every quarter second (taken up within 20 ms) and
+//! closes chunks every 0.73 s, so a crash of the process in a flight in real time loses at
+//! most the last second, in every phase (a simulated
 //! flight, thousands of times faster, may lose its last few milliseconds of wall-clock time:
 //! seconds of flight, which the writer had not caught up with or keeps for one larger write;
 //! see [`LogThread`]); [`FlightLog::open`] reads every complete
@@ -62,8 +67,10 @@
 //! disk space 8 MB ahead, its size unchanged, and gives back what it did not use when it
 //! finishes; a crash-cut log keeps up to 8 MB reserved after its data, freed when the file is
 //! truncated or copied.) Damage inside the file (a bad
-//! sector, a corrupt copy) costs the chunks it touches: the reader skips to the next intact
-//! chunk and reads on. A power cut may lose what the OS had not yet written: for a log forced
+//! sector, a corrupt copy) costs at most the chunks it touches: the reader skips to the next
+//! record it can check and reads on; what the records at the start hold is there twice, once
+//! under a CRC; and each chunk's ticks start with a key frame, from which `replay` resumes
+//! after a gap (see [`FlightLog`]). A power cut may lose what the OS had not yet written: for a log forced
 //! to the disk as it is written ([`LogOptions::durable`]: `shoot`'s for a real flight, one
 //! paced by the wall clock, or with `--sync-log`), what came since the last sync (two
 //! seconds in real time); for a simulated flight's log as `shoot` writes it by default, left
@@ -71,6 +78,7 @@
 //! records), whatever the OS had not written back yet.
 
 pub mod cdr;
+pub mod key_frame;
 mod mcap_file;
 pub mod plots;
 mod reader;
@@ -85,7 +93,7 @@ use std::path::PathBuf;
 use dronecine_compiler::camera::Lens;
 use dronecine_grammar::script::Stage;
 
-pub use self::reader::{FlightLog, LoggedTick};
+pub use self::reader::{Damage, FlightLog, KeyFrame, LoggedTick};
 pub use self::thread::{LogThread, BATCH_PERIOD_S, POLL_MAX_S};
 pub use self::writer::{FlightLogWriter, LogCompression, LogOptions};
 
@@ -103,6 +111,10 @@ pub struct LogScene<'a> {
 /// The name of the metadata record that holds the [`FlightHeader`](crate::record::FlightHeader).
 pub const HEADER_METADATA: &str = "dronecine.flight";
 
+/// The name of the attachment that holds the [`FlightHeader`](crate::record::FlightHeader)
+/// again, as one JSON object, under the attachment's CRC.
+pub const HEADER_ATTACHMENT: &str = "dronecine.flight.json";
+
 /// Topics of the flight log.
 pub mod topic {
     pub const REFERENCE: &str = "/reference";
@@ -114,6 +126,8 @@ pub mod topic {
     pub const FRAMING: &str = "/framing";
     pub const EVENTS: &str = "/events";
     pub const SERVO_TICK: &str = "/servo/tick";
+    /// The key frames: the controller's state at the start of each chunk.
+    pub const SERVO_STATE: &str = "/servo/state";
     /// Transforms: `/tf/drone` (the estimate), `/tf/camera`, `/tf/actor/NAME`,
     /// `/tf/reference`, one topic per frame as `compile` writes them.
     pub const TF_PREFIX: &str = "/tf/";

@@ -5,7 +5,11 @@
 //! The loop copies each [`TickRecord`] into a preallocated batch ([`OwnedTick`], its vectors
 //! reused from batch to batch: no allocation per tick) and hands a full batch to the writer
 //! thread over a bounded channel; the writer thread writes it with [`FlightLogWriter`] and
-//! sends the emptied batch back. Events keep their place among the ticks.
+//! sends the emptied batch back. Events, the ticks that record nothing (their time closes the
+//! writer's chunks and hands batches over as ticks do) and key frames keep their place among
+//! the ticks. The loop's side steps a copy of the writer's chunk schedule with the same
+//! ticks: it knows, after a tick, that the writer starts a chunk there, and asks the loop for
+//! the controller's state (the chunk's key frame) without waiting for the writer.
 //!
 //! The writer thread polls for full batches (sleeping 0.1 ms, doubling up to 20 ms while none
 //! comes) instead of blocking on the channel: a blocked receiver makes every hand-over wake
@@ -57,13 +61,14 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use super::writer::ChunkClock;
 use super::FlightLogWriter;
 use crate::record::FlightSink;
 use crate::record::{Event, FramingRecord, Phase, TickRecord};
 use dronecine_backend::frames::Command;
 use dronecine_backend::{FlightState, MocapFrame};
 use dronecine_compiler::reference::{ActorPose, Sample};
-use dronecine_servo::control::{TickFault, TickInput, TickOutput};
+use dronecine_servo::control::{ControllerState, TickFault, TickInput, TickOutput};
 
 /// Flight time covered by one batch at most.
 pub const BATCH_PERIOD_S: f64 = 0.25;
@@ -232,31 +237,52 @@ fn prefetch_for_write<T>(start: *const T, bytes: usize) {
     let _ = (start, bytes);
 }
 
-/// Ticks (the first `len` of `ticks` are live) and the events among them: `(i, event)` comes
-/// before tick `i`.
+/// What comes between the ticks of a batch.
+enum Mark {
+    Event(Event),
+    /// A tick that records nothing, at this flight time.
+    Idle(f64),
+    /// The controller's state after the tick before it: `Batch::key_frames[i]`.
+    KeyFrame(usize),
+}
+
+/// Room for this many key frames in each batch (a chunk closes at most every few batches,
+/// whatever the ticks' clocks say, one key frame each; more grow the batch once).
+const KEY_FRAMES: usize = 2;
+
+/// Ticks (the first `len` of `ticks` are live) and what comes among them: `(i, mark)` comes
+/// before tick `i`, in order.
 struct Batch {
     ticks: Vec<OwnedTick>,
     len: usize,
-    events: Vec<(usize, Event)>,
+    marks: Vec<(usize, Mark)>,
+    /// The idle ticks among `marks`.
+    idles: usize,
+    key_frames: Vec<ControllerState>,
 }
 
 impl Batch {
-    /// A batch whose ticks are all allocated up front: filling it allocates nothing.
+    /// A batch whose ticks, marks and key frames are all allocated up front: filling it
+    /// allocates nothing (but the events' own text).
     fn new(ticks: usize) -> Batch {
         Batch {
             ticks: (0..ticks).map(|_| OwnedTick::empty()).collect(),
             len: 0,
-            events: Vec::with_capacity(4),
+            marks: Vec::with_capacity(ticks + 4),
+            idles: 0,
+            key_frames: Vec::with_capacity(KEY_FRAMES),
         }
     }
 
     fn clear(&mut self) {
         self.len = 0;
-        self.events.clear();
+        self.marks.clear();
+        self.idles = 0;
+        self.key_frames.clear();
     }
 
     fn is_empty(&self) -> bool {
-        self.len == 0 && self.events.is_empty()
+        self.len == 0 && self.marks.is_empty()
     }
 }
 
@@ -272,10 +298,15 @@ pub struct LogThread {
     /// costs a full memory fence.
     failed: Arc<AtomicBool>,
     batch: Batch,
-    /// Flight time of the batch's first tick.
+    /// Flight time of the batch's first tick (or tick that records nothing).
     batch_start_s: Option<f64>,
     max_ticks: usize,
     handle: Option<JoinHandle<io::Result<()>>>,
+    /// The writer's schedule of chunk closes, stepped with the same ticks: where the writer
+    /// starts a chunk, which starts with a key frame.
+    clock: ChunkClock,
+    /// The last tick closes a chunk: the loop is asked for the controller's state.
+    key_frame_due: bool,
 }
 
 /// The writer thread's side of syncing: asks the syncer thread to `sync_data` (never
@@ -343,6 +374,7 @@ impl LogThread {
             batches: 0,
         };
         let failed = Arc::new(AtomicBool::new(false));
+        let clock = writer.chunk_clock();
         let errors = Errors {
             tx: err_tx,
             failed: Arc::clone(&failed),
@@ -362,7 +394,28 @@ impl LogThread {
             batch_start_s: None,
             max_ticks,
             handle: Some(handle),
+            clock,
+            key_frame_due: false,
         })
+    }
+
+    /// The writer's error, once (the writer sets the flag once); the loop lands on it.
+    fn check_writer(&mut self) -> io::Result<()> {
+        if self.failed.load(Ordering::Acquire) {
+            self.failed.store(false, Ordering::Relaxed);
+            return Err(self.thread_error());
+        }
+        Ok(())
+    }
+
+    /// Hands the batch over once it holds [`BATCH_PERIOD_S`] of flight, or as many ticks
+    /// (those that record nothing included) as it has room for.
+    fn hand_over_when_due(&mut self, t_s: f64) -> io::Result<()> {
+        let start = *self.batch_start_s.get_or_insert(t_s);
+        if self.batch.len + self.batch.idles >= self.max_ticks || !(t_s - start < BATCH_PERIOD_S) {
+            self.hand_over()?;
+        }
+        Ok(())
     }
 
     /// Hands the current batch to the writer (waiting only when it is [`BATCHES`] behind)
@@ -426,11 +479,7 @@ impl LogThread {
 
 impl FlightSink for LogThread {
     fn tick(&mut self, record: &TickRecord) -> io::Result<()> {
-        if self.failed.load(Ordering::Acquire) {
-            // Told once (the writer sets the flag once); the loop lands.
-            self.failed.store(false, Ordering::Relaxed);
-            return Err(self.thread_error());
-        }
+        self.check_writer()?;
         let b = &mut self.batch;
         if b.len == b.ticks.len() {
             // Only after a failed hand-over (the batch was kept): the loop is landing.
@@ -443,16 +492,34 @@ impl FlightSink for LogThread {
             ahead.prefetch(record.actors.len());
         }
         let t_s = record.input.t_s;
-        let start = *self.batch_start_s.get_or_insert(t_s);
-        if b.len >= self.max_ticks || !(t_s - start < BATCH_PERIOD_S) {
-            self.hand_over()?;
-        }
-        Ok(())
+        self.key_frame_due = self.clock.step(t_s);
+        self.hand_over_when_due(t_s)
     }
 
     fn event(&mut self, event: &Event) -> io::Result<()> {
         let at = self.batch.len;
-        self.batch.events.push((at, event.clone()));
+        self.batch.marks.push((at, Mark::Event(event.clone())));
+        Ok(())
+    }
+
+    fn idle(&mut self, t_s: f64) -> io::Result<()> {
+        self.check_writer()?;
+        let b = &mut self.batch;
+        b.marks.push((b.len, Mark::Idle(t_s)));
+        b.idles += 1;
+        self.clock.step(t_s);
+        self.hand_over_when_due(t_s)
+    }
+
+    fn wants_key_frame(&self) -> bool {
+        self.key_frame_due
+    }
+
+    fn key_frame(&mut self, state: &ControllerState) -> io::Result<()> {
+        self.key_frame_due = false;
+        let b = &mut self.batch;
+        b.marks.push((b.len, Mark::KeyFrame(b.key_frames.len())));
+        b.key_frames.push(*state);
         Ok(())
     }
 }
@@ -554,15 +621,23 @@ fn yield_to_the_loop() {
 }
 
 fn write_batch(writer: &mut FlightLogWriter, batch: &Batch) -> io::Result<()> {
-    let mut events = batch.events.iter().peekable();
+    let write_mark = |writer: &mut FlightLogWriter, mark: &Mark| match mark {
+        Mark::Event(e) => writer.write_event(e),
+        Mark::Idle(t_s) => writer.idle(*t_s),
+        Mark::KeyFrame(i) => {
+            writer.write_key_frame(&batch.key_frames[*i]);
+            Ok(())
+        }
+    };
+    let mut marks = batch.marks.iter().peekable();
     for (i, tick) in batch.ticks[..batch.len].iter().enumerate() {
-        while let Some((_, e)) = events.next_if(|(at, _)| *at <= i) {
-            writer.write_event(e)?;
+        while let Some((_, mark)) = marks.next_if(|(at, _)| *at <= i) {
+            write_mark(writer, mark)?;
         }
         writer.write_tick(&tick.record())?;
     }
-    for (_, e) in events {
-        writer.write_event(e)?;
+    for (_, mark) in marks {
+        write_mark(writer, mark)?;
     }
     Ok(())
 }

@@ -9,6 +9,13 @@
 //! written for this path: each chunk hashed once and written with one system call); chunks
 //! carry no message indexes (readers scan the ≤ 1 s chunks). Nothing on the per-tick path
 //! allocates. Only `/events` is JSON.
+//!
+//! Chunks close by the flight's clock ([`ChunkClock`]), on ticks and on the ticks that record
+//! nothing alike. After a tick that closes one, the writer asks for the controller's state
+//! ([`FlightLogWriter::wants_key_frame`]) and writes it before the next tick, as the new
+//! chunk's key frame on `/servo/state`; before the log's first tick it writes the mark that
+//! the controller starts there. A key frame at every chunk's start (rather than every N ticks)
+//! lets replay check every tick of any intact chunk, whatever was lost before it.
 
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -26,8 +33,9 @@ use dronecine_compiler::camera::Lens;
 
 use super::mcap_file::{ChunkCompression, McapFile};
 use super::plots::{self, same_command};
-use super::{cdr, exact, schema, topic, LogScene, HEADER_METADATA};
+use super::{cdr, exact, key_frame, schema, topic, LogScene, HEADER_ATTACHMENT, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, TickRecord};
+use dronecine_servo::control::ControllerState;
 
 /// The frame of the reference pose on `/tf/reference`.
 const REFERENCE_FRAME: &str = "reference";
@@ -60,8 +68,10 @@ pub struct LogOptions {
     /// Rate of `/measurement`: the actors' raw measured poses are kept nowhere else.
     pub measurement_hz: f64,
     /// Flight time between two chunk closes and flushes: what a crash may lose. Also closed
-    /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say. (After
-    /// [`FlightLogWriter::defer_hand_over`], closed chunks may wait for one larger write.)
+    /// every `rate_hz · flush_period_s` ticks, whatever the ticks' clocks say; the ticks that
+    /// record nothing ([`FlightLogWriter::idle`]: before take-off, the drone's own take-off
+    /// and landing) count as ticks. (After [`FlightLogWriter::defer_hand_over`], closed
+    /// chunks may wait for one larger write.)
     pub flush_period_s: f64,
     /// Whether the log is forced to the disk as it is written: its data synced every few
     /// seconds while the flight goes on ([`LogThread`](super::LogThread)'s syncer) and the
@@ -112,6 +122,8 @@ struct Channels {
     framing: Channel,
     events: Channel,
     servo_tick: Channel,
+    /// `/servo/state`: the key frames.
+    key_frame: Channel,
     /// `/tf/drone`, `/tf/camera`, `/tf/actor/NAME`…, `/tf/reference`: one per frame in
     /// `FlightLogWriter::frames`' order.
     tf: Vec<Channel>,
@@ -160,9 +172,14 @@ pub struct FlightLogWriter {
     next_framing_s: f64,
     /// The last `/command` written had its `failsafe` flag set.
     command_failsafe: bool,
-    next_flush_s: f64,
-    ticks_since_flush: u64,
-    flush_every_ticks: u64,
+    clock: ChunkClock,
+    /// A tick was written (the first one follows the mark that the controller starts).
+    started: bool,
+    /// The last tick closed a chunk: the next chunk starts with a key frame, which
+    /// [`FlightLogWriter::write_key_frame`] gives.
+    key_frame_due: bool,
+    /// The key frame given since the last tick, written before the next tick.
+    key_frame: Option<ControllerState>,
     /// Where `/tf` puts the drone on ticks without an estimate.
     last_estimate: Option<([f64; 3], f64)>,
     /// A second handle on the file, for syncing it from another thread (a durable log only).
@@ -233,13 +250,58 @@ fn add_channels(writer: &mut McapFile) -> io::Result<Channels> {
             topic::CAMERA_CALIBRATION,
             j,
         )?,
+        key_frame: channel(
+            key_frame::SCHEMA_NAME,
+            key_frame::SCHEMA,
+            topic::SERVO_STATE,
+            c,
+        )?,
     })
+}
+
+/// When the log closes its chunks: every `period_s` of flight time, and every `every_ticks`
+/// ticks whatever their clocks say. A tick that records nothing counts as a tick: the log's
+/// time passes as on any other. [`LogThread`](super::LogThread) keeps a copy, stepped with the
+/// same ticks, to know where the writer starts its chunks.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ChunkClock {
+    period_s: f64,
+    /// The flight time at which the next chunk closes.
+    next_s: f64,
+    ticks: u64,
+    every_ticks: u64,
+}
+
+impl ChunkClock {
+    fn new(period_s: f64, rate_hz: f64) -> ChunkClock {
+        ChunkClock {
+            period_s,
+            next_s: period_s,
+            ticks: 0,
+            every_ticks: (rate_hz * period_s).floor().max(1.0) as u64,
+        }
+    }
+
+    /// A tick at `t_s`: whether the chunk closes after it.
+    pub(crate) fn step(&mut self, t_s: f64) -> bool {
+        self.ticks += 1;
+        let due = (t_s.is_finite() && t_s >= self.next_s) || self.ticks >= self.every_ticks;
+        if due {
+            if t_s.is_finite() {
+                // The next close at most one period after this one.
+                self.next_s = (self.next_s + self.period_s).clamp(t_s, t_s + self.period_s);
+            }
+            self.ticks = 0;
+        }
+        due
+    }
 }
 
 impl FlightLogWriter {
     /// Creates (truncating) the log at `path` and writes the header, the schemas and
-    /// channels, the `dronecine.flight` metadata, the script attachment and the static scene,
-    /// then flushes. The parent directory must exist (an error names the path otherwise).
+    /// channels, the `dronecine.flight` metadata, the script attachment, the header again as
+    /// an attachment (its CRC checked), and a chunk with the schemas and channels again and
+    /// the static scene, then flushes. The parent directory must exist (an error names the path otherwise).
     pub fn create(
         path: &Path,
         header: &FlightHeader,
@@ -313,6 +375,12 @@ impl FlightLogWriter {
                 header.script_text.as_bytes(),
             )
             .map_err(err)?;
+        // The header again, under a CRC: a reader whose metadata record is damaged (it has no
+        // CRC) reads this one.
+        let json = serde_json::to_vec(header).map_err(|e| annotate(path, io::Error::other(e)))?;
+        writer
+            .attach(0, 0, HEADER_ATTACHMENT, "application/json", &json)
+            .map_err(err)?;
 
         let rate_hz = if header.rate_hz.is_finite() && header.rate_hz > 0.0 {
             header.rate_hz
@@ -335,7 +403,8 @@ impl FlightLogWriter {
         )
         .map_err(err)?;
         channels.tf = tf;
-        let flush_every_ticks = (rate_hz * options.flush_period_s).floor().max(1.0) as u64;
+        // Every schema and channel again, in the first chunk, under its CRC.
+        writer.repeat_schemas_and_channels();
         let mut log = FlightLogWriter {
             writer: Some(writer),
             path: path.to_path_buf(),
@@ -353,9 +422,10 @@ impl FlightLogWriter {
             next_command_s: f64::NEG_INFINITY,
             next_framing_s: f64::NEG_INFINITY,
             command_failsafe: false,
-            next_flush_s: options.flush_period_s,
-            ticks_since_flush: 0,
-            flush_every_ticks,
+            clock: ChunkClock::new(options.flush_period_s, rate_hz),
+            started: false,
+            key_frame_due: false,
+            key_frame: None,
             last_estimate: None,
             sync_file,
         };
@@ -418,9 +488,7 @@ impl FlightLogWriter {
     /// Closes the current chunk and flushes the file to the OS.
     fn flush(&mut self) -> io::Result<()> {
         let (writer, path) = self.mcap()?;
-        writer.flush().map_err(|e| annotate(path, e))?;
-        self.ticks_since_flush = 0;
-        Ok(())
+        writer.flush().map_err(|e| annotate(path, e))
     }
 
     /// Closes the current chunk at its flush time; it reaches the OS then, or, after
@@ -429,9 +497,7 @@ impl FlightLogWriter {
         let (writer, path) = self.mcap()?;
         writer
             .close_and_hand_over_when_due()
-            .map_err(|e| annotate(path, e))?;
-        self.ticks_since_flush = 0;
-        Ok(())
+            .map_err(|e| annotate(path, e))
     }
 
     /// Keeps closed chunks until they reach `bytes`, then hands them to the OS in one write
@@ -452,11 +518,26 @@ impl FlightLogWriter {
     }
 
     /// Writes one tick on every per-tick topic, `/tf` when due, and closes the chunk when a
-    /// flush is due. `tick.actors` and `tick.framing` index the scene's actors.
+    /// flush is due. `tick.actors` and `tick.framing` index the scene's actors. Before the
+    /// first tick, the mark that the controller starts there; before any other, the key frame
+    /// given since the last tick, if any.
     pub fn write_tick(&mut self, tick: &TickRecord) -> io::Result<()> {
         let t_s = tick.input.t_s;
         let ns = ns_from_s(t_s);
         let output = tick.output.as_ref().ok();
+        if !self.started {
+            self.started = true;
+            // No state before the first tick: the controller starts there.
+            self.key_frame = None;
+            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.key_frame);
+            put_with(w, path, channel, ns, |b| key_frame::encode(b, t_s, None))?;
+        } else if let Some(state) = self.key_frame.take() {
+            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.key_frame);
+            put_with(w, path, channel, ns, |b| {
+                key_frame::encode(b, t_s, Some(&state))
+            })?;
+        }
+        self.key_frame_due = false;
 
         // The plot topics at `plot_hz` (each on the first tick that has one when due); every
         // tick's exact values are on /servo/tick.
@@ -522,18 +603,39 @@ impl FlightLogWriter {
             self.write_tf(ns, tick)?;
         }
 
-        self.ticks_since_flush += 1;
-        if (t_s.is_finite() && t_s >= self.next_flush_s)
-            || self.ticks_since_flush >= self.flush_every_ticks
-        {
-            if t_s.is_finite() {
-                // The next flush at most one period after this one.
-                let period = self.options.flush_period_s;
-                self.next_flush_s = (self.next_flush_s + period).clamp(t_s, t_s + period);
-            }
+        if self.clock.step(t_s) {
+            self.close_chunk()?;
+            self.key_frame_due = true;
+        }
+        Ok(())
+    }
+
+    /// A tick that records nothing (waiting for the motion capture before take-off, the
+    /// drone's own take-off and landing) at `t_s`: the chunk closes when it would on a tick,
+    /// so that what came before (the events) reaches the file within a second of flight.
+    pub fn idle(&mut self, t_s: f64) -> io::Result<()> {
+        if self.clock.step(t_s) {
             self.close_chunk()?;
         }
         Ok(())
+    }
+
+    /// Whether the last tick written closed a chunk: the next chunk then starts with the
+    /// controller's state after that tick ([`FlightLogWriter::write_key_frame`]).
+    pub fn wants_key_frame(&self) -> bool {
+        self.key_frame_due
+    }
+
+    /// The controller's state after the last tick written (a key frame): written before the
+    /// next tick, in the chunk that tick goes in, so that replay can resume there after a gap.
+    pub fn write_key_frame(&mut self, state: &ControllerState) {
+        self.key_frame = Some(*state);
+        self.key_frame_due = false;
+    }
+
+    /// The schedule of the chunks' closes, as it stands.
+    pub(crate) fn chunk_clock(&self) -> ChunkClock {
+        self.clock
     }
 
     /// `/tf`: the drone at its estimate, the camera, the actors and the reference; and
@@ -688,5 +790,15 @@ impl crate::record::FlightSink for FlightLogWriter {
     }
     fn event(&mut self, event: &Event) -> io::Result<()> {
         self.write_event(event)
+    }
+    fn idle(&mut self, t_s: f64) -> io::Result<()> {
+        FlightLogWriter::idle(self, t_s)
+    }
+    fn wants_key_frame(&self) -> bool {
+        FlightLogWriter::wants_key_frame(self)
+    }
+    fn key_frame(&mut self, state: &ControllerState) -> io::Result<()> {
+        self.write_key_frame(state);
+        Ok(())
     }
 }

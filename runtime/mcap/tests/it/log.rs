@@ -11,17 +11,22 @@ use dronecine_backend::{BodyPose, FlightState, MocapFrame};
 use dronecine_compiler::camera::Lens;
 use dronecine_compiler::reference::{ActorPose, Sample};
 use dronecine_grammar::script::Stage;
+use dronecine_mcap::log::LogOptions;
 use dronecine_mcap::log::{
-    cdr, plots, FlightLog, FlightLogWriter, LogError, LogScene, LogThread, LoggedTick,
+    cdr, key_frame, plots, FlightLog, FlightLogWriter, LogError, LogScene, LogThread, LoggedTick,
 };
 use dronecine_mcap::output::mcap as compiled;
 use dronecine_mcap::output::{foxglove, McapWriter, RunInfo};
-use dronecine_mcap::record::{reference_of, Event, FlightHeader, FramingRecord, Phase, TickRecord};
-use dronecine_servo::control::{Estimate, Measurement, TickFault, TickInput, TickOutput};
+use dronecine_mcap::record::{
+    reference_of, Event, FlightHeader, FlightSink, FramingRecord, Phase, TickRecord,
+};
+use dronecine_servo::control::{
+    ControllerState, Estimate, FilterState, Measurement, PidState, TickFault, TickInput, TickOutput,
+};
 use dronecine_servo::setup::ControllerSetup;
 use proptest::prelude::*;
 
-fn names() -> Vec<String> {
+pub(crate) fn names() -> Vec<String> {
     vec!["Ann".to_string(), "Bo \"the\" Bear".to_string()]
 }
 
@@ -37,7 +42,7 @@ fn lens() -> Lens {
     Lens::new(84f64.to_radians(), 16.0 / 9.0)
 }
 
-fn header() -> FlightHeader {
+pub(crate) fn header() -> FlightHeader {
     FlightHeader {
         script_name: "orbit.psl".into(),
         script_text: "stage 8m x 6m x 3m\ndrone ardrone2\n\"quoted\" — ünïcode\n".into(),
@@ -60,11 +65,11 @@ fn header() -> FlightHeader {
 
 /// Everything a `TickRecord` borrows, owned.
 #[derive(Clone, Debug)]
-struct Tick {
+pub(crate) struct Tick {
     phase: Phase,
     shot: Option<usize>,
     sample: Sample,
-    input: TickInput,
+    pub(crate) input: TickInput,
     output: Result<TickOutput, TickFault>,
     command_sent: Command,
     mocap: Option<MocapFrame>,
@@ -73,7 +78,7 @@ struct Tick {
 }
 
 impl Tick {
-    fn record(&self) -> TickRecord<'_> {
+    pub(crate) fn record(&self) -> TickRecord<'_> {
         TickRecord {
             phase: self.phase,
             shot: self.shot,
@@ -89,7 +94,7 @@ impl Tick {
         }
     }
 
-    fn logged(&self) -> LoggedTick {
+    pub(crate) fn logged(&self) -> LoggedTick {
         LoggedTick {
             phase: self.phase,
             shot: self.shot,
@@ -205,7 +210,7 @@ fn tick(k: usize, t_s: f64, x: [f64; 8]) -> Tick {
 }
 
 /// Smooth, ordinary values for tick `k` of a flight at 100 Hz.
-fn flight_tick(k: usize) -> Tick {
+pub(crate) fn flight_tick(k: usize) -> Tick {
     let t = k as f64 * 0.01;
     let x = [
         t.sin(),
@@ -220,7 +225,7 @@ fn flight_tick(k: usize) -> Tick {
     tick(k, t, x)
 }
 
-fn scene_of(names: &[String]) -> LogScene<'_> {
+pub(crate) fn scene_of(names: &[String]) -> LogScene<'_> {
     LogScene {
         stage: stage(),
         lens: lens(),
@@ -229,11 +234,30 @@ fn scene_of(names: &[String]) -> LogScene<'_> {
     }
 }
 
-fn write_log(path: &Path, ticks: &[Tick], events: &[Event]) {
+/// A controller's state after tick `k` (its numbers derived from `k`), as a flight loop
+/// gives it when the log asks for a key frame.
+pub(crate) fn state_after(k: usize) -> ControllerState {
+    let x = k as f64;
+    ControllerState::Pid(PidState {
+        filter: FilterState {
+            x: [x, -x, 0.5 * x, 1.0, 2.0, 3.0, 0.0, -0.0, x * 1e-9],
+            heading_rad: 0.01 * x,
+            ..FilterState::default()
+        },
+        sent_input: [0.1, 0.2, x],
+        sent_yaw_rate_radps: -x,
+        integral_z_ms: 0.5 * x,
+    })
+}
+
+pub(crate) fn write_log(path: &Path, ticks: &[Tick], events: &[Event]) {
     let names = names();
     let mut w = FlightLogWriter::create(path, &header(), &scene_of(&names)).unwrap();
     for (i, t) in ticks.iter().enumerate() {
         w.write_tick(&t.record()).unwrap();
+        if w.wants_key_frame() {
+            w.write_key_frame(&state_after(i));
+        }
         if let Some(e) = events.get(i) {
             w.write_event(e).unwrap();
         }
@@ -327,7 +351,7 @@ fn event_bits(e: &Event) -> (u64, String, String, String, Option<u32>, Option<St
     )
 }
 
-fn events() -> Vec<Event> {
+pub(crate) fn events() -> Vec<Event> {
     vec![
         Event {
             t_s: 0.0,
@@ -481,6 +505,7 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
         "/framing",
         "/events",
         "/servo/tick",
+        "/servo/state",
         "/tf/drone",
         "/tf/camera",
         "/tf/actor/Ann",
@@ -515,6 +540,7 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
             "/measurement" => Some(("dronecine/msg/Measurement", plots::measurement_schema())),
             "/command" => Some(("dronecine/msg/Command", plots::command_schema())),
             "/framing" => Some(("dronecine/msg/Framing", plots::framing_schema())),
+            "/servo/state" => Some(("dronecine/msg/ServoState", key_frame::SCHEMA.to_string())),
             topic if topic.starts_with("/tf/") => Some((
                 "foxglove_msgs/msg/FrameTransforms",
                 foxglove::frame_transforms_schema(),
@@ -547,6 +573,7 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
         for (ns, data) in msgs {
             let stamped_ns = match topic.as_str() {
                 "/servo/tick" => continue, // above
+                "/servo/state" => Some(ns_of(key_frame::decode(data).unwrap().0)),
                 "/reference" => Some(ns_of(compiled::decode_reference(data).unwrap().t_s)),
                 "/actors" => Some(ns_of(compiled::decode_actors(data).unwrap().0)),
                 "/estimate" => Some(ns_of(plots::decode_estimate(data).unwrap().0)),
@@ -656,6 +683,46 @@ fn the_log_is_a_standard_mcap_file_with_a_schema_on_every_channel() {
     assert_eq!(attachment.name, "orbit.psl");
     let a = mcap::read::attachment(&bytes, attachment).unwrap();
     assert_eq!(a.data.as_ref(), header().script_text.as_bytes());
+    // The header again, one JSON object under the attachment's CRC.
+    let attachment = &summary.attachment_indexes[1];
+    assert_eq!(
+        (attachment.name.as_str(), attachment.media_type.as_str()),
+        ("dronecine.flight.json", "application/json")
+    );
+    let a = mcap::read::attachment(&bytes, attachment).unwrap();
+    let json: FlightHeader = serde_json::from_slice(&a.data).unwrap();
+    assert_eq!(json, header());
+    // The key frames: the start mark before the first tick, then the controller's state at
+    // the start of every chunk after it, each the state after the tick before it.
+    let frames = &by_topic["/servo/state"];
+    assert!(key_frame::decode(&frames[0].1).unwrap().1.is_none());
+    let mut with_ticks = 0;
+    for index in &summary.chunk_indexes {
+        let first: Vec<_> = summary
+            .stream_chunk(&bytes, index)
+            .unwrap()
+            .map(|m| m.unwrap())
+            .filter(|m| m.channel.topic.starts_with("/servo/"))
+            .take(1)
+            .collect();
+        if let Some(m) = first.first() {
+            with_ticks += 1;
+            assert_eq!(
+                m.channel.topic, "/servo/state",
+                "a chunk starts with a key frame"
+            );
+        }
+    }
+    assert_eq!(frames.len(), with_ticks);
+    for (ns, data) in &frames[1..] {
+        let (t_s, state) = key_frame::decode(data).unwrap();
+        let k = ticks.iter().position(|t| t.input.t_s == t_s).unwrap();
+        assert_eq!((t_s * 1e9).round() as u64, *ns);
+        assert!(
+            state.unwrap().same_bits(&state_after(k - 1)),
+            "before tick {k}"
+        );
+    }
 }
 
 #[test]
@@ -736,13 +803,93 @@ fn a_crash_loses_at_most_the_last_second() {
     }
 }
 
+/// A crash before the first tick (waiting for the motion capture, the drone's own take-off,
+/// when the flight loop records nothing but events and tells the log the time) loses at most
+/// the last second: the log closes its chunks by the flight's time there too.
+#[test]
+fn a_crash_during_take_off_loses_at_most_the_last_second() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    for n in [1usize, 72, 73, 74, 99, 100, 101, 250, 399, 400] {
+        let path = dir.path().join(format!("take-off-{n}.mcap"));
+        let options = LogOptions::shoot(false);
+        let mut w =
+            FlightLogWriter::create_with(&path, &header(), &scene_of(&names), options).unwrap();
+        let mut probes = Vec::new();
+        for k in 0..n {
+            let t_s = k as f64 * 0.01;
+            if k % 10 == 0 {
+                w.write_event(&probe(t_s)).unwrap();
+                probes.push(t_s);
+            }
+            w.idle(t_s).unwrap();
+        }
+        let crash_s = (n - 1) as f64 * 0.01;
+        // The process dies: no finish, no drop, nothing flushed.
+        std::mem::forget(w);
+        let log = FlightLog::open(&path).unwrap();
+        assert!(log.truncated && log.ticks.is_empty(), "{n}");
+        let kept: Vec<f64> = log.events.iter().map(|e| e.t_s).collect();
+        let must = probes.iter().filter(|&&t| t <= crash_s - 1.0).count();
+        assert!(kept.len() >= must, "{n} idle ticks: {kept:?}");
+        assert_eq!(kept, probes[..kept.len()], "{n}: a prefix");
+    }
+}
+
+/// Through `LogThread`, in real time, a take-off loses at most its last second too: the loop
+/// hands the writer its ticks that record nothing, batch by batch, as it hands over ticks.
+#[test]
+fn a_take_off_in_real_time_through_the_log_thread_loses_at_most_the_last_second() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = names();
+    let path = dir.path().join("take-off.mcap");
+    let w = FlightLogWriter::create_with(
+        &path,
+        &header(),
+        &scene_of(&names),
+        LogOptions::shoot(false),
+    )
+    .unwrap();
+    let mut sink = LogThread::spawn(w, 100.0).unwrap();
+    let mut probes = Vec::new();
+    for k in 0..400 {
+        let t_s = k as f64 * 0.01;
+        if k % 10 == 0 {
+            sink.event(&probe(t_s)).unwrap();
+            probes.push(t_s);
+        }
+        sink.idle(t_s).unwrap();
+        if k % 25 == 24 {
+            // A quarter of a second of flight, in a fraction of one: the writer idles.
+            std::thread::sleep(std::time::Duration::from_millis(30));
+        }
+    }
+    let must = probes.iter().filter(|&&t| t <= 3.99 - 1.0).count();
+    let cut = dir.path().join("cut.mcap");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+    let log = loop {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        std::fs::copy(&path, &cut).unwrap();
+        let log = FlightLog::open(&cut).unwrap();
+        if log.events.len() >= must || std::time::Instant::now() > deadline {
+            break log;
+        }
+    };
+    assert!(log.truncated);
+    assert!(
+        log.events.len() >= must,
+        "{} probes recovered, {must} expected",
+        log.events.len()
+    );
+    sink.finish().unwrap();
+}
+
 /// Through `LogThread` (as `shoot` writes), a flight in real time loses at most the last
 /// second too: the writer thread keeps closed chunks for one larger write only while batches
 /// wait (a flight faster than real time), and hands them to the OS before it sleeps. The
 /// file is read while the thread runs, as a crash would leave it.
 #[test]
 fn a_flight_in_real_time_through_the_log_thread_loses_at_most_the_last_second() {
-    use dronecine_mcap::record::FlightSink;
     let dir = tempfile::tempdir().unwrap();
     let names = names();
     let path = dir.path().join("real-time.mcap");
@@ -784,7 +931,7 @@ fn a_flight_in_real_time_through_the_log_thread_loses_at_most_the_last_second() 
     sink.finish().unwrap();
 }
 
-fn reference_log() -> &'static [u8] {
+pub(crate) fn reference_log() -> &'static [u8] {
     static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
     BYTES.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
@@ -870,7 +1017,7 @@ proptest! {
 
 /// Each chunk of an MCAP file: its offset, its length, and its messages' first and last log
 /// times (ns), from the summary's chunk indexes (read by the mcap crate).
-fn chunks_of(bytes: &[u8]) -> Vec<(u64, u64, u64, u64)> {
+pub(crate) fn chunks_of(bytes: &[u8]) -> Vec<(u64, u64, u64, u64)> {
     let summary = mcap::Summary::read(bytes).unwrap().unwrap();
     summary
         .chunk_indexes
@@ -1016,24 +1163,66 @@ fn a_missing_directory_is_an_error_naming_the_path() {
     assert!(e.to_string().contains("orbit-1.mcap"), "{e}");
 }
 
+/// A probe event at flight time `t_s` (something a crash could lose).
+fn probe(t_s: f64) -> Event {
+    Event {
+        t_s,
+        level: "info".into(),
+        kind: "probe".into(),
+        message: String::new(),
+        line: None,
+        help: None,
+    }
+}
+
+/// Four seconds of take-off at 100 Hz before the flight's ticks: ticks that record nothing,
+/// with a probe event every tenth.
+fn take_off(sink: &mut dyn FlightSink) {
+    for k in 0..400 {
+        let t_s = k as f64 * 0.01;
+        if k % 10 == 0 {
+            sink.event(&probe(t_s)).unwrap();
+        }
+        sink.idle(t_s).unwrap();
+    }
+}
+
 /// `shoot` writes through `LogThread`: the file is the one the writer makes on the loop's own
-/// thread, byte for byte (same chunks, same order of ticks and events), across several
-/// batches; and a thread dropped without `finish` (an error path, a panic) still closes it.
+/// thread, byte for byte (same chunks, same order of ticks, ticks that record nothing, key
+/// frames and events), across several batches; and a thread dropped without `finish` (an
+/// error path, a panic) still closes it.
 #[test]
 fn the_log_thread_writes_the_same_file_and_closes_it_when_dropped() {
-    use dronecine_mcap::record::FlightSink;
     let dir = tempfile::tempdir().unwrap();
     let names = names();
-    let ticks: Vec<Tick> = (0..1234).map(flight_tick).collect();
+    let ticks: Vec<Tick> = (0..1234).map(|k| flight_tick(k + 400)).collect();
     let events = events();
     let direct = dir.path().join("direct.mcap");
-    write_log(&direct, &ticks, &events);
+    {
+        // As `write_log`, after the same take-off.
+        let mut w = FlightLogWriter::create(&direct, &header(), &scene_of(&names)).unwrap();
+        take_off(&mut w);
+        for (i, t) in ticks.iter().enumerate() {
+            w.write_tick(&t.record()).unwrap();
+            if w.wants_key_frame() {
+                w.write_key_frame(&state_after(i));
+            }
+            if let Some(e) = events.get(i) {
+                w.write_event(e).unwrap();
+            }
+        }
+        w.finish().unwrap();
+    }
     for finish in [true, false] {
         let threaded = dir.path().join(format!("threaded-{finish}.mcap"));
         let w = FlightLogWriter::create(&threaded, &header(), &scene_of(&names)).unwrap();
         let mut sink = LogThread::spawn(w, 100.0).unwrap();
+        take_off(&mut sink);
         for (i, t) in ticks.iter().enumerate() {
             sink.tick(&t.record()).unwrap();
+            if sink.wants_key_frame() {
+                sink.key_frame(&state_after(i)).unwrap();
+            }
             if let Some(e) = events.get(i) {
                 sink.event(e).unwrap();
             }
@@ -1046,7 +1235,11 @@ fn the_log_thread_writes_the_same_file_and_closes_it_when_dropped() {
             let log = FlightLog::open(&threaded).unwrap();
             assert!(!log.truncated, "{:?}", log.damage);
             assert_eq!(log.ticks.len(), ticks.len());
-            assert_eq!(log.events.len(), events.len());
+            assert_eq!(
+                log.events.len(),
+                40 + events.len(),
+                "the probes and the events"
+            );
         }
     }
 }
@@ -1234,8 +1427,6 @@ fn a_short_compressed_log_reads_whole() {
 /// its syncer.
 #[test]
 fn a_log_not_forced_to_the_disk_is_the_same_file() {
-    use dronecine_mcap::log::LogOptions;
-    use dronecine_mcap::record::FlightSink;
     let dir = tempfile::tempdir().unwrap();
     let names = names();
     let ticks: Vec<Tick> = (0..600).map(flight_tick).collect();
