@@ -259,7 +259,7 @@ fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
                     .with_help(
                         "remove the camera angle, or fly a drone profile with a pitch gimbal \
                          (`drone \"profiles/mine.toml\"` with `gimbal = { pitch_min_deg = …, \
-                         pitch_max_deg = … }`)",
+                         pitch_max_deg = …, rate_degps = … }`)",
                     ),
                 );
             }

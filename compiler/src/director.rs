@@ -858,7 +858,17 @@ impl Director {
                 tick.dt_s,
             );
         }
-        self.pitch_rad = pitch_target;
+        self.pitch_rad = match self.gimbal {
+            // A gimbal turns the camera at its rate: the pitch goes toward the one that
+            // frames the shot no faster.
+            Gimbal::Pitch { rate_radps, .. }
+                if !tick.first && tick.dt_s > 0.0 && self.pitch_rad.is_finite() =>
+            {
+                let most = rate_radps * tick.dt_s;
+                self.pitch_rad + (pitch_target - self.pitch_rad).clamp(-most, most)
+            }
+            _ => pitch_target,
+        };
         heading_target
     }
 
@@ -2018,7 +2028,9 @@ impl Director {
                 orient_fixed_pitch(&self.lens, position, aim, screen[0], 0.0),
                 0.0,
             ),
-            Gimbal::Pitch { min_rad, max_rad } => {
+            Gimbal::Pitch {
+                min_rad, max_rad, ..
+            } => {
                 let o = orient(&self.lens, position, aim, screen);
                 (o.heading_rad, o.pitch_rad.clamp(min_rad, max_rad))
             }

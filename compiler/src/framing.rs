@@ -52,6 +52,9 @@
 //!   both aim points are at the camera's height (equal heights and φ = 0 or π, e.g. eye-level
 //!   two-shots of equal-height actors, any θ); otherwise it lands off by the roll-free error
 //!   (≈ 0.28 in screen y at φ = 20°, θ = (π − α)/2 with a 43° lens). Default screen y's are 0.
+//!   With a pitch gimbal at eye level, a two-shot in one framing turns φ (about AB) to where
+//!   the other actor lands exactly too, within the gimbal's range (`both_exact`): a written
+//!   camera angle keeps its φ and the error.
 //! - **Default screens** follow the side: when no screen x is given and the profile puts the
 //!   camera across the line of action, the defaults swap (A right, B left) so a roll-free
 //!   camera can show them; explicit screens that a roll-free camera cannot show from the
@@ -497,11 +500,11 @@ impl Prepared {
                 let pair = pair_of(sa, sb, (f.size, f.size))?;
                 let near = match near {
                     Some(Visual::Two(t)) if !t.over_shoulder && (t.a, t.b) == (pair.a, pair.b) => {
-                        Some(t.toric.theta_rad)
+                        Some((t.toric.theta_rad, t.toric.phi_rad))
                     }
                     _ => None,
                 };
-                solve_together(pair, sa, f.size, actors, lens, near).map(Visual::Two)
+                solve_together(pair, sa, f.size, actors, lens, gimbal, near).map(Visual::Two)
             }
             [fg, bg] if fg.subjects.len() == 1 && bg.subjects.len() == 1 => {
                 let (sa, sb) = (&fg.subjects[0], &bg.subjects[0]);
@@ -765,14 +768,20 @@ const TIE_MARGIN_RAD: f64 = 0.02;
 /// changes (at θ = π − α) between actors whose sizes are at different distances (different
 /// heights): the size moves to the other actor, and its distance with it. The profile-vantage
 /// two-shot has one camera, and no choice to hold.
+///
+/// With a pitch gimbal at eye level, φ is the one nearest the side's (held: nearest the last
+/// solve's) at which both actors land on their screen points ([`both_exact`]); `near` is the
+/// last solve's (θ, φ).
 fn solve_together(
     mut pair: Pair,
     sa: &Subject,
     size_: Size,
     actors: &[ActorPose],
     lens: &Lens,
-    near_theta_rad: Option<f64>,
+    gimbal: &Gimbal,
+    near: Option<(f64, f64)>,
 ) -> Result<TwoVisual, FramingError> {
+    let near_theta_rad = near.map(|n| n.0);
     if let Some(profile) = sa.profile {
         // Vantage from A: (θ, φ) exact, the size follows.
         let u = sphere::direction(actors[pair.a].facing_rad, profile.azimuth_rad(), pair.e);
@@ -835,7 +844,21 @@ fn solve_together(
         .copied()
         .min_by(|x, y| key(x).total_cmp(&key(y)))
         .ok_or(FramingError::SizeUnreachable { size: size_ })?;
-    let theta = pair.refine_theta(lens, theta, phi, primary);
+    let refined = pair.refine_theta(lens, theta, phi, primary);
+    let (theta, phi) = match gimbal {
+        Gimbal::Pitch {
+            min_rad, max_rad, ..
+        } if pair.elevation == 0.0 => {
+            // Held, from the last solve's φ when it is on this side.
+            let start = near
+                .map(|n| n.1)
+                .filter(|last| last.is_finite() && math::cos(last - phi) > 0.0)
+                .unwrap_or(phi);
+            both_exact(&pair, lens, theta, start, primary, (*min_rad, *max_rad))
+                .unwrap_or((refined, phi))
+        }
+        _ => (refined, phi),
+    };
     Ok(pair.visual(
         Toric {
             alpha_rad: alpha,
@@ -845,6 +868,127 @@ fn solve_together(
         primary,
         false,
     ))
+}
+
+/// How far from its start [`both_exact`] looks for φ, each way (radians): short of a quarter
+/// turn, so that the camera stays on its side of the line of action.
+const BOTH_EXACT_REACH_RAD: f64 = 1.4;
+
+/// The step of [`both_exact`]'s search for a change of sign (radians of φ).
+const BOTH_EXACT_STEP_RAD: f64 = 0.02;
+
+/// A roll-free camera on a pitch gimbal puts two points at different heights on their screen
+/// points when the plane through the camera and the two points holds the camera's right axis
+/// (horizontal: every plane holds a horizontal direction) at the tilt of the camera's pitch.
+/// The torus gives the angle between the two actors; turning about AB (φ) turns that plane;
+/// θ keeps the sized actor's size. So: the φ nearest `start` at which the camera that aims
+/// the primary exactly puts the other actor on its screen point too, with its θ refined for
+/// the size (from the root `theta0`), and a pitch inside the gimbal's range `pitch_range`.
+/// `None` when no such φ lies within [`BOTH_EXACT_REACH_RAD`] of `start`.
+///
+/// The other actor's miss is measured as the signed angle, about the primary's ray, from
+/// where it is asked to where it lands: both rays are α from the primary's, so it is one
+/// number, and zero only where the actor lands exactly.
+fn both_exact(
+    pair: &Pair,
+    lens: &Lens,
+    theta0: f64,
+    start: f64,
+    primary: Primary,
+    pitch_range: (f64, f64),
+) -> Option<(f64, f64)> {
+    let (aimed, aimed_screen, other, other_screen) = match primary {
+        Primary::A => (pair.ma, pair.screen_a, pair.mb, pair.screen_b),
+        Primary::B => (pair.mb, pair.screen_b, pair.ma, pair.screen_a),
+    };
+    let u = lens.ray(aimed_screen).normalize();
+    let w = lens.ray(other_screen).normalize();
+    // (miss, θ, pitch) at φ.
+    let miss = |phi: f64| -> Option<(f64, f64, f64)> {
+        let theta = pair.refine_theta(lens, theta0, phi, primary);
+        let toric = Toric {
+            alpha_rad: pair.alpha,
+            theta_rad: theta,
+            phi_rad: phi,
+        };
+        let c = toric::position(&pair.ma, &pair.mb, &toric).ok()?;
+        let o = orient(lens, &c, &aimed, aimed_screen);
+        if o.clamped {
+            return None;
+        }
+        let camera = crate::camera::CameraPose {
+            position_m: c,
+            heading_rad: o.heading_rad,
+            pitch_rad: o.pitch_rad,
+        };
+        let v = camera.to_camera(&other).normalize();
+        let m = u.dot(&w.cross(&v));
+        m.is_finite().then_some((m, theta, o.pitch_rad))
+    };
+    let in_range = |(_, theta, pitch): (f64, f64, f64), phi: f64| {
+        (pitch >= pitch_range.0 && pitch <= pitch_range.1).then_some((theta, wrap_angle_rad(phi)))
+    };
+    let at = miss(start)?;
+    // The nearest change of sign, stepping out both ways.
+    let mut bracket = None;
+    let mut last = [(start, at); 2];
+    if at.0 != 0.0 {
+        let steps = (BOTH_EXACT_REACH_RAD / BOTH_EXACT_STEP_RAD) as usize;
+        'out: for k in 1..=steps {
+            for (side, sign) in [1.0, -1.0].into_iter().enumerate() {
+                let phi = start + sign * BOTH_EXACT_STEP_RAD * k as f64;
+                let Some(here) = miss(phi) else {
+                    continue;
+                };
+                let (phi0, before) = last[side];
+                if (before.0 < 0.0) != (here.0 < 0.0) || here.0 == 0.0 {
+                    bracket = Some(((phi0, before), (phi, here)));
+                    break 'out;
+                }
+                last[side] = (phi, here);
+            }
+        }
+    }
+    let ((mut a, mut fa), (mut b, mut fb)) = match bracket {
+        Some(((a, fa), (b, fb))) => ((a, fa.0), (b, fb.0)),
+        None if at.0 == 0.0 => return in_range(at, start),
+        None => return None,
+    };
+    // Regula falsi (Illinois: the end kept twice has its value halved); the miss is smooth
+    // in φ. The answer is the point evaluated with the smallest miss.
+    let mut best = if fa.abs() <= fb.abs() {
+        (a, miss(a)?)
+    } else {
+        (b, miss(b)?)
+    };
+    let mut kept = 0i8;
+    for _ in 0..60 {
+        if best.1 .0 == 0.0 || (b - a).abs() < 1e-13 {
+            break;
+        }
+        let mut phi = (a * fb - b * fa) / (fb - fa);
+        if !(phi > a.min(b) && phi < a.max(b)) {
+            phi = (a + b) / 2.0;
+        }
+        let here = miss(phi)?;
+        if here.0.abs() < best.1 .0.abs() {
+            best = (phi, here);
+        }
+        if (here.0 < 0.0) == (fa < 0.0) {
+            (a, fa) = (phi, here.0);
+            if kept == 1 {
+                fb /= 2.0;
+            }
+            kept = 1;
+        } else {
+            (b, fb) = (phi, here.0);
+            if kept == -1 {
+                fa /= 2.0;
+            }
+            kept = -1;
+        }
+    }
+    in_range(best.1, best.0)
 }
 
 /// How much farther than the toric circle allows an over-the-shoulder's background actor may
@@ -1023,7 +1167,9 @@ fn aim(
             0.0,
             flags,
         ),
-        Gimbal::Pitch { min_rad, max_rad } => {
+        Gimbal::Pitch {
+            min_rad, max_rad, ..
+        } => {
             let o = orient(lens, c, target, screen);
             flags.orientation_clamped = o.clamped;
             let (lo, hi) = (min_rad.min(*max_rad), max_rad.max(*min_rad));

@@ -11,6 +11,7 @@ mod diagnostics;
 mod e2e;
 mod fmt;
 mod gains;
+mod gimbal;
 mod robustness;
 mod shoot;
 mod shots;

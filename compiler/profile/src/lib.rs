@@ -102,8 +102,20 @@ pub struct Camera {
 pub enum Gimbal {
     /// A camera fixed to the body, looking along the heading, level (AR.Drone front camera).
     None,
-    /// A pitch gimbal with its range (up positive).
-    Pitch { min_rad: f64, max_rad: f64 },
+    /// A pitch gimbal with its range (up positive) and the rate it turns at.
+    Pitch {
+        min_rad: f64,
+        max_rad: f64,
+        /// How fast the gimbal turns the camera's pitch. A flight log's profile without it
+        /// (its format predates the field) reads as infinite: the camera was taken to be at
+        /// the pitch asked of it at once, which is how such a flight was measured.
+        #[serde(default = "unlimited_rate")]
+        rate_radps: f64,
+    },
+}
+
+fn unlimited_rate() -> f64 {
+    f64::INFINITY
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -319,10 +331,15 @@ impl Profile {
             "gimbal",
             match c.gimbal {
                 Gimbal::None => "\"none\"".to_string(),
-                Gimbal::Pitch { min_rad, max_rad } => format!(
-                    "{{ pitch_min_deg = {}, pitch_max_deg = {} }}",
+                Gimbal::Pitch {
+                    min_rad,
+                    max_rad,
+                    rate_radps,
+                } => format!(
+                    "{{ pitch_min_deg = {}, pitch_max_deg = {}, rate_degps = {} }}",
                     num(min_rad.to_degrees()),
-                    num(max_rad.to_degrees())
+                    num(max_rad.to_degrees()),
+                    num(rate_radps.to_degrees())
                 ),
             },
         );
@@ -709,7 +726,7 @@ const CAMERA: SectionSpec = SectionSpec {
             Kind::Special,
             "",
             "\"none\"",
-            "the camera mount: `\"none\"` (fixed, level) or `{ pitch_min_deg = -90, pitch_max_deg = 30 }`",
+            "the camera mount: `\"none\"` (fixed, level) or `{ pitch_min_deg = -90, pitch_max_deg = 30, rate_degps = 90 }`",
         ),
     ],
 };
@@ -732,6 +749,13 @@ const GIMBAL: SectionSpec = SectionSpec {
             "°",
             "30",
             "the highest camera pitch of the gimbal (up positive)",
+        ),
+        key(
+            "rate_degps",
+            Kind::Num(Range::new(POSITIVE, Hi::Le(1800.0))),
+            "°/s",
+            "90",
+            "how fast the gimbal turns the camera's pitch",
         ),
     ],
 };
@@ -1778,12 +1802,12 @@ impl<'s> Reader<'s> {
             return None;
         };
         let span = sp(v.span());
-        let shape_help = "write `gimbal = \"none\"` for a camera fixed to the body, or `gimbal = { pitch_min_deg = -90, pitch_max_deg = 30 }` for a pitch gimbal and its range";
+        let shape_help = "write `gimbal = \"none\"` for a camera fixed to the body, or `gimbal = { pitch_min_deg = -90, pitch_max_deg = 30, rate_degps = 90 }` for a pitch gimbal, its range and its rate";
         match v.get_ref() {
             DeValue::String(text) if text.as_ref() == "none" => Some(Gimbal::None),
             DeValue::String(text) => {
                 let mean = if text.eq_ignore_ascii_case("pitch") {
-                    "a pitch gimbal needs its range: ".to_string()
+                    "a pitch gimbal needs its range and rate: ".to_string()
                 } else if let Some(m) = did_you_mean(text, ["none"]) {
                     format!("{m} Otherwise, ")
                 } else {
@@ -1812,13 +1836,15 @@ impl<'s> Reader<'s> {
                         g.absent(k);
                     }
                 }
+                let rate = g.num(self, "rate_degps");
                 g.finish(self);
                 match (lo, hi) {
                     (Got::Ok(lo, lo_span), Got::Ok(hi, hi_span)) => {
                         if lo < hi {
-                            Some(Gimbal::Pitch {
+                            rate.map(|rate| Gimbal::Pitch {
                                 min_rad: lo.to_radians(),
                                 max_rad: hi.to_radians(),
+                                rate_radps: rate.to_radians(),
                             })
                         } else {
                             self.diags.push(
@@ -2183,7 +2209,7 @@ mod tests {
             .replace("aspect = \"16:9\"", "aspect = 1.5")
             .replace(
                 "gimbal = \"none\"",
-                "gimbal = { pitch_min_deg = -90, pitch_max_deg = 30 }",
+                "gimbal = { pitch_min_deg = -90, pitch_max_deg = 30, rate_degps = 90 }",
             );
         let (p, _) = Profile::from_toml("x", &src).unwrap();
         assert!((p.camera.fov_x_rad - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
@@ -2192,7 +2218,55 @@ mod tests {
             p.camera.gimbal,
             Gimbal::Pitch {
                 min_rad: -std::f64::consts::FRAC_PI_2,
-                max_rad: 30f64.to_radians()
+                max_rad: 30f64.to_radians(),
+                rate_radps: std::f64::consts::FRAC_PI_2,
+            }
+        );
+    }
+
+    /// A gimbal's rate is required, positive and finite, and each mistake is told at its
+    /// place: a missing rate at the gimbal's table, a bad one at its number, a misspelt key
+    /// at the key.
+    #[test]
+    fn a_gimbal_needs_a_positive_rate() {
+        let with = |gimbal: &str| ARDRONE2_TOML.replace("gimbal = \"none\"", gimbal);
+        let src = with("gimbal = { pitch_min_deg = -90, pitch_max_deg = 30 }");
+        let d = Profile::from_toml("x", &src).unwrap_err();
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].code, ProfileCode::MissingKey);
+        assert!(d[0].message.contains("rate_degps"), "{}", d[0].message);
+        assert!(src[d[0].span.start..d[0].span.end].starts_with("{ pitch_min_deg"));
+        for bad in ["0", "-30", "2000", "nan", "\"fast\""] {
+            let src = with(&format!(
+                "gimbal = {{ pitch_min_deg = -90, pitch_max_deg = 30, rate_degps = {bad} }}"
+            ));
+            let d = Profile::from_toml("x", &src).unwrap_err();
+            assert_eq!(d.len(), 1, "{bad}: {d:?}");
+            assert_eq!(d[0].code, ProfileCode::BadValue, "{bad}");
+            assert_eq!(&src[d[0].span.start..d[0].span.end], bad);
+        }
+        let src = with("gimbal = { pitch_min_deg = -90, pitch_max_deg = 30, rate_deg_s = 90 }");
+        let d = Profile::from_toml("x", &src).unwrap_err();
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].code, ProfileCode::UnknownKey);
+        assert_eq!(&src[d[0].span.start..d[0].span.end], "rate_deg_s");
+        assert!(
+            d[0].help.as_deref().unwrap_or("").contains("rate_degps"),
+            "{d:?}"
+        );
+    }
+
+    /// A flight log's profile with a pitch gimbal but no rate reads as an unlimited rate.
+    #[test]
+    fn a_logged_gimbal_without_a_rate_reads_as_unlimited() {
+        let json = r#"{"kind":"pitch","min_rad":-1.0,"max_rad":0.5}"#;
+        let g: Gimbal = serde_json::from_str(json).unwrap();
+        assert_eq!(
+            g,
+            Gimbal::Pitch {
+                min_rad: -1.0,
+                max_rad: 0.5,
+                rate_radps: f64::INFINITY
             }
         );
     }
@@ -2204,6 +2278,7 @@ mod tests {
         p.camera.gimbal = Gimbal::Pitch {
             min_rad: -1.2,
             max_rad: 0.4,
+            rate_radps: 1.5,
         };
         p.limits.speed_max_mps = 1.1;
         let (q, w) = Profile::from_toml("ardrone2", &p.to_toml()).unwrap();

@@ -235,6 +235,7 @@ fn a_user_profile_file_round_trips() {
     mine.camera.gimbal = Gimbal::Pitch {
         min_rad: -90f64.to_radians(),
         max_rad: 30f64.to_radians(),
+        rate_radps: 90f64.to_radians(),
     };
     mine.limits.speed_max_mps = 1.5;
     let path = scratch("gimballed.toml");
@@ -245,9 +246,14 @@ fn a_user_profile_file_round_trips() {
     assert_eq!(back.servo, mine.servo);
     assert_eq!(back.model, mine.model);
     match back.camera.gimbal {
-        Gimbal::Pitch { min_rad, max_rad } => {
+        Gimbal::Pitch {
+            min_rad,
+            max_rad,
+            rate_radps,
+        } => {
             assert!((min_rad + std::f64::consts::FRAC_PI_2).abs() < 1e-12);
             assert!((max_rad - 30f64.to_radians()).abs() < 1e-12);
+            assert!((rate_radps - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         }
         Gimbal::None => panic!("gimbal lost"),
     }

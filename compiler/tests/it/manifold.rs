@@ -28,6 +28,7 @@ fn gimbal() -> Gimbal {
     Gimbal::Pitch {
         min_rad: -PI / 2.0,
         max_rad: PI / 2.0,
+        rate_radps: PI,
     }
 }
 
@@ -644,6 +645,7 @@ fn pitch_is_clamped_and_flagged() {
     let g = Gimbal::Pitch {
         min_rad: -0.1,
         max_rad: 0.1,
+        rate_radps: PI,
     };
     let actors = [actor(0.0, 0.0, 0.0, 1.8)];
     let c = comp(
@@ -1267,4 +1269,77 @@ fn a_held_two_shot_follows_its_root_as_the_actors_walk() {
         "the case jumps unheld: {plain_jump_m:.3} m"
     );
     assert!(held_jump_m < 0.05, "held: {held_jump_m:.3} m in a tick");
+}
+
+/// Two actors of different heights in one framing, eye level, a pitch gimbal: the camera
+/// turns about the actors' line until the plane through it and both aim points holds its
+/// (horizontal) right axis, so both land exactly on their screen points (written or
+/// default), the sized actor keeps its size, and the pitch lies inside the gimbal's range.
+/// A gimbal whose range cannot hold that pitch frames as the level case does: the primary
+/// exactly, the other off its line.
+#[test]
+fn a_gimbal_frames_two_heights_exactly() {
+    let l = lens(84.0);
+    let g = gimbal();
+    for (xb, yb, hb, screens) in [
+        (2.0, 0.0, 1.65, [None, None, None]),
+        (1.5, 1.0, 1.50, [None, None, None]),
+        (2.5, -0.5, 1.95, [Some(-0.5), Some(0.1), Some(0.2)]),
+    ] {
+        let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(xb, yb, 180.0, hb)];
+        let c = comp(
+            CameraAngle::EyeLevel,
+            vec![(
+                Size::MS,
+                vec![
+                    subject("A", None, screens[0], screens[1]),
+                    subject("B", None, None, screens[2]),
+                ],
+            )],
+        );
+        let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
+        let p = place(&v, &actors, &l, &g);
+        let e = screen_error(&v, &actors, &l, &g, &p);
+        assert!(e < 1e-6, "B at ({xb}, {yb}), {hb} m: screen error {e}");
+        assert!(!p.flags.any(), "{:?}", p.flags);
+        // The level camera's error on the same composition, for contrast.
+        let v0 = solve(&c, &NAMES[..2], &actors, &l, &Gimbal::None).unwrap();
+        let p0 = place(&v0, &actors, &l, &Gimbal::None);
+        let e0 = screen_error(&v0, &actors, &l, &Gimbal::None, &p0);
+        assert!(e0 > 0.01, "level: {e0}");
+        // The sized actor keeps its size: its band spans two frame heights.
+        let Visual::Two(t) = &v else { panic!("{v:?}") };
+        let (sized, band) = match t.primary {
+            framing::Primary::A => (&actors[0], t.band_a_m),
+            framing::Primary::B => (&actors[1], t.band_b_m),
+        };
+        let cam = pose(&p);
+        let top = cam.project(&l, &head(sized, band[1])).unwrap();
+        let bottom = cam.project(&l, &head(sized, band[0])).unwrap();
+        assert!(
+            (top[1] - bottom[1] - 2.0).abs() < 0.02,
+            "{top:?} {bottom:?}"
+        );
+    }
+
+    // A gimbal that barely tilts: the pitch is out of its reach, the primary still exact.
+    let narrow = Gimbal::Pitch {
+        min_rad: -1e-4,
+        max_rad: 1e-4,
+        rate_radps: PI,
+    };
+    let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(2.0, 0.0, 180.0, 1.65)];
+    let c = comp(
+        CameraAngle::EyeLevel,
+        vec![(
+            Size::MS,
+            vec![
+                subject("A", None, None, None),
+                subject("B", None, None, None),
+            ],
+        )],
+    );
+    let v = solve(&c, &NAMES[..2], &actors, &l, &narrow).unwrap();
+    let p = place(&v, &actors, &l, &narrow);
+    assert!(screen_error(&v, &actors, &l, &narrow, &p) > 0.01);
 }

@@ -53,6 +53,16 @@ pub trait Drone {
     /// flag off).
     fn hover(&mut self) -> Result<(), BackendError>;
     fn telemetry(&mut self) -> Telemetry;
+    /// Points the camera gimbal at `pitch_rad` (up positive, from level); a drone without a
+    /// gimbal ignores it.
+    fn point_camera(&mut self, _pitch_rad: f64) -> Result<(), BackendError> {
+        Ok(())
+    }
+    /// The camera pitch the gimbal last reported (up positive), if the drone has a gimbal
+    /// that reports one.
+    fn camera_pitch_rad(&mut self) -> Option<f64> {
+        None
+    }
 }
 
 /// One tracked body: position and heading in the world frame (see `frames.rs`).

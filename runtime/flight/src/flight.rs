@@ -14,7 +14,9 @@ use dronecine_compiler::route::{self, Keepout};
 use dronecine_compiler::steering::{self, Bodies, Body, Kinematics};
 use dronecine_grammar::script::Stage;
 use dronecine_math::wrap_angle_rad;
-use dronecine_mcap::record::{reference_of, Event, FlightSink, FramingRecord, Phase, TickRecord};
+use dronecine_mcap::record::{
+    reference_of, Event, FlightSink, FramingRecord, GimbalRecord, Phase, TickRecord,
+};
 use dronecine_servo::control::{Controller, Measurement, TickFault, TickInput, TickOutput};
 
 use crate::ahead::DirectedTick;
@@ -51,6 +53,11 @@ pub(crate) struct Flight<'s, 'b> {
     pub(crate) actors: ActorTracker,
     pub(crate) targets: Vec<ScreenTarget>,
     pub(crate) framing: Vec<FramingRecord>,
+    /// The profile has a camera gimbal: each tick reads its pitch and commands it.
+    pub(crate) gimbal: bool,
+    /// The pitch the gimbal reported at the start of this tick (`None` without a gimbal, or
+    /// when the drone reports none).
+    pub(crate) gimbal_pitch_rad: Option<f64>,
     /// The actors' bodies as they stand this tick, for [`Flight::clear_of_actors`] (reused:
     /// no allocation per tick).
     pub(crate) bodies: Vec<Body>,
@@ -151,6 +158,8 @@ impl<'s, 'b> Flight<'s, 'b> {
             actors: ActorTracker::new(setup.scene),
             targets: Vec::with_capacity(4),
             framing: Vec::with_capacity(n_actors.max(2)),
+            gimbal: setup.profile.camera.gimbal != dronecine_profile::Gimbal::None,
+            gimbal_pitch_rad: None,
             bodies: Vec::with_capacity(n_actors),
             last_aim: None,
             last_tick_s: None,
@@ -228,6 +237,9 @@ impl<'s, 'b> Flight<'s, 'b> {
             );
         }
         self.fresh = self.mocap.poll(&mut self.frame)?;
+        if self.gimbal {
+            self.gimbal_pitch_rad = self.drone.camera_pitch_rad();
+        }
         let agreed = ahead.is_none_or(|k| k.feed.fill(self.fresh, &mut self.frame));
         if self.fresh {
             if !take_newer(&mut self.last_frame_t_s, &self.frame) {
@@ -314,6 +326,9 @@ impl<'s, 'b> Flight<'s, 'b> {
             Operator::Fly => {}
             Operator::Land => land = true,
             Operator::MotorsCut => return Ok(Outcome::Land),
+        }
+        if self.gimbal {
+            self.drone.point_camera(sample.camera_pitch_rad)?;
         }
         if self.hovering || actor_hover || output.is_err() || land {
             command_sent = Command::HOVER;
@@ -537,6 +552,10 @@ impl<'s, 'b> Flight<'s, 'b> {
             framing: &self.framing,
             drone_state: state,
             latency_s,
+            gimbal: self.gimbal.then_some(GimbalRecord {
+                asked_rad: sample.camera_pitch_rad,
+                reported_rad: self.gimbal_pitch_rad,
+            }),
         };
         // A log that starts a chunk after this tick opens it with the controller's state (a
         // key frame), from which replay resumes after a gap.

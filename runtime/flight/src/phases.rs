@@ -387,8 +387,9 @@ impl Flight<'_, '_> {
 
     /// A shot's sample as flown: in a hold, aimed from where the drone is (the heading and
     /// gimbal pitch that frame the live actors from its measured position); and the framing
-    /// as the drone really films it, from the measured pose and the camera pitch asked of the
-    /// gimbal (level without one), into `self.framing`.
+    /// as the drone really films it, from the measured pose and the camera pitch the gimbal
+    /// reported at the start of the tick (the pitch asked when it reports none; level without
+    /// a gimbal), into `self.framing`.
     fn aimed_and_measured(&mut self, t: f64, tick: &DirectedTick, sample: Sample) -> Sample {
         let mut world_sample = Sample { t_s: t, ..sample };
         let usable = self
@@ -401,7 +402,9 @@ impl Flight<'_, '_> {
             let camera = CameraPose {
                 position_m: Vec3::from(m.position_m),
                 heading_rad: m.heading_rad,
-                pitch_rad: world_sample.camera_pitch_rad,
+                pitch_rad: self
+                    .gimbal_pitch_rad
+                    .unwrap_or(world_sample.camera_pitch_rad),
             }
             .frame();
             if held.targets_into(&self.actors.poses, &camera.position_m, &mut self.targets) {

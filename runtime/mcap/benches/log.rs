@@ -213,6 +213,7 @@ fn write_with(path: &Path, ticks: &[Tick], n: usize, options: LogOptions) -> Dur
             framing: &tick.framing,
             drone_state: FlightState::Flying,
             latency_s: Some(0.002),
+            gimbal: None,
         };
         log.write_tick(black_box(&record)).unwrap();
         if log.wants_key_frame() {

@@ -95,6 +95,17 @@ pub struct FramingRecord {
     pub requested: Option<[f64; 2]>,
 }
 
+/// The camera gimbal at one tick: the pitch asked of it and the pitch it reported (up
+/// positive). Only a drone whose profile has a gimbal has one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GimbalRecord {
+    /// The pitch commanded this tick (the reference sample's).
+    pub asked_rad: f64,
+    /// The pitch the gimbal reported this tick, before this tick's command (`None` when the
+    /// drone reports none).
+    pub reported_rad: Option<f64>,
+}
+
 /// One control tick.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TickRecord<'a> {
@@ -119,6 +130,8 @@ pub struct TickRecord<'a> {
     /// Seconds from this tick's mocap frame reaching the computer to the command leaving it
     /// (`None` without a new frame).
     pub latency_s: Option<f64>,
+    /// The camera gimbal (`None` when the profile has no gimbal).
+    pub gimbal: Option<GimbalRecord>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -8,6 +8,11 @@
 //! drain — each switchable in [`Effects`], each seeded. With [`Effects::none`] the plant is
 //! exactly the servo's model (see `plant.rs`).
 //!
+//! When the profile has a pitch gimbal, so has the simulated camera ([`SimGimbal`]): it turns
+//! toward the pitch last asked ([`Drone::point_camera`]) at the profile's rate, within its
+//! range, step by step with the plant, and reports where it is
+//! ([`Drone::camera_pitch_rad`]). Without one the camera is fixed and reports nothing.
+//!
 //! One [`Simulator`] owns the world; [`SimDrone`], [`SimMocap`] and [`SimClock`] are handles on
 //! it (`Rc<RefCell<_>>`, single-threaded). [`SimClock::sleep_until`] advances the physics; the
 //! mocap produces a frame every `1/mocap_rate_hz` of world time, whether or not anyone polls.
@@ -40,7 +45,7 @@ use dronecine_backend::{
 };
 use dronecine_compiler::reference::ActorPose;
 use dronecine_grammar::script::Scene;
-use dronecine_profile::Profile;
+use dronecine_profile::{Gimbal, Profile};
 
 use actors::Actors;
 use plant::{Link, Mode, Packet, Plant};
@@ -93,6 +98,60 @@ impl Default for Truth {
     }
 }
 
+/// The simulated camera's pitch gimbal: it turns toward the pitch asked at its rate, within
+/// its range. It starts level (clamped into its range).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimGimbal {
+    pub min_rad: f64,
+    pub max_rad: f64,
+    pub rate_radps: f64,
+    /// Where the camera points now (up positive).
+    pub pitch_rad: f64,
+    /// The pitch last asked, clamped into the range.
+    pub target_rad: f64,
+}
+
+impl SimGimbal {
+    /// The gimbal of a profile, level; `None` for a camera fixed to the body.
+    pub fn of(gimbal: &Gimbal) -> Option<SimGimbal> {
+        match *gimbal {
+            Gimbal::None => None,
+            Gimbal::Pitch {
+                min_rad,
+                max_rad,
+                rate_radps,
+            } => {
+                let level = 0f64.clamp(min_rad, max_rad);
+                Some(SimGimbal {
+                    min_rad,
+                    max_rad,
+                    rate_radps,
+                    pitch_rad: level,
+                    target_rad: level,
+                })
+            }
+        }
+    }
+
+    /// Asks for `pitch_rad`, held inside the range; a pitch that is not a number is ignored.
+    pub fn point(&mut self, pitch_rad: f64) {
+        if !pitch_rad.is_nan() {
+            self.target_rad = pitch_rad.clamp(self.min_rad, self.max_rad);
+        }
+    }
+
+    /// Turns toward the pitch asked for `dt_s`, at most its rate.
+    pub fn step(&mut self, dt_s: f64) {
+        let most = self.rate_radps * dt_s;
+        let to_go = self.target_rad - self.pitch_rad;
+        self.pitch_rad = if to_go.abs() <= most {
+            self.target_rad
+        } else {
+            self.pitch_rad + most.copysign(to_go)
+        };
+    }
+}
+
 /// What happened to the command packets so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LinkStats {
@@ -136,6 +195,8 @@ struct World {
     actors: Actors,
     mocap: MocapGen,
     battery_on: bool,
+    /// The camera's gimbal, when the profile has one.
+    gimbal: Option<SimGimbal>,
     /// [`SimConfig::actors_ahead`].
     actors_ahead: bool,
     /// The flight takes the actors' part of the frames from the copy ahead
@@ -282,6 +343,9 @@ impl World {
                         ];
                     }
                     self.plant.step(&mut self.link, self.last_wind);
+                    if let Some(g) = &mut self.gimbal {
+                        g.step(self.plant.h);
+                    }
                 }
                 Event::Done => break,
             }
@@ -409,6 +473,7 @@ impl Simulator {
             actors,
             mocap,
             battery_on: eff.battery,
+            gimbal: SimGimbal::of(&profile.camera.gimbal),
             actors_ahead: config.actors_ahead,
             actors_from_feed: false,
             zig,
@@ -463,6 +528,11 @@ impl Simulator {
             (FlightState::Flying, Mode::Progressive(c)) => Some(c),
             _ => None,
         }
+    }
+
+    /// The camera's gimbal now, when the profile has one.
+    pub fn gimbal(&self) -> Option<SimGimbal> {
+        self.world.borrow().gimbal
     }
 
     pub fn link_stats(&self) -> LinkStats {
@@ -545,6 +615,17 @@ impl Drone for SimDrone {
             battery_percent: w.plant.battery,
             link_age_s: 0.0,
         }
+    }
+
+    fn point_camera(&mut self, pitch_rad: f64) -> Result<(), BackendError> {
+        if let Some(g) = &mut self.world.borrow_mut().gimbal {
+            g.point(pitch_rad);
+        }
+        Ok(())
+    }
+
+    fn camera_pitch_rad(&mut self) -> Option<f64> {
+        self.world.borrow().gimbal.map(|g| g.pitch_rad)
     }
 }
 

@@ -1036,3 +1036,41 @@ fn frames_without_the_actors_draw_the_same_numbers() {
     assert_eq!(left_out, 1999);
     assert!(dropped > 50, "dropouts drawn: {dropped}");
 }
+
+/// A profile with a pitch gimbal gives the simulated camera one: it turns toward the pitch
+/// asked at the profile's rate, stops inside its range, and reports where it is; a profile
+/// without one reports nothing and ignores the asking.
+#[test]
+fn a_gimbal_follows_at_its_rate_within_its_range() {
+    let mut gimballed = profile();
+    let rate = 60f64.to_radians();
+    gimballed.camera.gimbal = dronecine_profile::Gimbal::Pitch {
+        min_rad: -FRAC_PI_2,
+        max_rad: 30f64.to_radians(),
+        rate_radps: rate,
+    };
+    let mut rig = Rig::new(&reduced(1), &gimballed);
+    assert_eq!(rig.drone.camera_pitch_rad(), Some(0.0));
+    rig.drone.point_camera(-0.5).unwrap();
+    rig.sleep(0.1);
+    let p = rig.drone.camera_pitch_rad().unwrap();
+    assert!((p + rate * 0.1).abs() < 1e-9, "{p}");
+    rig.sleep(1.0);
+    assert_eq!(rig.drone.camera_pitch_rad(), Some(-0.5));
+    // Beyond the range: held at its end.
+    rig.drone.point_camera(1.5).unwrap();
+    rig.sleep(3.0);
+    let top = rig.drone.camera_pitch_rad().unwrap();
+    assert!((top - 30f64.to_radians()).abs() < 1e-12, "{top}");
+    assert_eq!(rig.sim.gimbal().map(|g| g.pitch_rad), Some(top));
+    // Not a number: ignored.
+    rig.drone.point_camera(f64::NAN).unwrap();
+    rig.sleep(0.1);
+    assert_eq!(rig.drone.camera_pitch_rad(), Some(top));
+
+    let mut fixed = Rig::new(&reduced(1), &profile());
+    fixed.drone.point_camera(-0.5).unwrap();
+    fixed.sleep(0.5);
+    assert_eq!(fixed.drone.camera_pitch_rad(), None);
+    assert!(fixed.sim.gimbal().is_none());
+}

@@ -437,6 +437,7 @@ mod tests {
             framing: &[],
             drone_state: FlightState::Flying,
             latency_s: Some(2.5e-5),
+            gimbal: None,
         }
     }
 

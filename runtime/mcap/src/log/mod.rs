@@ -25,6 +25,7 @@
 //! | `/measurement` | `dronecine/msg/Measurement` (CDR) | 30 Hz: ticks with a new mocap frame | `t_s` (capture), `frame`, `drone {position_m, heading_rad, tracked}`, `actors[]` (same) |
 //! | `/command` | `dronecine/msg/Command` (CDR) | 10 Hz, and every tick whose `failsafe` is set (and the first after) | `t_s`, `roll_rad`, `pitch_rad`, `yaw_rate_radps`, `vz_mps` (the command **sent**), `saturated`, `failsafe` (the command sent is not the controller's) |
 //! | `/framing` | `dronecine/msg/Framing` (CDR) | 10 Hz: ticks with framing records | `t_s`, `shot` (−1: none), `actors[] {name, actor, screen, requested, has_screen, has_requested}` |
+//! | `/gimbal` | `dronecine/msg/Gimbal` (CDR) | every tick, only when the profile has a gimbal (no channel otherwise) | `t_s`, `asked_rad` (the pitch commanded), `reported_rad` and `has_reported` (the pitch the gimbal reported, before this tick's command) |
 //! | `/events` | `dronecine.Event` | each event | `t_s`, `level`, `kind`, `message`; a finding of the director's also `line` (the script's, 1-based) and `help` (its fix, as compile says it) |
 //! | `/servo/tick` | `dronecine/msg/ServoTick` (CDR, [`cdr::SCHEMA`]) | every tick | the phase, the shot, the [`TickInput`](dronecine_servo::control::TickInput), the [`TickOutput`](dronecine_servo::control::TickOutput) or the fault, the command sent, the drone's state, the latency, the actors as the director saw them, the framing records: 514 bytes with two actors framed |
 //! | `/servo/state` | `dronecine/msg/ServoState` (CDR, [`key_frame::SCHEMA`]) | before the first tick of each chunk | a key frame: the [`ControllerState`](dronecine_servo::control::ControllerState) after the tick before, every float bit for bit (before the log's first tick, the mark that the controller starts there) |
@@ -124,6 +125,8 @@ pub mod topic {
     pub const MEASUREMENT: &str = "/measurement";
     pub const COMMAND: &str = "/command";
     pub const FRAMING: &str = "/framing";
+    /// The camera gimbal's pitch, asked and reported: only for a drone with a gimbal.
+    pub const GIMBAL: &str = "/gimbal";
     pub const EVENTS: &str = "/events";
     pub const SERVO_TICK: &str = "/servo/tick";
     /// The key frames: the controller's state at the start of each chunk.

@@ -1,5 +1,6 @@
 //! The flight log's own plot topics in CDR with `ros2msg` schemas, as `/servo/tick`:
-//! `/estimate`, `/measurement`, `/command` and `/framing` (compile's `/reference`, `/actors`
+//! `/estimate`, `/measurement`, `/command`, `/framing` and, for a drone with a gimbal,
+//! `/gimbal` (compile's `/reference`, `/actors`
 //! and `/tf` come from the compiler's writers, in CDR too). Every float is written exactly
 //! (NaN, infinities and `-0.0` included); an absent value (an untracked body, an actor behind
 //! the camera) is zero with its flag clear. The decoders are for tests and tools: a damaged
@@ -11,7 +12,7 @@
 
 use crate::output::cdr::{Cdr, CdrReader, SEPARATOR};
 
-use crate::record::FramingRecord;
+use crate::record::{FramingRecord, GimbalRecord};
 use dronecine_backend::frames::Command;
 use dronecine_backend::{BodyPose, MocapFrame};
 use dronecine_servo::control::{Estimate, TickOutput};
@@ -20,6 +21,7 @@ pub const ESTIMATE: &str = "dronecine/msg/Estimate";
 pub const MEASUREMENT: &str = "dronecine/msg/Measurement";
 pub const COMMAND: &str = "dronecine/msg/Command";
 pub const FRAMING: &str = "dronecine/msg/Framing";
+pub const GIMBAL: &str = "dronecine/msg/Gimbal";
 
 /// The `ros2msg` definition of `/estimate`.
 pub fn estimate_schema() -> String {
@@ -84,6 +86,18 @@ bool has_screen
 bool has_requested
 "
     )
+}
+
+/// The `ros2msg` definition of `/gimbal`.
+pub fn gimbal_schema() -> String {
+    "\
+# The camera gimbal's pitch: what the flight asked and what the gimbal reported
+float64 t_s                      # flight clock (s)
+float64 asked_rad                # the pitch commanded this tick, up positive
+float64 reported_rad             # the pitch the gimbal reported, up positive (zero unless has_reported)
+bool has_reported                # false: the drone reported no pitch this tick
+"
+    .to_string()
 }
 
 /// Bit-for-bit equal floats.
@@ -166,6 +180,32 @@ pub fn framing(
             .bool(f.screen.is_some())
             .bool(f.requested.is_some());
     }
+}
+
+/// Appends a `/gimbal` message.
+pub fn gimbal(buf: &mut Vec<u8>, t_s: f64, g: &GimbalRecord) {
+    Cdr::new(buf)
+        .f64(t_s)
+        .f64(g.asked_rad)
+        .f64(g.reported_rad.unwrap_or_default())
+        .bool(g.reported_rad.is_some());
+}
+
+/// A `/gimbal` message read back: the time and the record.
+pub fn decode_gimbal(data: &[u8]) -> Result<(f64, GimbalRecord), String> {
+    let mut r = CdrReader::new(data)?;
+    let t_s = r.f64("t_s")?;
+    let asked_rad = r.f64("asked_rad")?;
+    let reported_rad = r.f64("reported_rad")?;
+    let has_reported = r.bool("has_reported")?;
+    r.finish("Gimbal")?;
+    Ok((
+        t_s,
+        GimbalRecord {
+            asked_rad,
+            reported_rad: has_reported.then_some(reported_rad),
+        },
+    ))
 }
 
 /// An `/estimate` message read back: the time and the estimate.
@@ -362,6 +402,32 @@ mod tests {
         buf.clear();
         framing(&mut buf, 4.0, None, &names, &[]);
         assert_eq!(decode_framing(&buf).unwrap().shot, None);
+
+        for g in [
+            GimbalRecord {
+                asked_rad: -0.25,
+                reported_rad: Some(-0.0),
+            },
+            GimbalRecord {
+                asked_rad: 0.1 + 0.2,
+                reported_rad: None,
+            },
+        ] {
+            buf.clear();
+            gimbal(&mut buf, 5.0, &g);
+            // Three floats and a flag, no padding.
+            assert_eq!(buf.len(), 4 + 25);
+            let (t, back) = decode_gimbal(&buf).unwrap();
+            assert_eq!(t, 5.0);
+            assert_eq!(back.asked_rad.to_bits(), g.asked_rad.to_bits());
+            assert_eq!(
+                back.reported_rad.map(f64::to_bits),
+                g.reported_rad.map(f64::to_bits)
+            );
+        }
+        let last = buf.len() - 1;
+        buf[last] = 2;
+        assert!(decode_gimbal(&buf).unwrap_err().contains("has_reported"));
     }
 
     #[test]

@@ -64,7 +64,7 @@ use std::time::{Duration, Instant};
 use super::writer::ChunkClock;
 use super::FlightLogWriter;
 use crate::record::FlightSink;
-use crate::record::{Event, FramingRecord, Phase, TickRecord};
+use crate::record::{Event, FramingRecord, GimbalRecord, Phase, TickRecord};
 use dronecine_backend::frames::Command;
 use dronecine_backend::{FlightState, MocapFrame};
 use dronecine_compiler::reference::{ActorPose, Sample};
@@ -125,6 +125,7 @@ pub struct OwnedTick {
     framing: Vec<FramingRecord>,
     drone_state: FlightState,
     latency_s: Option<f64>,
+    gimbal: Option<GimbalRecord>,
 }
 
 /// Room for this many actors in each preallocated tick (more grow a tick's vectors once).
@@ -149,6 +150,7 @@ impl OwnedTick {
             framing: Vec::with_capacity(ACTORS),
             drone_state: FlightState::Landed,
             latency_s: None,
+            gimbal: None,
         }
     }
 
@@ -175,6 +177,7 @@ impl OwnedTick {
         self.framing.extend_from_slice(r.framing);
         self.drone_state = r.drone_state;
         self.latency_s = r.latency_s;
+        self.gimbal = r.gimbal;
     }
 
     /// Asks the cache for the lines that [`OwnedTick::fill`] will write with a record of
@@ -209,6 +212,7 @@ impl OwnedTick {
             framing: &self.framing,
             drone_state: self.drone_state,
             latency_s: self.latency_s,
+            gimbal: self.gimbal,
         }
     }
 }

@@ -120,6 +120,8 @@ struct Channels {
     measurement: Channel,
     command: Channel,
     framing: Channel,
+    /// `/gimbal`, only for a profile with a gimbal.
+    gimbal: Option<Channel>,
     events: Channel,
     servo_tick: Channel,
     /// `/servo/state`: the key frames.
@@ -205,8 +207,8 @@ fn open(path: &Path, new: bool) -> io::Result<File> {
 
 /// Adds the log's schemas and channels but `/tf`'s: the per-tick topics in CDR with ros2msg
 /// schemas, events and the static ones JSON; `/servo/tick` first (its schema and channel ids
-/// are 1).
-fn add_channels(writer: &mut McapFile) -> io::Result<Channels> {
+/// are 1), `/gimbal` (for a drone with a gimbal) just before `/servo/state`, which is last.
+fn add_channels(writer: &mut McapFile, gimbal: bool) -> io::Result<Channels> {
     let mut channel = |schema_name: &str, schema: &str, topic: &str, enc: Encoding| {
         let schema_id = writer.add_schema(schema_name, enc.schema(), schema.as_bytes())?;
         let id = writer.add_channel(schema_id, topic, enc.message())?;
@@ -250,6 +252,16 @@ fn add_channels(writer: &mut McapFile) -> io::Result<Channels> {
             topic::CAMERA_CALIBRATION,
             j,
         )?,
+        gimbal: if gimbal {
+            Some(channel(
+                plots::GIMBAL,
+                &plots::gimbal_schema(),
+                topic::GIMBAL,
+                c,
+            )?)
+        } else {
+            None
+        },
         key_frame: channel(
             key_frame::SCHEMA_NAME,
             key_frame::SCHEMA,
@@ -357,7 +369,8 @@ impl FlightLogWriter {
         )
         .map_err(err)?;
 
-        let channels = add_channels(&mut writer).map_err(err)?;
+        let gimbal = header.profile.camera.gimbal != dronecine_profile::Gimbal::None;
+        let channels = add_channels(&mut writer, gimbal).map_err(err)?;
 
         let metadata = header_metadata(header).map_err(|e| annotate(path, io::Error::other(e)))?;
         writer
@@ -592,6 +605,12 @@ impl FlightLogWriter {
             let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.framing);
             put_with(w, path, channel, ns, |b| {
                 plots::framing(b, t_s, tick.shot, &self.actor_names, tick.framing)
+            })?;
+        }
+
+        if let (Some(g), Some(channel)) = (&tick.gimbal, &mut self.channels.gimbal) {
+            put_with(&mut self.writer, &self.path, channel, ns, |b| {
+                plots::gimbal(b, t_s, g)
             })?;
         }
 

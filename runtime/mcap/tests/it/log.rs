@@ -91,6 +91,7 @@ impl Tick {
             framing: &self.framing,
             drone_state: FlightState::Flying,
             latency_s: self.mocap.as_ref().map(|_| 0.0037),
+            gimbal: None,
         }
     }
 
