@@ -342,13 +342,7 @@ pub fn run_calibrate(a: &CalibrateArgs, color: bool) -> ExitCode {
             )
         }
         Some(t) => {
-            hardware = match dronecine_runtime::connect_hardware(
-                &t.drone,
-                &t.mocap,
-                &t.rig,
-                std::iter::empty::<&str>(),
-                &prior,
-            ) {
+            hardware = match dronecine_runtime::connect_hardware(t, None, &prior) {
                 Ok(h) => h,
                 Err(e) => return fail(e),
             };

@@ -3,17 +3,12 @@
 
 use std::path::Path;
 
-use dronecine_ardrone::url::ArDroneUrl;
 use dronecine_diag as diag;
 use dronecine_natnet::rig::{Rig, RigError};
-use dronecine_natnet::url::NatNetUrl;
+use dronecine_runtime::{DroneUrl, HardwareTarget, MocapUrl};
 
 /// A real drone and its motion capture.
-pub struct Target {
-    pub drone: ArDroneUrl,
-    pub mocap: NatNetUrl,
-    pub rig: Rig,
-}
+pub type Target = HardwareTarget;
 
 /// `None` without `--drone` and `--mocap` (the command flies the simulator); the error
 /// message (without `error: `) when only one is given, when `--rig` comes without them, a
@@ -40,9 +35,11 @@ pub fn target(
             None => Ok(None),
         },
         (Some(d), Some(m)) => {
-            let drone = ArDroneUrl::parse(d).map_err(|e| format!("--drone: {e}"))?;
-            let mocap = NatNetUrl::parse(m).map_err(|e| format!("--mocap: {e}"))?;
+            let drone = DroneUrl::parse(d).map_err(|e| format!("--drone: {e}"))?;
+            let mocap = MocapUrl::parse(m).map_err(|e| format!("--mocap: {e}"))?;
             let rig = match rig {
+                // ArduPilot's simulator's truth has no rigid bodies.
+                None if mocap == MocapUrl::SitlTruth => Rig::numbered(actors.unwrap_or(&[])),
                 Some(path) => match Rig::load(path) {
                     Ok(rig) => rig,
                     Err(RigError::Invalid {
@@ -71,7 +68,12 @@ pub fn target(
                     Rig::numbered(names)
                 }
             };
-            Ok(Some(Target { drone, mocap, rig }))
+            Ok(Some(Target {
+                drone,
+                mocap,
+                rig,
+                forward_mocap: true,
+            }))
         }
         (Some(_), None) => {
             Err("--drone needs --mocap: the servo flies on motion-capture positions".into())

@@ -21,6 +21,7 @@ mod replay;
 mod shoot;
 mod signals;
 mod status;
+mod status_mavlink;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -154,17 +155,24 @@ enum Command {
         report: ReportFormat,
         #[command(flatten)]
         effects: SimEffects,
-        /// Fly a real AR.Drone 2.0 (or `dronecine emulate`):
-        /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`. Needs --mocap.
+        /// Fly a real drone. An AR.Drone 2.0 (or `dronecine emulate`):
+        /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`; an ArduPilot Copter:
+        /// `mavlink://udp:HOST:PORT`, `mavlink://tcp:HOST:PORT` or
+        /// `mavlink:///dev/PORT?baud=N`. Needs --mocap.
         #[arg(long, value_name = "URL")]
         drone: Option<String>,
         /// Its positions from OptiTrack NatNet:
-        /// `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`.
+        /// `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`; or `sitl`: the
+        /// truth of ArduPilot's simulator (SIM_STATE), the actors walking their blocking.
         #[arg(long, value_name = "URL")]
         mocap: Option<String>,
         /// Rigid-body ids of the drone and the actors (TOML) [default: drone 1, actors 2, 3, …].
         #[arg(long, value_name = "FILE")]
         rig: Option<PathBuf>,
+        /// With an ArduPilot drone: do not send it the motion capture (VISION_POSITION_ESTIMATE);
+        /// its EKF then navigates on its own sensors.
+        #[arg(long)]
+        no_forward_mocap: bool,
         /// No progress display; of the events, only the errors (a failsafe's reason, why a
         /// flight ended early).
         #[arg(short, long)]
@@ -186,7 +194,10 @@ enum Command {
     /// velocities and the set state flags, once or continuously. Only reads: writes no
     /// limits and sends no take-off or landing command.
     Status {
-        /// The drone: `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]` (its Wi-Fi: ardrone://192.168.1.1).
+        /// The drone: `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]` (its Wi-Fi: ardrone://192.168.1.1),
+        /// or an ArduPilot Copter: `mavlink://udp:HOST:PORT`, `mavlink://tcp:HOST:PORT`,
+        /// `mavlink:///dev/PORT?baud=N` (mode, arming, battery, EKF and motion-capture
+        /// navigation, pre-arm checks, the parameters that matter, limits, gimbal).
         #[arg(long, value_name = "URL")]
         drone: String,
         /// Keep printing (every --interval) until interrupted.
@@ -377,6 +388,7 @@ fn run(cli: Cli) -> ExitCode {
             drone,
             mocap,
             rig,
+            no_forward_mocap,
         } => shoot::run(&shoot::Args {
             file: &file,
             log: log.as_deref(),
@@ -396,6 +408,7 @@ fn run(cli: Cli) -> ExitCode {
             sim_off: &effects.sim_off,
             drone: drone.as_deref(),
             mocap: mocap.as_deref(),
+            no_forward_mocap,
             rig: rig.as_deref(),
             color,
         }),

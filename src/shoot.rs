@@ -41,10 +41,13 @@ pub struct Args<'a> {
     pub ideal: bool,
     /// Simulator effects to switch off, by [`Effects::NAMES`].
     pub sim_off: &'a [String],
-    /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`: fly a real drone (or the emulator).
+    /// `ardrone://…` or `mavlink://…`: fly a real drone (or the emulator, or SITL).
     pub drone: Option<&'a str>,
-    /// `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`: its positions.
+    /// `natnet://SERVER[:PORT][?multicast=GROUP|unicast][&data_port=N]`, or `sitl`: its
+    /// positions.
     pub mocap: Option<&'a str>,
+    /// Do not send the motion capture to an ArduPilot vehicle's EKF.
+    pub no_forward_mocap: bool,
     /// The rig file (rigid-body ids); default: the emulator's layout.
     pub rig: Option<&'a Path>,
     pub color: bool,
@@ -234,7 +237,10 @@ fn where_it_flies(a: &Args, scene: &Scene) -> Result<(Target, u64, Effects), Str
     let target =
         match crate::hardware::target("shoot", a.drone, a.mocap, a.rig, Some(&names), a.color)? {
             None => Target::Sim,
-            Some(t) => Target::Hardware(t),
+            Some(t) => Target::Hardware(crate::hardware::Target {
+                forward_mocap: !a.no_forward_mocap,
+                ..t
+            }),
         };
     Ok((
         target,
@@ -487,7 +493,7 @@ impl Flight<'_> {
                 };
                 dronecine_runtime::fly_simulated(&flight, log, display)
             }
-            Target::Hardware(crate::hardware::Target { drone, mocap, rig }) => {
+            Target::Hardware(target) => {
                 let flight = HardwareFlight {
                     script,
                     source: &r.text,
@@ -495,9 +501,7 @@ impl Flight<'_> {
                     profile,
                     rate_hz: a.rate_hz,
                     controller: self.setup.clone(),
-                    drone,
-                    mocap,
-                    rig,
+                    target,
                     interrupts: Some(&INTERRUPTS),
                 };
                 dronecine_runtime::fly_hardware(&flight, log, display)

@@ -5,9 +5,7 @@
 //! which `calibrate` flies too). This crate is where the backends meet the flight loop: the
 //! loop's own crate knows none of them.
 
-use dronecine_ardrone::client::{ArDroneClient, ArDroneOptions};
-use dronecine_ardrone::url::ArDroneUrl;
-use dronecine_backend::clock::{Paced, WallClock};
+use dronecine_backend::clock::Paced;
 use dronecine_backend::{Backends, Clock};
 use dronecine_compiler::blocking::Blocking;
 use dronecine_compiler::director::Director;
@@ -15,13 +13,13 @@ use dronecine_flight::report::FlightReport;
 use dronecine_flight::{self as flight, FlightError, FlightSetup, Observer, Safety};
 use dronecine_grammar::script::{Scene, Script};
 use dronecine_mcap::record::FlightSink;
-use dronecine_natnet::client::{NatNetClient, NatNetOptions};
-use dronecine_natnet::rig::Rig;
-use dronecine_natnet::url::NatNetUrl;
 use dronecine_profile::Profile;
 use dronecine_servo::control::Controller;
 use dronecine_servo::setup::{controller_for, ControllerSetup};
 use dronecine_sim::{SimConfig, Simulator};
+
+pub mod hardware;
+pub use hardware::{connect_hardware, DroneUrl, Hardware, HardwareTarget, MocapUrl};
 
 /// Where the drone simulated by `sim` waits on the floor: below the first framing (against
 /// the actors' opening marks), facing the way it will film; but never nearer an actor's mark
@@ -233,8 +231,8 @@ pub fn fly_simulated(
     .map_err(SessionError::Flight)
 }
 
-/// A flight on hardware: the drone over its UDP protocol, positions from NatNet, paced by
-/// the wall clock.
+/// A flight on hardware: the drone over its protocol, positions from the motion capture,
+/// paced by the wall clock.
 pub struct HardwareFlight<'a> {
     pub script: &'a Script,
     pub source: &'a str,
@@ -242,62 +240,8 @@ pub struct HardwareFlight<'a> {
     pub profile: &'a Profile,
     pub rate_hz: f64,
     pub controller: ControllerSetup,
-    pub drone: &'a ArDroneUrl,
-    pub mocap: &'a NatNetUrl,
-    /// Rigid-body ids of the drone and the actors, and the mocap's axes.
-    pub rig: &'a Rig,
+    pub target: &'a HardwareTarget,
     pub interrupts: Option<&'a std::sync::atomic::AtomicU32>,
-}
-
-/// The backends of a flight on hardware, connected: the drone over its UDP protocol (its
-/// limits set from the profile), its positions from NatNet, and the wall clock they share.
-pub struct Hardware {
-    pub drone: ArDroneClient,
-    pub mocap: NatNetClient,
-    /// Its epoch is the mocap's: frames are timestamped on arrival on the flight's clock.
-    pub clock: WallClock,
-}
-
-impl Hardware {
-    /// The three as the flight loop (or the calibration) takes them.
-    pub fn backends(&mut self) -> Backends<'_> {
-        Backends {
-            drone: &mut self.drone,
-            mocap: &mut self.mocap,
-            clock: &mut self.clock,
-        }
-    }
-}
-
-/// Connects to the motion capture (the drone's and the actors' rigid bodies from `rig`;
-/// `actor_names` in the scene's order, none for a flight without actors), then to the drone,
-/// giving it the profile's limits. The clock starts now and is the mocap's epoch.
-pub fn connect_hardware<I>(
-    drone: &ArDroneUrl,
-    mocap: &NatNetUrl,
-    rig: &Rig,
-    actor_names: I,
-    profile: &Profile,
-) -> Result<Hardware, SessionError>
-where
-    I: IntoIterator,
-    I::Item: AsRef<str>,
-{
-    // One epoch for the flight clock and the mocap's arrival times.
-    let clock = WallClock::new();
-    let options = NatNetOptions {
-        epoch: clock.epoch(),
-        ..NatNetOptions::default()
-    };
-    let mocap = NatNetClient::connect(mocap, rig, actor_names, &options)
-        .map_err(|e| SessionError::Setup(format!("motion capture: {e}")))?;
-    let drone = ArDroneClient::connect(drone, profile, &ArDroneOptions::default())
-        .map_err(|e| SessionError::Setup(format!("drone: {e}")))?;
-    Ok(Hardware {
-        drone,
-        mocap,
-        clock,
-    })
 }
 
 pub fn fly_hardware(
@@ -306,13 +250,7 @@ pub fn fly_hardware(
     observer: &mut dyn Observer,
 ) -> Result<FlightReport, SessionError> {
     let mut controller = servo(&f.controller, f.profile, f.rate_hz)?;
-    let mut hw = connect_hardware(
-        f.drone,
-        f.mocap,
-        f.rig,
-        f.scene.actors.iter().map(|a| a.name.as_str()),
-        f.profile,
-    )?;
+    let mut hw = connect_hardware(f.target, Some((f.script, f.scene)), f.profile)?;
     let setup = flight_setup(
         f.script,
         f.source,
@@ -398,10 +336,21 @@ mod tests {
     #[test]
     fn connect_hardware_refuses_an_actor_without_a_rigid_body_before_any_traffic() {
         // Nothing listens on these ports: the rig check must come first.
-        let drone = ArDroneUrl::parse("ardrone://127.0.0.1:9:9").unwrap();
-        let mocap = NatNetUrl::parse("natnet://127.0.0.1:9?unicast").unwrap();
-        let rig = Rig::numbered::<&str>(&[]);
-        let e = connect_hardware(&drone, &mocap, &rig, ["A"], &ardrone2())
+        let target = HardwareTarget {
+            drone: DroneUrl::parse("ardrone://127.0.0.1:9:9").unwrap(),
+            mocap: MocapUrl::parse("natnet://127.0.0.1:9?unicast").unwrap(),
+            rig: dronecine_natnet::rig::Rig::numbered::<&str>(&[]),
+            forward_mocap: true,
+        };
+        let text = "stage 8m x 6m x 3m\ndrone ardrone2\nactor A height 1.80m at (0, 0) \
+                    facing 0deg\nMS on A front for 4s\n";
+        let opts = dronecine_grammar::Options {
+            known_drones: dronecine_profile::BUILTIN_NAMES,
+            base_dir: None,
+        };
+        let script = dronecine_grammar::check(text, &opts).script.unwrap();
+        let scene = script.scene.as_ref().unwrap();
+        let e = connect_hardware(&target, Some((&script, scene)), &ardrone2())
             .err()
             .expect("refused");
         let msg = e.to_string();
@@ -410,6 +359,37 @@ mod tests {
             "{msg}"
         );
         assert!(msg.contains("actor `A`"), "{msg}");
+    }
+
+    /// `--mocap sitl` is the truth of ArduPilot's simulator: with an AR.Drone it is refused
+    /// before any traffic.
+    #[test]
+    fn sitl_truth_needs_a_mavlink_drone() {
+        let target = HardwareTarget {
+            drone: DroneUrl::parse("ardrone://127.0.0.1:9:9").unwrap(),
+            mocap: MocapUrl::parse("sitl").unwrap(),
+            rig: dronecine_natnet::rig::Rig::numbered::<&str>(&[]),
+            forward_mocap: true,
+        };
+        let e = connect_hardware(&target, None, &ardrone2())
+            .err()
+            .expect("refused");
+        assert!(e.to_string().contains("needs a `mavlink://` drone"), "{e}");
+    }
+
+    /// Both schemes parse; anything else names both.
+    #[test]
+    fn drone_addresses_name_their_protocol() {
+        assert!(matches!(
+            DroneUrl::parse("ardrone://192.168.1.1"),
+            Ok(DroneUrl::ArDrone(_))
+        ));
+        assert!(matches!(
+            DroneUrl::parse("mavlink://tcp:127.0.0.1:5760"),
+            Ok(DroneUrl::Mavlink(_))
+        ));
+        let e = DroneUrl::parse("crazyflie://x").unwrap_err();
+        assert!(e.contains("ardrone://") && e.contains("mavlink://"), "{e}");
     }
 
     #[test]
@@ -433,27 +413,24 @@ mod tests {
             ..EmulatorConfig::new(ardrone2(), empty_scene(), 3)
         };
         let emulator = Emulator::start(config).expect("the emulator starts");
-        let drone = ArDroneUrl::parse(&format!(
-            "ardrone://127.0.0.1:{}:{}",
-            emulator.at_addr().port(),
-            emulator.navdata_addr().port()
-        ))
-        .unwrap();
-        let mocap = NatNetUrl::parse(&format!(
-            "natnet://127.0.0.1:{}?unicast&data_port={}",
-            emulator.natnet_command_addr().unwrap().port(),
-            data.port()
-        ))
-        .unwrap();
-        let rig = Rig::numbered::<&str>(&[]);
-        let mut hw = connect_hardware(
-            &drone,
-            &mocap,
-            &rig,
-            std::iter::empty::<&str>(),
-            &ardrone2(),
-        )
-        .expect("connects to the emulator");
+        let target = HardwareTarget {
+            drone: DroneUrl::parse(&format!(
+                "ardrone://127.0.0.1:{}:{}",
+                emulator.at_addr().port(),
+                emulator.navdata_addr().port()
+            ))
+            .unwrap(),
+            mocap: MocapUrl::parse(&format!(
+                "natnet://127.0.0.1:{}?unicast&data_port={}",
+                emulator.natnet_command_addr().unwrap().port(),
+                data.port()
+            ))
+            .unwrap(),
+            rig: dronecine_natnet::rig::Rig::numbered::<&str>(&[]),
+            forward_mocap: true,
+        };
+        let mut hw =
+            connect_hardware(&target, None, &ardrone2()).expect("connects to the emulator");
         let b = hw.backends();
         assert_eq!(b.drone.telemetry().state, FlightState::Landed);
         let mut frame = MocapFrame::default();
