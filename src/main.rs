@@ -8,6 +8,7 @@
 
 #[macro_use]
 mod out;
+mod realtime;
 
 mod calibrate;
 mod check;
@@ -173,6 +174,10 @@ enum Command {
         /// its EKF then navigates on its own sensors.
         #[arg(long)]
         no_forward_mocap: bool,
+        /// With a real drone: do not ask for real-time scheduling (SCHED_FIFO) and locked
+        /// memory, which a flight on a real drone asks for when the user may have them.
+        #[arg(long)]
+        normal_priority: bool,
         /// No progress display; of the events, only the errors (a failsafe's reason, why a
         /// flight ended early).
         #[arg(short, long)]
@@ -389,6 +394,7 @@ fn run(cli: Cli) -> ExitCode {
             mocap,
             rig,
             no_forward_mocap,
+            normal_priority,
         } => shoot::run(&shoot::Args {
             file: &file,
             log: log.as_deref(),
@@ -409,6 +415,7 @@ fn run(cli: Cli) -> ExitCode {
             drone: drone.as_deref(),
             mocap: mocap.as_deref(),
             no_forward_mocap,
+            normal_priority,
             rig: rig.as_deref(),
             color,
         }),

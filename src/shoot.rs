@@ -48,6 +48,8 @@ pub struct Args<'a> {
     pub mocap: Option<&'a str>,
     /// Do not send the motion capture to an ArduPilot vehicle's EKF.
     pub no_forward_mocap: bool,
+    /// Do not ask for real-time scheduling and locked memory on a real drone.
+    pub normal_priority: bool,
     /// The rig file (rigid-body ids); default: the emulator's layout.
     pub rig: Option<&'a Path>,
     pub color: bool,
@@ -494,6 +496,9 @@ impl Flight<'_> {
                 dronecine_runtime::fly_simulated(&flight, log, display)
             }
             Target::Hardware(target) => {
+                if !a.normal_priority {
+                    errln!("note: {}", crate::realtime::request().describe());
+                }
                 let flight = HardwareFlight {
                     script,
                     source: &r.text,
@@ -879,6 +884,17 @@ pub fn render_report_as(
             count(r.deadline_misses, "missed deadline")
         );
     }
+    if let Some(l) = r.lateness {
+        let _ = writeln!(
+            s,
+            "  timing: {} ticks ran {:.0} µs late at the median, {:.0} µs at the 99th \
+             percentile, {:.1} ms at worst",
+            l.ticks,
+            l.p50_s * 1e6,
+            l.p99_s * 1e6,
+            l.max_s * 1e3
+        );
+    }
     if r.director_errors > 0 {
         let _ = writeln!(
             s,
@@ -1080,6 +1096,7 @@ mod tests {
             failsafes: 0,
             faults: 0,
             deadline_misses: 0,
+            lateness: None,
             director_errors: 0,
             latency_mean_s: None,
             latency_max_s: None,

@@ -224,6 +224,8 @@ fn prepare_ardupilot(
     if !check.passed() {
         return Err(SessionError::Setup(format!("drone: {}", check.refusal())));
     }
+    // Read now, so that the take-off does not wait for them in the flight's loop.
+    drone.limits().map_err(refused)?;
     if !forward {
         return Ok(mocap);
     }

@@ -17,4 +17,6 @@ mod shoot;
 mod shots;
 #[cfg(unix)]
 mod signals;
+#[cfg(unix)]
+mod sitl;
 mod status;

@@ -39,7 +39,7 @@ dronecine_diag::codes! {
 }
 
 /// Names accepted by `drone NAME` in a script.
-pub const BUILTIN_NAMES: &[&str] = &["ardrone2", "ardrone2-outdoor"];
+pub const BUILTIN_NAMES: &[&str] = &["ardrone2", "ardrone2-outdoor", "arducopter-quad"];
 
 /// The profile used when a script names none.
 pub const DEFAULT_NAME: &str = "ardrone2";
@@ -170,12 +170,14 @@ pub const DEFAULT_TRACKING_MARGIN_M: f64 = 0.15;
 
 const ARDRONE2_TOML: &str = include_str!("../profiles/ardrone2.toml");
 const ARDRONE2_OUTDOOR_TOML: &str = include_str!("../profiles/ardrone2-outdoor.toml");
+const ARDUCOPTER_QUAD_TOML: &str = include_str!("../profiles/arducopter-quad.toml");
 
 /// The TOML text of a built-in profile (what `Profile::builtin` parses).
 pub fn builtin_source(name: &str) -> Option<&'static str> {
     match name {
         "ardrone2" => Some(ARDRONE2_TOML),
         "ardrone2-outdoor" => Some(ARDRONE2_OUTDOOR_TOML),
+        "arducopter-quad" => Some(ARDUCOPTER_QUAD_TOML),
         _ => None,
     }
 }

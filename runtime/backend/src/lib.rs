@@ -63,6 +63,17 @@ pub trait Drone {
     fn camera_pitch_rad(&mut self) -> Option<f64> {
         None
     }
+    /// Moves into `out` what the drone itself said or did since the last call (an
+    /// autopilot's texts, a mode it chose, its failsafes), for the flight to show and log.
+    fn messages(&mut self, _out: &mut Vec<DroneMessage>) {}
+}
+
+/// Something the drone itself said or did ([`Drone::messages`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DroneMessage {
+    /// `error`, `warning` or `info`, as the flight's events.
+    pub level: &'static str,
+    pub text: String,
 }
 
 /// One tracked body: position and heading in the world frame (see `frames.rs`).

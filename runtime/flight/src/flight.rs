@@ -69,6 +69,10 @@ pub(crate) struct Flight<'s, 'b> {
     pub(crate) failsafes: u64,
     pub(crate) faults: u64,
     pub(crate) deadline_misses: u64,
+    /// How late each tick ran.
+    pub(crate) lateness: crate::lateness::LatenessHistogram,
+    /// What the drone said since the last tick (kept for its capacity).
+    drone_messages: Vec<dronecine_backend::DroneMessage>,
     pub(crate) director_errors: u64,
     pub(crate) hovering: bool,
     /// The first interrupt was handled (landing).
@@ -169,6 +173,8 @@ impl<'s, 'b> Flight<'s, 'b> {
             director_errors: 0,
             faults: 0,
             deadline_misses: 0,
+            drone_messages: Vec::new(),
+            lateness: crate::lateness::LatenessHistogram::default(),
             hovering: false,
             interrupted: false,
             motors_cut: false,
@@ -177,6 +183,16 @@ impl<'s, 'b> Flight<'s, 'b> {
             script_duration_s,
             written_t_s: 0.0,
         })
+    }
+
+    /// Logs what the drone said or did since the last tick as `drone` events.
+    fn tell_drone_messages(&mut self, t_s: f64) {
+        let mut said = std::mem::take(&mut self.drone_messages);
+        self.drone.messages(&mut said);
+        for m in said.drain(..) {
+            self.event(t_s, m.level, "drone", m.text);
+        }
+        self.drone_messages = said;
     }
 
     pub(crate) fn event(&mut self, t_s: f64, level: &str, kind: &str, message: String) {
@@ -224,6 +240,7 @@ impl<'s, 'b> Flight<'s, 'b> {
     ) -> Result<(f64, bool), FlightError> {
         self.clock.sleep_until(t_next_s);
         let now = self.clock.now_s();
+        self.lateness.add(now - t_next_s);
         if now > t_next_s + 0.5 * self.period_s {
             self.deadline_misses += 1;
             self.event(
@@ -237,6 +254,7 @@ impl<'s, 'b> Flight<'s, 'b> {
             );
         }
         self.fresh = self.mocap.poll(&mut self.frame)?;
+        self.tell_drone_messages(now);
         if self.gimbal {
             self.gimbal_pitch_rad = self.drone.camera_pitch_rad();
         }

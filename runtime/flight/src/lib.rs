@@ -37,6 +37,7 @@ mod code;
 mod findings;
 mod flight;
 mod glide;
+pub mod lateness;
 mod phases;
 mod preflight;
 pub mod replay;

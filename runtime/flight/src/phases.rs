@@ -509,6 +509,7 @@ impl Flight<'_, '_> {
                 director_errors: self.director_errors,
                 faults: self.faults,
                 deadline_misses: self.deadline_misses,
+                lateness: self.lateness.summary(),
             },
         );
         match log_error {

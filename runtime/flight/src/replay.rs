@@ -183,6 +183,8 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
         director_errors: log.events.iter().filter(|e| e.is_director_error()).count() as u64,
         faults: count("fault"),
         deadline_misses: count("deadline_missed"),
+        // The log keeps the late ticks (events), not every tick's lateness.
+        lateness: None,
     };
     Ok(Replay {
         ticks: checked,

@@ -25,6 +25,8 @@ use dronecine_compiler::framing::body_axis_distance_m;
 use dronecine_profile::Safety;
 use serde::Serialize;
 
+pub use crate::lateness::Lateness;
+
 use dronecine_compiler::reference::ActorPose;
 use dronecine_mcap::record::{FramingRecord, Phase};
 use dronecine_servo::control::{TickFault, TickInput, TickOutput};
@@ -80,6 +82,11 @@ pub struct FlightReport {
     pub failsafes: u64,
     pub faults: u64,
     pub deadline_misses: u64,
+    /// How late the ticks ran, on a flight paced by the wall clock (a real drone, an
+    /// emulator, SITL); `None` on the simulator, whose clock waits for nothing, and in a
+    /// replay (the log keeps only the late ticks, as `deadline_missed` events).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lateness: Option<Lateness>,
     /// Errors the director raised against the live actors (a framing it could not solve
     /// holds the drone until it solves): each is an event on the log's `/events`.
     pub director_errors: u64,
@@ -334,6 +341,7 @@ impl Metrics {
             director_errors: counts.director_errors,
             faults: counts.faults,
             deadline_misses: counts.deadline_misses,
+            lateness: counts.lateness,
             latency_mean_s: (self.latency.2 > 0).then(|| self.latency.0 / self.latency.2 as f64),
             latency_max_s: (self.latency.2 > 0).then_some(self.latency.1),
             shots,
@@ -365,6 +373,7 @@ pub struct Counts {
     pub director_errors: u64,
     pub faults: u64,
     pub deadline_misses: u64,
+    pub lateness: Option<Lateness>,
 }
 
 #[cfg(test)]

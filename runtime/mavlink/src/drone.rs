@@ -8,9 +8,11 @@
 //!   (LOCAL_POSITION_NED) reaches [`MavlinkOptions::hover_height_m`]: `Flying`. Without a
 //!   fresh height the climb holds its altitude instead.
 //! - **Flying**: [`Drone::send`] is one SET_ATTITUDE_TARGET (`frames`); the yaw target is
-//!   the integral of the yaw-rate commands, kept within [`MAX_YAW_LEAD_RAD`] of the measured
-//!   yaw; roll and pitch are clamped to ANGLE_MAX and the yaw rate to ATC_RATE_Y_MAX.
-//!   [`Drone::hover`] is level, the yaw target held, thrust 0.5. A command during the
+//!   the vehicle's yaw (ATTITUDE) plus the yaw-rate command times `1/ATC_ANG_YAW_P`
+//!   ([`VehicleLimits::yaw_lead_s`]; at most [`MAX_YAW_LEAD_RAD`]), which the autopilot's
+//!   angle controller turns into that rate (the integral of the commands before the first
+//!   ATTITUDE); roll and pitch are clamped to the lean limit and the yaw rate to
+//!   ATC_RATE_Y_MAX. [`Drone::hover`] is level at the vehicle's yaw, thrust 0.5. A command during the
 //!   take-off ends it: the flight has taken over. The vehicle's own
 //!   watchdog (its attitude timeout, then GUID_TIMEOUT) acts when the calls stop.
 //! - **Landing**: LAND mode (custom mode 9), re-sent until the heartbeat shows it; `Landing`
@@ -31,9 +33,9 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use dronecine_backend::frames::{wrap_angle_rad, Command};
-use dronecine_backend::{BackendError, BodyPose, Drone, FlightState, Telemetry};
+use dronecine_backend::{BackendError, BodyPose, Drone, DroneMessage, FlightState, Telemetry};
 use mavlink::dialects::ardupilotmega::{
-    MavCmd, ATTITUDE_DATA, BATTERY_STATUS_DATA, EKF_STATUS_REPORT_DATA, EXTENDED_SYS_STATE_DATA,
+    ATTITUDE_DATA, BATTERY_STATUS_DATA, EKF_STATUS_REPORT_DATA, EXTENDED_SYS_STATE_DATA,
     GIMBAL_DEVICE_ATTITUDE_STATUS_DATA, LOCAL_POSITION_NED_DATA, SIM_STATE_DATA, SYS_STATUS_DATA,
 };
 use mavlink::MessageData;
@@ -123,6 +125,9 @@ impl Default for MavlinkOptions {
 pub enum Phase {
     /// Not flying for the flight (on the ground, or flown by someone else).
     Ground,
+    /// The take-off asked: GUIDED_NOGPS, then arming, each asked again every half second
+    /// until the heartbeat shows it (the vehicle's refusals come as its texts).
+    Arming,
     TakingOff,
     Flying,
     /// Landing: asked by the flight, or decided by the autopilot.
@@ -141,6 +146,7 @@ pub fn flight_state(
     let ours = |hb: Heartbeat| hb.custom_mode == copter_mode::GUIDED_NOGPS;
     match (phase, heartbeat) {
         (Phase::Emergency, _) => FlightState::Emergency,
+        (Phase::Arming, _) => FlightState::TakingOff,
         (_, None) => FlightState::Landed,
         (_, Some(hb)) if !hb.armed => FlightState::Landed,
         (Phase::Landing, _) => FlightState::Landing,
@@ -386,78 +392,6 @@ impl MavlinkDrone {
     }
 
     // -----------------------------------------------------------------------------------
-    // Commands waited for.
-
-    /// Asks for a custom mode until the heartbeat shows it; refused when the vehicle
-    /// refuses or does not change within the command timeout.
-    fn change_mode(&self, mode: u32) -> Result<(), BackendError> {
-        let msg = messages::set_mode(self.target, mode);
-        self.command_until(&msg, MavCmd::MAV_CMD_DO_SET_MODE, |hb| {
-            hb.custom_mode == mode
-        })
-        .map_err(|why| {
-            BackendError::Refused(format!(
-                "{} did not switch to {}: {why}",
-                self.link.url(),
-                copter_mode::name(mode)
-            ))
-        })
-    }
-
-    fn arm(&self) -> Result<(), BackendError> {
-        let msg = messages::arm(self.target, true);
-        self.command_until(&msg, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, |hb| hb.armed)
-            .map_err(|why| BackendError::Refused(format!("{} did not arm: {why}", self.link.url())))
-    }
-
-    /// Sends `msg` (again every [`RESEND`]) until the heartbeat satisfies `done`; the
-    /// reason when it does not.
-    fn command_until(
-        &self,
-        msg: &mavlink::dialects::ardupilotmega::MavMessage,
-        command: MavCmd,
-        done: impl Fn(Heartbeat) -> bool,
-    ) -> Result<(), String> {
-        let start = Instant::now();
-        let mut last: Option<Instant> = None;
-        let mut refused = None;
-        let ok = self.link.wait_for(
-            self.options.command_timeout,
-            || {
-                if last.is_none_or(|t| t.elapsed() >= RESEND) {
-                    last = Some(Instant::now());
-                    self.link.send(msg)?;
-                }
-                Ok(())
-            },
-            |s| {
-                refused = s
-                    .ack_since(command as u32, start)
-                    .filter(|r| !matches!(r, 0 | 5));
-                refused.is_some() || s.heartbeat.is_some_and(&done)
-            },
-        );
-        let ok = ok.map_err(|e| e.to_string())? && refused.is_none();
-        if ok {
-            return Ok(());
-        }
-        let state = self.link.state();
-        let texts: Vec<&str> = state.texts_since(start).collect();
-        let what = match refused {
-            Some(r) => format!("refused ({})", result_name(r)),
-            None => format!(
-                "no change within {:.1} s",
-                self.options.command_timeout.as_secs_f64()
-            ),
-        };
-        Err(if texts.is_empty() {
-            what
-        } else {
-            format!("{what}; the vehicle says: {}", texts.join(" / "))
-        })
-    }
-
-    // -----------------------------------------------------------------------------------
     // Set-points.
 
     /// Follows the vehicle: the take-off's end, the autopilot's own mode changes, the
@@ -472,6 +406,17 @@ impl MavlinkDrone {
         };
         let Some(hb) = hb else { return Ok(()) };
         match self.phase {
+            Phase::Arming if hb.custom_mode != copter_mode::GUIDED_NOGPS => {
+                self.resend(|d| messages::set_mode(d.target, copter_mode::GUIDED_NOGPS))?
+            }
+            Phase::Arming if !hb.armed => self.resend(|d| messages::arm(d.target, true))?,
+            Phase::Arming => {
+                self.phase = Phase::TakingOff;
+                self.yaw_target_rad = self.link.state().attitude_rad.map_or(0.0, |a| a[2]);
+                self.yaw_rate_radps = 0.0;
+                self.last_setpoint = None;
+                self.send_climb()?;
+            }
             Phase::TakingOff | Phase::Flying
                 if hb.armed && hb.custom_mode != copter_mode::GUIDED_NOGPS =>
             {
@@ -512,14 +457,17 @@ impl MavlinkDrone {
         let dt_s = self.last_setpoint.map_or(0.0, |t| {
             now.duration_since(t).as_secs_f64().min(MAX_YAW_STEP_S)
         });
-        let mut target = wrap_angle_rad(self.yaw_target_rad + self.yaw_rate_radps * dt_s);
-        if let Some([_, _, yaw]) = self.link.state().attitude_rad {
-            let lead = wrap_angle_rad(target - yaw);
-            if lead.abs() > MAX_YAW_LEAD_RAD {
-                target = wrap_angle_rad(yaw + MAX_YAW_LEAD_RAD.copysign(lead));
+        let measured = self.link.state().attitude_rad.map(|a| a[2]);
+        self.yaw_target_rad = match (measured, self.limits) {
+            // Anchored on the vehicle's yaw: its angle controller (P = 1/lead) then turns it
+            // at the rate asked, with no integral of past commands for it to catch up on.
+            (Some(yaw), Some(limits)) => {
+                let lead =
+                    (rate_radps * limits.yaw_lead_s).clamp(-MAX_YAW_LEAD_RAD, MAX_YAW_LEAD_RAD);
+                wrap_angle_rad(yaw + lead)
             }
-        }
-        self.yaw_target_rad = target;
+            _ => wrap_angle_rad(self.yaw_target_rad + self.yaw_rate_radps * dt_s),
+        };
         self.yaw_rate_radps = rate_radps;
         self.last_setpoint = Some(now);
     }
@@ -571,6 +519,14 @@ impl MavlinkDrone {
 }
 
 impl Drone for MavlinkDrone {
+    fn messages(&mut self, out: &mut Vec<DroneMessage>) {
+        let mut state = self.link.state();
+        if state.events.is_empty() {
+            return;
+        }
+        out.extend(state.events.drain(..).map(|(_, e)| message_of(&e)));
+    }
+
     /// The parameter check and the limits, GUIDED_NOGPS, arming, then the climb (module
     /// docs); refused, saying why, when any step fails.
     fn take_off(&mut self) -> Result<(), BackendError> {
@@ -587,14 +543,13 @@ impl Drone for MavlinkDrone {
             return Err(BackendError::Refused(check.refusal()));
         }
         self.limits()?;
-        self.change_mode(copter_mode::GUIDED_NOGPS)?;
-        self.arm()?;
-        self.phase = Phase::TakingOff;
+        // The mode and the arming are asked here and again at every telemetry read until the
+        // heartbeat shows them (`update`): the flight's loop goes on meanwhile, forwarding
+        // the motion capture that the autopilot's pre-arm checks want fresh.
+        self.phase = Phase::Arming;
         self.took_over = None;
-        self.yaw_target_rad = self.link.state().attitude_rad.map_or(0.0, |a| a[2]);
-        self.yaw_rate_radps = 0.0;
-        self.last_setpoint = None;
-        self.send_climb()
+        self.last_request = None;
+        self.update()
     }
 
     /// LAND mode (re-sent until the heartbeat shows it); nothing when the autopilot chose
@@ -602,6 +557,11 @@ impl Drone for MavlinkDrone {
     fn land(&mut self) -> Result<(), BackendError> {
         self.update()?;
         if self.took_over.is_some() || matches!(self.phase, Phase::Ground | Phase::Emergency) {
+            return Ok(());
+        }
+        let armed = self.link.state().heartbeat.is_some_and(|h| h.armed);
+        if self.phase == Phase::Arming && !armed {
+            self.phase = Phase::Ground;
             return Ok(());
         }
         self.phase = Phase::Landing;
@@ -692,20 +652,6 @@ impl Drone for MavlinkDrone {
     }
 }
 
-/// MAV_RESULT's name.
-fn result_name(result: u8) -> &'static str {
-    match result {
-        0 => "accepted",
-        1 => "temporarily rejected",
-        2 => "denied",
-        3 => "unsupported",
-        4 => "failed",
-        5 => "in progress",
-        6 => "cancelled",
-        _ => "an unknown result",
-    }
-}
-
 /// Sends `pose` as VISION_POSITION_ESTIMATE unless the last one (at `last_t_s`) went out less
 /// than [`VISION_PERIOD_S`] before `t_s`: `true` when sent. Roll and pitch are the vehicle's
 /// own (ATTITUDE): the motion capture gives the position and the heading.
@@ -745,9 +691,65 @@ impl PoseForwarder {
     }
 }
 
+/// A vehicle event as the flight logs it: STATUSTEXT of severity error or worse (0–3) as
+/// `error`, warning (4) as `warning`, the rest and the vehicle's changes as `info`.
+pub fn message_of(e: &VehicleEvent) -> DroneMessage {
+    match e {
+        VehicleEvent::Text { severity, text } => DroneMessage {
+            level: match severity {
+                0..=3 => "error",
+                4 => "warning",
+                _ => "info",
+            },
+            text: format!("autopilot: {text}"),
+        },
+        VehicleEvent::Mode { from, to } => DroneMessage {
+            level: "info",
+            text: match from {
+                Some(from) => format!(
+                    "autopilot mode {} (was {})",
+                    copter_mode::name(*to),
+                    copter_mode::name(*from)
+                ),
+                None => format!("autopilot mode {}", copter_mode::name(*to)),
+            },
+        },
+        VehicleEvent::Armed(armed) => DroneMessage {
+            level: "info",
+            text: if *armed { "armed" } else { "disarmed" }.into(),
+        },
+        VehicleEvent::EkfFlags(flags) => DroneMessage {
+            level: "info",
+            text: format!("EKF flags {flags:#06x}"),
+        },
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The autopilot's texts keep their gravity in the flight's log; its changes are told.
+    #[test]
+    fn vehicle_events_become_the_flights_events() {
+        let text = |severity| VehicleEvent::Text {
+            severity,
+            text: "EKF3 lane switch".into(),
+        };
+        assert_eq!(message_of(&text(2)).level, "error");
+        assert_eq!(message_of(&text(4)).level, "warning");
+        assert_eq!(message_of(&text(6)).level, "info");
+        assert_eq!(message_of(&text(6)).text, "autopilot: EKF3 lane switch");
+        let mode = VehicleEvent::Mode {
+            from: Some(copter_mode::GUIDED_NOGPS),
+            to: copter_mode::LAND,
+        };
+        assert_eq!(
+            message_of(&mode).text,
+            "autopilot mode LAND (was GUIDED_NOGPS)"
+        );
+        assert_eq!(message_of(&VehicleEvent::Armed(false)).text, "disarmed");
+    }
 
     fn hb(mode: u32, armed: bool) -> Option<Heartbeat> {
         Some(Heartbeat {

@@ -116,7 +116,13 @@ pub struct VehicleLimits {
     /// `GUID_TIMEOUT` (s): how long the vehicle flies on without a set-point before it
     /// levels and holds its altitude.
     pub guided_timeout_s: f64,
+    /// `1 / ATC_ANG_YAW_P` (s): how far ahead of the vehicle's yaw a yaw-rate command puts
+    /// the yaw target, so that the autopilot's angle controller turns it at that rate.
+    pub yaw_lead_s: f64,
 }
+
+/// ArduCopter's default `ATC_ANG_YAW_P` (1/s), for a vehicle that does not answer for it.
+pub const DEFAULT_YAW_ANGLE_P: f64 = 4.5;
 
 /// The limits' parameter names, in [`VehicleLimits`]' order: ArduCopter 4.7's name first,
 /// then the older one (whose unit differs: [`OLD_UNIT_SCALE`]).
@@ -165,13 +171,21 @@ impl VehicleLimits {
             })
         };
         let v = |i: usize| f64::from(values[i].unwrap_or(f32::NAN));
-        Self::from_values(
+        let yaw_p = read_params(link, &["ATC_ANG_YAW_P"], timeout)?[0]
+            .map(f64::from)
+            .filter(|p| p.is_finite() && *p > 0.0)
+            .unwrap_or(DEFAULT_YAW_ANGLE_P);
+        let limits = Self::from_values(
             v(0) * scale[0],
             v(1) * scale[1],
             v(2) * scale[2],
             v(3),
             v(4),
-        )
+        )?;
+        Ok(VehicleLimits {
+            yaw_lead_s: 1.0 / yaw_p,
+            ..limits
+        })
     }
 
     /// The limits from the parameters' values in their own units.
@@ -199,6 +213,7 @@ impl VehicleLimits {
             tilt_max_rad: (angle_max_cdeg / 100.0).to_radians(),
             yaw_rate_max_radps: (rate_y_max_degps > 0.0).then(|| rate_y_max_degps.to_radians()),
             guided_timeout_s: guid_timeout_s,
+            yaw_lead_s: 1.0 / DEFAULT_YAW_ANGLE_P,
         })
     }
 }

@@ -196,18 +196,27 @@ fn fly(drone: &mut MavlinkDrone, peer: &mut Peer) {
         yaw_rate_radps: 0.2,
         ..Command::HOVER
     };
+    let yaw_of = |target: &serde_json::Value| {
+        let q: Vec<f64> = target["q"].as_array().unwrap().iter().map(num).collect();
+        dronecine_mavlink::frames::euler_from_quaternion([q[0], q[1], q[2], q[3]])[2]
+    };
     drone.send(&turning).unwrap();
     std::thread::sleep(Duration::from_millis(50));
+    // The turn: the yaw target leads the vehicle's yaw by the rate over ATC_ANG_YAW_P (the
+    // fake vehicle has none: ArduCopter's default, 4.5).
+    let turn = targets(peer).pop().unwrap();
+    assert!(close(num(&turn["body_yaw_rate"]), 0.2), "{turn}");
+    let lead = yaw_of(&turn) - VEHICLE_YAW_RAD;
+    assert!((lead - 0.2 / 4.5).abs() < 1e-4, "{lead}");
     drone.hover().unwrap();
     std::thread::sleep(Duration::from_millis(100));
     let last = targets(peer).pop().unwrap();
-    let q: Vec<f64> = last["q"].as_array().unwrap().iter().map(num).collect();
-    let [_, _, yaw] = dronecine_mavlink::frames::euler_from_quaternion([q[0], q[1], q[2], q[3]]);
-    // The hover: level, thrust 0.5, no rate, the yaw target advanced by the turn's 0.2 rad/s.
+    // The hover: level, thrust 0.5, no rate, the vehicle's yaw held.
     assert!(close(num(&last["thrust"]), 0.5) && num(&last["body_yaw_rate"]) == 0.0);
     assert!(
-        yaw > VEHICLE_YAW_RAD + 0.005 && yaw < VEHICLE_YAW_RAD + 0.03,
-        "{yaw}"
+        (yaw_of(&last) - VEHICLE_YAW_RAD).abs() < 1e-4,
+        "{}",
+        yaw_of(&last)
     );
     drone.point_camera(-0.3).unwrap();
     let g = peer.until(WAIT, |v| v["rx"] == "GIMBAL_MANAGER_SET_PITCHYAW");

@@ -1,0 +1,187 @@
+//! ArduCopter SITL: the autopilot's own code and multicopter physics, flown through the MAVLink
+//! backend, judged on the simulator's true position (`--mocap sitl`: SIM_STATE is the motion
+//! capture, and what the autopilot's EKF is fed).
+//!
+//! Opt-in: `DRONECINE_ARDUCOPTER_SITL` names the SITL binary (`arducopter`, built from the
+//! ArduPilot sources with `./waf configure --board sitl && ./waf copter`); the autopilot's
+//! default parameters for its test vehicle are read from `DRONECINE_ARDUCOPTER_DEFAULTS`, or
+//! from `Tools/autotest/default_params/copter.parm` of the source tree the binary was built
+//! in. Without the variable every test here says it is skipped and passes.
+//!
+//! SITL listens on every network interface: each flight runs SITL and `dronecine` together in
+//! a network namespace of their own (`unshare --net --map-root-user`, only the loopback up).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::common::{temp_dir, workspace};
+
+/// The parameters flying on motion capture needs, on top of the test vehicle's defaults.
+const EXTERNAL_NAV_PARAMS: &str = "VISO_TYPE 1\nGPS1_TYPE 0\nEK3_SRC1_POSXY 6\n\
+                                   EK3_SRC1_VELXY 6\nEK3_SRC1_POSZ 6\nEK3_SRC1_VELZ 6\n";
+
+/// The position error a flight through SITL must keep under (RMS, m), and its ratio to the
+/// embedded simulator's on the same script.
+const MAX_RMS_M: f64 = 0.10;
+const MAX_RATIO_TO_SIMULATOR: f64 = 2.0;
+
+/// The SITL binary and its defaults file, or `None` (the test is skipped, saying why).
+fn sitl(test: &str) -> Option<(PathBuf, PathBuf)> {
+    let Some(binary) = std::env::var_os("DRONECINE_ARDUCOPTER_SITL").map(PathBuf::from) else {
+        eprintln!(
+            "{test}: skipped: DRONECINE_ARDUCOPTER_SITL does not name an ArduCopter SITL binary"
+        );
+        return None;
+    };
+    assert!(
+        binary.is_file(),
+        "DRONECINE_ARDUCOPTER_SITL: {binary:?} is not a file"
+    );
+    let defaults = std::env::var_os("DRONECINE_ARDUCOPTER_DEFAULTS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            // build/sitl/bin/arducopter in the source tree.
+            let tree = binary.ancestors().nth(4).unwrap_or(Path::new("/"));
+            tree.join("Tools/autotest/default_params/copter.parm")
+        });
+    assert!(
+        defaults.is_file(),
+        "no ArduCopter defaults at {defaults:?}: set DRONECINE_ARDUCOPTER_DEFAULTS"
+    );
+    Some((binary, defaults))
+}
+
+/// `shots/NAME` with its drone line made `drone arducopter-quad`, written into `dir`.
+fn for_arducopter(name: &str, dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(workspace().join("shots").join(name)).unwrap();
+    let (drone_line, _) = text
+        .lines()
+        .enumerate()
+        .find(|(_, l)| l.trim_start().starts_with("drone "))
+        .expect("a drone line");
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = String::new();
+    for (i, l) in lines.iter().enumerate() {
+        out += if i == drone_line {
+            "drone arducopter-quad"
+        } else {
+            l
+        };
+        out += "\n";
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+/// The JSON report of `script` flown through SITL (fresh parameters, a new namespace).
+fn fly_sitl(sitl: &(PathBuf, PathBuf), script: &Path, dir: &Path) -> serde_json::Value {
+    let params = dir.join("external-nav.parm");
+    std::fs::write(&params, EXTERNAL_NAV_PARAMS).unwrap();
+    let (binary, defaults) = sitl;
+    let inside = format!(
+        "ip link set lo up || exit 1; cd '{dir}' || exit 1; \
+         '{binary}' --model quad --speedup 1 --wipe --defaults '{defaults},{params}' -I0 \
+           --home -35.363261,149.165230,584,0 > sitl.log 2>&1 & sitl=$!; sleep 2; \
+         '{dronecine}' shoot '{script}' --drone mavlink://tcp:127.0.0.1:5760 --mocap sitl \
+           --report json -q --log '{dir}/flight.mcap' > report.json 2> shoot.err; rc=$?; \
+         kill $sitl; wait $sitl 2>/dev/null; exit $rc",
+        dir = dir.display(),
+        binary = binary.display(),
+        defaults = defaults.display(),
+        params = params.display(),
+        dronecine = env!("CARGO_BIN_EXE_dronecine"),
+        script = script.display(),
+    );
+    let status = Command::new("unshare")
+        .args(["--net", "--map-root-user", "bash", "-c", &inside])
+        .env("NO_COLOR", "1")
+        .status()
+        .expect("unshare runs (util-linux)");
+    let err = std::fs::read_to_string(dir.join("shoot.err")).unwrap_or_default();
+    assert!(status.success(), "the flight through SITL failed: {err}");
+    let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    serde_json::from_str(&report).unwrap_or_else(|e| panic!("{e}: {report}\n{err}"))
+}
+
+/// The JSON report of `script` flown on the embedded simulator (seed 1).
+fn fly_simulator(script: &Path, dir: &Path) -> serde_json::Value {
+    let log = dir.join("simulated.mcap");
+    let o = crate::common::dronecine(&[
+        "shoot",
+        script.to_str().unwrap(),
+        "--seed",
+        "1",
+        "--report",
+        "json",
+        "-q",
+        "--log",
+        log.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", crate::common::stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// A one-actor shot the quad can frame: it keeps a metre from actors, so the framings are
+/// medium long shots (1.37 m away with its lens) rather than the AR.Drone's medium shots.
+const ONE_ACTOR: &str = "stage 8m x 6m x 3m\ndrone arducopter-quad\n\
+                         actor A height 1.80m at (0, 0) facing 0deg\n\
+                         MLS on A front for 4s\n\
+                         then dolly to MLS on A 34backright over 6s\n\
+                         then hold for 4s\n";
+
+/// `shots/NAME` (or [`ONE_ACTOR`] for `one-actor.psl`) through SITL: completed, its path held
+/// within [`MAX_RMS_M`] RMS and no worse than [`MAX_RATIO_TO_SIMULATOR`] times the embedded
+/// simulator's figure.
+fn flies_through_sitl(name: &str) {
+    let Some(sitl) = sitl(name) else {
+        return;
+    };
+    let dir = temp_dir(&format!("sitl-{name}"));
+    let script = if name == "one-actor.psl" {
+        let path = dir.path().join(name);
+        std::fs::write(&path, ONE_ACTOR).unwrap();
+        path
+    } else {
+        for_arducopter(name, dir.path())
+    };
+    let simulated = fly_simulator(&script, dir.path());
+    let flown = fly_sitl(&sitl, &script, dir.path());
+    let rms = |r: &serde_json::Value| r["rms_position_error_m"].as_f64().unwrap();
+    eprintln!(
+        "{name} through SITL: {:.1} cm RMS ({:.1} cm max), heading {:.2}° RMS, saturated \
+         {:.1} %, framing {}; the embedded simulator: {:.1} cm RMS",
+        rms(&flown) * 100.0,
+        flown["max_position_error_m"].as_f64().unwrap() * 100.0,
+        flown["rms_heading_error_rad"]
+            .as_f64()
+            .unwrap()
+            .to_degrees(),
+        flown["saturated_fraction"].as_f64().unwrap() * 100.0,
+        flown["rms_framing_error"],
+        rms(&simulated) * 100.0
+    );
+    assert_eq!(flown["completed"], true, "{flown}");
+    assert!(rms(&flown) <= MAX_RMS_M, "{flown}");
+    assert!(
+        rms(&flown) <= MAX_RATIO_TO_SIMULATOR * rms(&simulated),
+        "{} against the simulator's {}",
+        rms(&flown),
+        rms(&simulated)
+    );
+}
+
+#[test]
+fn the_square_flies_through_arducopter_sitl() {
+    flies_through_sitl("square.psl");
+}
+
+#[test]
+fn the_helix_flies_through_arducopter_sitl() {
+    flies_through_sitl("helix.psl");
+}
+
+#[test]
+fn a_one_actor_shot_flies_through_arducopter_sitl() {
+    flies_through_sitl("one-actor.psl");
+}
