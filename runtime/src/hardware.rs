@@ -232,25 +232,21 @@ fn prepare_ardupilot(
     drone.set_origin().map_err(refused)?;
     let mut forwarder = drone.forwarder();
     let mut frame = MocapFrame::default();
-    drone
-        .wait_for_external_nav(EXTERNAL_NAV_TIMEOUT, |_| {
-            if mocap.poll(&mut frame)? {
-                if let Some(pose) = frame.drone {
-                    forwarder.forward(frame.t_s, &pose)?;
-                }
+    // The motion capture's newest pose of the drone, forwarded while the autopilot is waited
+    // for.
+    let mut forward = |_: &mut MavlinkDrone| -> Result<(), BackendError> {
+        if mocap.poll(&mut frame)? {
+            if let Some(pose) = frame.drone {
+                forwarder.forward(frame.t_s, &pose)?;
             }
-            Ok(())
-        })
+        }
+        Ok(())
+    };
+    drone
+        .wait_for_external_nav(EXTERNAL_NAV_TIMEOUT, &mut forward)
         .map_err(refused)?;
     drone
-        .wait_for_prearm(PREARM_TIMEOUT, |_| {
-            if mocap.poll(&mut frame)? {
-                if let Some(pose) = frame.drone {
-                    forwarder.forward(frame.t_s, &pose)?;
-                }
-            }
-            Ok(())
-        })
+        .wait_for_prearm(PREARM_TIMEOUT, &mut forward)
         .map_err(refused)?;
     Ok(Box::new(Forwarding {
         inner: mocap,

@@ -322,37 +322,51 @@ impl MavlinkDrone {
     pub fn wait_for_prearm(
         &mut self,
         timeout: Duration,
-        mut tick: impl FnMut(&mut Self) -> Result<(), BackendError>,
+        tick: impl FnMut(&mut Self) -> Result<(), BackendError>,
     ) -> Result<(), BackendError> {
+        if self.wait_until(timeout, |d| d.link.state().prearm_ok != Some(false), tick)? {
+            return Ok(());
+        }
+        let state = self.link.state();
+        let mut texts: Vec<&str> = (state.events.iter().rev())
+            .filter_map(|(_, e)| match e {
+                VehicleEvent::Text { text, .. } if text.starts_with("PreArm") => {
+                    Some(text.as_str())
+                }
+                _ => None,
+            })
+            .take(4)
+            .collect();
+        texts.dedup();
+        Err(BackendError::Refused(format!(
+            "the autopilot at {} did not pass its pre-arm checks within {:.0} s{}",
+            self.link.url(),
+            timeout.as_secs_f64(),
+            if texts.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", texts.join("; "))
+            }
+        )))
+    }
+
+    /// Calls `tick` every few milliseconds until `done` holds (`true`) or `timeout` passes
+    /// (`false`); a failed `tick` ends the wait with its error.
+    fn wait_until(
+        &mut self,
+        timeout: Duration,
+        done: impl Fn(&Self) -> bool,
+        mut tick: impl FnMut(&mut Self) -> Result<(), BackendError>,
+    ) -> Result<bool, BackendError> {
         let deadline = Instant::now() + timeout;
-        while self.link.state().prearm_ok == Some(false) {
+        while !done(self) {
             if Instant::now() >= deadline {
-                let state = self.link.state();
-                let mut texts: Vec<&str> = (state.events.iter().rev())
-                    .filter_map(|(_, e)| match e {
-                        VehicleEvent::Text { text, .. } if text.starts_with("PreArm") => {
-                            Some(text.as_str())
-                        }
-                        _ => None,
-                    })
-                    .take(4)
-                    .collect();
-                texts.dedup();
-                return Err(BackendError::Refused(format!(
-                    "the autopilot at {} did not pass its pre-arm checks within {:.0} s{}",
-                    self.link.url(),
-                    timeout.as_secs_f64(),
-                    if texts.is_empty() {
-                        String::new()
-                    } else {
-                        format!(": {}", texts.join("; "))
-                    }
-                )));
+                return Ok(false);
             }
             tick(self)?;
             std::thread::sleep(Duration::from_millis(5));
         }
-        Ok(())
+        Ok(true)
     }
 
     /// Waits for [`MavlinkDrone::uses_external_nav`], calling `tick` every few milliseconds
@@ -361,25 +375,20 @@ impl MavlinkDrone {
     pub fn wait_for_external_nav(
         &mut self,
         timeout: Duration,
-        mut tick: impl FnMut(&mut Self) -> Result<(), BackendError>,
+        tick: impl FnMut(&mut Self) -> Result<(), BackendError>,
     ) -> Result<(), BackendError> {
-        let deadline = Instant::now() + timeout;
-        while !self.uses_external_nav() {
-            if Instant::now() >= deadline {
-                let flags = self.link.state().ekf_flags;
-                return Err(BackendError::Refused(format!(
-                    "the autopilot at {} did not report using the motion capture within {:.0} s \
-                     (EKF flags: {}): check VISO_TYPE and EK3_SRC1_*, that the motion capture \
-                     reaches it, and that the origin was set",
-                    self.link.url(),
-                    timeout.as_secs_f64(),
-                    flags.map_or("none received".into(), |f| format!("{f:#06x}"))
-                )));
-            }
-            tick(self)?;
-            std::thread::sleep(Duration::from_millis(5));
+        if self.wait_until(timeout, Self::uses_external_nav, tick)? {
+            return Ok(());
         }
-        Ok(())
+        let flags = self.link.state().ekf_flags;
+        Err(BackendError::Refused(format!(
+            "the autopilot at {} did not report using the motion capture within {:.0} s \
+             (EKF flags: {}): check VISO_TYPE and EK3_SRC1_*, that the motion capture reaches \
+             it, and that the origin was set",
+            self.link.url(),
+            timeout.as_secs_f64(),
+            flags.map_or("none received".into(), |f| format!("{f:#06x}"))
+        )))
     }
 
     fn request_streams(&self) -> Result<(), BackendError> {
