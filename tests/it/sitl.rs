@@ -2,11 +2,12 @@
 //! backend, judged on the simulator's true position (`--mocap sitl`: SIM_STATE is the motion
 //! capture, and what the autopilot's EKF is fed).
 //!
-//! Opt-in: `DRONECINE_ARDUCOPTER_SITL` names the SITL binary (`arducopter`, built from the
-//! ArduPilot sources with `./waf configure --board sitl && ./waf copter`); the autopilot's
-//! default parameters for its test vehicle are read from `DRONECINE_ARDUCOPTER_DEFAULTS`, or
-//! from `Tools/autotest/default_params/copter.parm` of the source tree the binary was built
-//! in. Without the variable every test here says it is skipped and passes.
+//! Opt-in: `DRONECINE_ARDUCOPTER_SITL` names the SITL binary (`arducopter`, ArduPilot's
+//! software-in-the-loop build of its Copter firmware, which this project does not ship); the
+//! autopilot's default parameters for its test vehicle are read from
+//! `DRONECINE_ARDUCOPTER_DEFAULTS`, or from `Tools/autotest/default_params/copter.parm` of the
+//! source tree the binary was built in. Without the variable every test here says it is
+//! skipped and passes.
 //!
 //! SITL listens on every network interface: each flight runs SITL and `dronecine` together in
 //! a network namespace of their own (`unshare --net --map-root-user`, only the loopback up).
