@@ -12,9 +12,9 @@ use std::time::{Duration, Instant};
 use dronecine_mavlink::messages::copter_mode;
 use dronecine_mavlink::{MavlinkDrone, MavlinkOptions, MavlinkUrl, ParamCheck, VehicleLimits};
 
-/// How long the vehicle's telemetry is listened to before the first read-out: EKF and
-/// SYS_STATUS reports come at 2 Hz.
-const FIRST_READOUT: Duration = Duration::from_millis(1500);
+/// The longest the first read-out waits for the vehicle's EKF and SYS_STATUS reports (asked
+/// for at 2 Hz when the link opens; an autopilot takes a moment to start streaming them).
+const FIRST_READOUT: Duration = Duration::from_secs(4);
 
 /// One read-out.
 struct Readout {
@@ -195,7 +195,11 @@ pub fn run(a: &Args, url: &MavlinkUrl) -> ExitCode {
         Ok(d) => d,
         Err(e) => return fail(e.to_string()),
     };
-    std::thread::sleep(FIRST_READOUT);
+    let reported = |s: &dronecine_mavlink::VehicleState| {
+        s.ekf_flags.is_some() && s.prearm_ok.is_some() && s.battery_percent.is_some()
+    };
+    // A vehicle that never sends them is read out as it is: its read-out says what is missing.
+    let _ = drone.link().wait_for(FIRST_READOUT, || Ok(()), reported);
     let mut readout = match read(&mut drone) {
         Ok(r) => r,
         Err(e) => return fail(e),
