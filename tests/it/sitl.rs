@@ -10,7 +10,8 @@
 //! skipped and passes.
 //!
 //! SITL listens on every network interface: each flight runs SITL and `dronecine` together in
-//! a network namespace of their own (`unshare --net --map-root-user`, only the loopback up).
+//! a network namespace of their own (`unshare --net`, inside a user namespace for a user other
+//! than root; only the loopback up).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -105,8 +106,18 @@ fn fly_sitl(
         dronecine = env!("CARGO_BIN_EXE_dronecine"),
         script = script.display(),
     );
+    // Root makes the network namespace itself (and the flight gets the real-time scheduling
+    // it asks for); anyone else makes it inside a user namespace of their own.
+    // SAFETY: geteuid takes nothing and cannot fail.
+    let root = unsafe { libc::geteuid() } == 0;
+    let unshare: &[&str] = if root {
+        &["--net"]
+    } else {
+        &["--net", "--map-root-user"]
+    };
     let status = Command::new("unshare")
-        .args(["--net", "--map-root-user", "bash", "-c", &inside])
+        .args(unshare)
+        .args(["bash", "-c", &inside])
         .env("NO_COLOR", "1")
         .status()
         .expect("unshare runs (util-linux)");
