@@ -56,7 +56,8 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "N")]
     repeats: Option<usize>,
     /// Write the calibration report (per axis the measured response against the fitted
-    /// model's and the previous profile's, SVG and PNG) to this folder.
+    /// model's and the previous profile's, SVG and PNG, and every test's samples as
+    /// `tests.json`) to this folder.
     #[arg(long, value_name = "DIR")]
     report: Option<std::path::PathBuf>,
     /// Calibrate a real AR.Drone 2.0 (or `dronecine emulate`) instead of the simulator:
@@ -177,6 +178,17 @@ fn render(fit: &ModelFit, errors: &[FitError], prev: &Profile, axes: &[Axis]) ->
                 tprev
             ));
         }
+        if let (Some(t), Some(written)) = (f.tau_s, f.servo_tau_s()) {
+            if written != t.value {
+                out.push_str(&format!(
+                    "{:<6} {:<16} {:>10.4} {:>27}\n",
+                    "",
+                    format!("{tname} written"),
+                    written,
+                    "(the delay folded in)"
+                ));
+            }
+        }
         // Found by the fit, not in the servo's model: reported, not written.
         if let Some(d) = f.descent_gain {
             out.push_str(&format!(
@@ -231,6 +243,20 @@ fn write_report(
         written.push(png_path);
     }
     Ok(written)
+}
+
+/// Writes `tests.json` into `dir`: every test flown, as the fit read it (the axis and its
+/// samples), so that a calibration can be studied or fitted again without flying it again.
+fn write_tests(dir: &Path, tests: &[(Axis, Segment)]) -> Result<std::path::PathBuf, String> {
+    let records: Vec<serde_json::Value> = tests
+        .iter()
+        .map(|(axis, seg)| serde_json::json!({ "axis": axis.name(), "samples": seg }))
+        .collect();
+    let path = dir.join("tests.json");
+    let text = serde_json::to_string(&records).map_err(|e| e.to_string())?;
+    crate::files::write_atomic(&path, &text)
+        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    Ok(path)
 }
 
 /// The `n` segments with the most input on `axis`.
@@ -437,7 +463,12 @@ fn fly_and_fit(
                         )
                     })
                     .collect();
-                match write_report(dir, &c.fit, &c.errors, prior, &tests) {
+                match write_report(dir, &c.fit, &c.errors, prior, &tests).and_then(|mut files| {
+                    write_tests(dir, &c.tests).map(|f| {
+                        files.push(f);
+                        files
+                    })
+                }) {
                     Ok(files) => outln!("report: {} files in {}", files.len(), dir.display()),
                     Err(e) => return fail(e),
                 }

@@ -132,23 +132,32 @@ fn unknown_profile(option: &str, name: &str) -> String {
 }
 
 /// A script that checks clean, has a scene, and names a drone profile that loads: what
-/// `compile`, `shoot` and `emulate` start from.
+/// `compile`, `shoot` and `emulate` start from, its coverages expanded for the profile.
 pub struct Loaded {
     pub file: check::FileResult,
     pub profile: Profile,
+    /// The script as it is flown: each `coverage` line expanded into its shots
+    /// ([`dronecine_compiler::coverage::expand`]).
+    expanded: Script,
+    /// What the expansion found (`compile::coverage_overruns`).
+    expansion: Vec<diag::Diagnostic>,
 }
 
 impl Loaded {
+    /// The script as it is flown, its coverages expanded.
     pub fn script(&self) -> &Script {
-        self.file
-            .checked
-            .script
-            .as_ref()
-            .expect("load_scene checked it")
+        &self.expanded
     }
 
     pub fn scene(&self) -> &Scene {
-        self.script().scene.as_ref().expect("load_scene checked it")
+        self.expanded.scene.as_ref().expect("load_scene checked it")
+    }
+
+    /// The script check's warnings and the expansion's, to tell with the compiler's.
+    pub fn script_warnings(&self) -> Vec<diag::Diagnostic> {
+        let mut all = self.file.checked.diagnostics.clone();
+        all.extend(self.expansion.iter().cloned());
+        all
     }
 }
 
@@ -209,7 +218,13 @@ pub fn load_scene(path: &Path, color: bool, what: &str, shots: bool) -> Result<L
     };
     let base = crate::files::base_dir(path);
     let profile = load_profile(scene, &base, &r.name, &r.text, color)?;
-    Ok(Loaded { file: r, profile })
+    let (expanded, expansion) = dronecine_compiler::coverage::expand(script, &profile);
+    Ok(Loaded {
+        file: r,
+        profile,
+        expanded,
+        expansion,
+    })
 }
 
 pub fn run(a: &Args) -> ExitCode {
@@ -272,7 +287,7 @@ pub fn run(a: &Args) -> ExitCode {
     let mut kept_actors: Vec<Vec<ActorPose>> = Vec::new();
     let mut n = 0usize;
     let opts = Options { rate_hz: a.rate_hz };
-    let compiled = compile::compile(script, &profile, &opts, |s, actors| {
+    let compiled = dronecine_film::compile(script, &profile, &opts, |s, actors| {
         mcap.write(s, actors)?;
         if let Some(c) = csv.as_mut() {
             c.write(s)?;
@@ -296,7 +311,7 @@ pub fn run(a: &Args) -> ExitCode {
     }
     // The language's warnings (a move timed with `for`, …) and the compiler's together, in
     // the script's order.
-    let shown = with_script_warnings(&r.checked.diagnostics, &compiled.diagnostics);
+    let shown = with_script_warnings(&loaded.script_warnings(), &compiled.diagnostics);
     if !shown.is_empty() {
         err!("{}", diag::render(&r.name, &r.text, &shown, a.color, 100));
     }
@@ -385,34 +400,41 @@ fn human_bytes(n: u64) -> String {
     }
 }
 
-/// The previews' list of shots and repositioning flights, labelled with the PSL text.
+/// The previews' list of shots and repositioning flights, labelled with the PSL text and
+/// named by shot type.
 fn shot_infos(script: &Script, src: &str, timings: &[ShotTiming]) -> Vec<ShotInfo> {
     let mut out = Vec::new();
     for t in timings {
         let shot = &script.timeline[t.index];
+        let kind = match &shot.content {
+            ShotContent::Path(_) => ShotKind::Path,
+            _ if script.moves_camera(t.index) => ShotKind::Transition,
+            _ => ShotKind::Hold,
+        };
+        let to = preview::shot_type(&shot.content);
+        // A camera move starts on the composition before it.
+        let from = match kind {
+            ShotKind::Transition => t.index.checked_sub(1).map_or(to.clone(), |i| {
+                preview::shot_type(&script.timeline[i].content)
+            }),
+            _ => to.clone(),
+        };
         if let Some((a, b)) = t.reposition {
             out.push(ShotInfo {
                 start_s: a,
                 end_s: b,
                 label: format!("repositioning flight to shot {}", t.index + 1),
                 kind: ShotKind::Reposition,
+                framing: [from.clone(), from.clone()],
             });
         }
-        let label = src
-            .get(shot.span.start..shot.span.end)
-            .unwrap_or("")
-            .trim()
-            .to_string();
-        let kind = match &shot.content {
-            ShotContent::Path(_) => ShotKind::Path,
-            _ if script.moves_camera(t.index) => ShotKind::Transition,
-            _ => ShotKind::Hold,
-        };
+        let label = shot.label(src);
         out.push(ShotInfo {
             start_s: t.start_s,
             end_s: t.end_s,
             label,
             kind,
+            framing: [from, to],
         });
     }
     out

@@ -1,4 +1,5 @@
-//! `dronecine fmt`: rewrite scripts in canonical form, or `--check` that they are.
+//! `dronecine fmt`: rewrite scripts in canonical form, or `--check` that they are; or
+//! `--expand` one script's coverages into the shots the compiler flies.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -58,5 +59,31 @@ pub fn run(inputs: &[PathBuf], check: bool, color: bool) -> ExitCode {
         ExitCode::FAILURE
     } else {
         ExitCode::SUCCESS
+    }
+}
+
+/// `fmt --expand FILE`: the script, its coverages expanded for its drone, on standard output.
+pub fn expand(inputs: &[PathBuf], color: bool) -> ExitCode {
+    let [path] = inputs else {
+        errln!(
+            "error: --expand prints one script; give one FILE, not {}",
+            inputs.len()
+        );
+        return ExitCode::FAILURE;
+    };
+    let loaded = match crate::compile::load_scene(path, color, "expanded", true) {
+        Ok(l) => l,
+        Err(code) => return code,
+    };
+    let r = &loaded.file;
+    match dronecine_grammar::format::expanded_text(&r.text, loaded.script()) {
+        Ok(text) => {
+            out!("{text}");
+            ExitCode::SUCCESS
+        }
+        Err(diags) => {
+            err!("{}", diag::render(&r.name, &r.text, &diags, color, 100));
+            ExitCode::FAILURE
+        }
     }
 }

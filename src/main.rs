@@ -14,14 +14,18 @@ mod calibrate;
 mod check;
 mod compile;
 mod emulate;
+mod explain;
 mod files;
 mod fmt;
 mod gains;
 mod hardware;
+mod live;
 mod replay;
+mod report;
 mod shoot;
 mod signals;
 mod status;
+mod status_crazyflie;
 mod status_mavlink;
 
 use std::io::IsTerminal;
@@ -57,13 +61,30 @@ enum Command {
         format: Format,
     },
     /// Rewrite scripts in canonical form (idempotent; comments are kept).
+    ///
+    /// With --expand, print one script with each `coverage` line replaced by the shots the
+    /// compiler flies for it, timed to its drone's repositioning flights, as PSL that
+    /// compiles to the same flight; the file is not changed.
     Fmt {
         /// Scripts or directories of scripts.
         #[arg(required = true, value_name = "FILE")]
         files: Vec<PathBuf>,
         /// Change nothing; exit 1 if any file would be rewritten.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "expand")]
         check: bool,
+        /// Print the script (one FILE) with its coverages expanded, instead of rewriting it.
+        #[arg(long)]
+        expand: bool,
+    },
+    /// What a word of the shot language or a diagnostic code means, with an example.
+    ///
+    /// A word: a shot size (`MS`), a profile (`34left`), a camera move (`dolly`), a camera
+    /// angle (`high angle`), a transition (`cut`) or any other keyword; a code:
+    /// `psl::unknown_actor` (or `unknown_actor`). Without one, lists them all.
+    Explain {
+        /// The word or code (several words are one term: `high angle`).
+        #[arg(value_name = "TERM")]
+        term: Vec<String>,
     },
     /// Compile a script into the timed 6D reference a drone flies (MCAP, CSV, previews).
     ///
@@ -156,10 +177,12 @@ enum Command {
         report: ReportFormat,
         #[command(flatten)]
         effects: SimEffects,
-        /// Fly a real drone. An AR.Drone 2.0 (or `dronecine emulate`):
+        /// Fly a real drone. An AR.Drone 2.0 (or `dronecine emulate ardrone`):
         /// `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]`; an ArduPilot Copter:
         /// `mavlink://udp:HOST:PORT`, `mavlink://tcp:HOST:PORT` or
-        /// `mavlink:///dev/PORT?baud=N`. Needs --mocap.
+        /// `mavlink:///dev/PORT?baud=N`; a Crazyflie: `crazyflie+radio://N/CHANNEL/RATE/ADDRESS`
+        /// (a Crazyradio) or `crazyflie+udp://HOST:PORT` (or `dronecine emulate crazyflie`).
+        /// Needs --mocap.
         #[arg(long, value_name = "URL")]
         drone: Option<String>,
         /// Its positions from OptiTrack NatNet:
@@ -170,8 +193,9 @@ enum Command {
         /// Rigid-body ids of the drone and the actors (TOML) [default: drone 1, actors 2, 3, …].
         #[arg(long, value_name = "FILE")]
         rig: Option<PathBuf>,
-        /// With an ArduPilot drone: do not send it the motion capture (VISION_POSITION_ESTIMATE);
-        /// its EKF then navigates on its own sensors.
+        /// With an ArduPilot drone or a Crazyflie: do not send it the motion capture
+        /// (VISION_POSITION_ESTIMATE; the external pose); its estimator then navigates on its
+        /// own sensors.
         #[arg(long)]
         no_forward_mocap: bool,
         /// With a real drone: do not ask for real-time scheduling (SCHED_FIFO) and locked
@@ -182,6 +206,10 @@ enum Command {
         /// flight ended early).
         #[arg(short, long)]
         quiet: bool,
+        /// Serve the flight as it happens to Foxglove (its WebSocket protocol), on ADDR:PORT
+        /// [default: 127.0.0.1:8765]: the flight log's topics, live. Give it after FILE.
+        #[arg(long, value_name = "ADDR:PORT", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
+        live: Option<std::net::SocketAddr>,
     },
     /// Re-run the controller of a flight log on its logged inputs, check that it gives the
     /// logged commands bit for bit, and print the report again.
@@ -192,6 +220,19 @@ enum Command {
         /// How to print the report.
         #[arg(long, value_enum, default_value_t = ReportFormat::Text)]
         report: ReportFormat,
+        /// Then play the logged flight to Foxglove (its WebSocket protocol) on ADDR:PORT
+        /// [default: 127.0.0.1:8765], paced as it was flown, once a client subscribes.
+        #[arg(long, value_name = "ADDR:PORT", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
+        live: Option<std::net::SocketAddr>,
+        /// With --live: times real time (0.01 to 1000).
+        #[arg(
+            long,
+            value_name = "X",
+            default_value_t = 1.0,
+            requires = "live",
+            allow_negative_numbers = true
+        )]
+        speed: f64,
     },
     /// Connect to a drone and print its state: what to check before a flight.
     ///
@@ -202,7 +243,9 @@ enum Command {
         /// The drone: `ardrone://HOST[:AT_PORT[:NAVDATA_PORT]]` (its Wi-Fi: ardrone://192.168.1.1),
         /// or an ArduPilot Copter: `mavlink://udp:HOST:PORT`, `mavlink://tcp:HOST:PORT`,
         /// `mavlink:///dev/PORT?baud=N` (mode, arming, battery, EKF and motion-capture
-        /// navigation, pre-arm checks, the parameters that matter, limits, gimbal).
+        /// navigation, pre-arm checks, the parameters that matter, limits, gimbal), or a
+        /// Crazyflie: `crazyflie+radio://N/CHANNEL/RATE/ADDRESS`, `crazyflie+udp://HOST:PORT`
+        /// (protocol version, battery, supervisor, estimate, attitude).
         #[arg(long, value_name = "URL")]
         drone: String,
         /// Keep printing (every --interval) until interrupted.
@@ -241,6 +284,9 @@ enum Command {
     },
 }
 
+/// Where `--live` serves unless told: Foxglove's default, on this machine only.
+const LIVE_ADDR: &str = "127.0.0.1:8765";
+
 #[derive(Subcommand, Debug)]
 enum EmulateKind {
     /// An AR.Drone 2.0 (AT commands in, navdata out) and OptiTrack Motive (NatNet frames of
@@ -258,30 +304,62 @@ enum EmulateKind {
         /// Navdata port (UDP).
         #[arg(long, value_name = "P", default_value_t = 5554)]
         navdata_port: u16,
-        /// Where NatNet frames go: a unicast address, or a multicast group.
-        #[arg(long, value_name = "ADDR:PORT", default_value = "239.255.42.99:1511")]
-        natnet: std::net::SocketAddr,
-        /// NatNet command port (UDP), answering the connect request with the server info.
-        #[arg(long, value_name = "P", default_value_t = 1510)]
-        natnet_command_port: u16,
-        /// NatNet version to announce and stream (3.0 to 4.1).
-        #[arg(long, value_name = "X.Y", default_value = "4.1")]
-        natnet_version: String,
-        /// Stream Z-up (Motive's default is Y-up).
-        #[arg(long)]
-        z_up: bool,
-        /// No NatNet at all.
-        #[arg(long, conflicts_with_all = ["natnet", "natnet_command_port", "natnet_version", "z_up"])]
-        no_natnet: bool,
-        /// The simulator's seed (noise, wind, radio loss, the actors' deviations).
-        #[arg(long, value_name = "N", default_value_t = 1)]
-        seed: u64,
-        /// A script whose scene gives the actors (and the drone profile); none without it.
-        #[arg(long, value_name = "FILE.psl")]
-        script: Option<PathBuf>,
         #[command(flatten)]
-        effects: SimEffects,
+        world: EmulatedWorld,
     },
+    /// A Crazyflie (CRTP over UDP, one packet per datagram, as cflib's UDP driver speaks it)
+    /// and OptiTrack Motive (NatNet frames of the drone and the actors), the simulator
+    /// running in real time until Ctrl-C; fly it with `--drone crazyflie+udp://HOST:PORT`.
+    ///
+    /// The answers and log samples go to the sender of the last packet. NatNet rigid
+    /// bodies: 1 = the drone, 2, 3, … = the script's actors in order. The script's drone line
+    /// gives the profile the simulator flies (`drone crazyflie21`).
+    Crazyflie {
+        /// Address to listen on.
+        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1")]
+        host: std::net::IpAddr,
+        /// CRTP port (UDP).
+        #[arg(long, value_name = "P", default_value_t = 19850)]
+        port: u16,
+        /// The CRTP protocol version to announce (4 to 12; from 9 the altHold yaw rate is
+        /// counter-clockwise positive).
+        #[arg(long, value_name = "N", default_value_t = 12, value_parser = clap::value_parser!(u8).range(4..=12))]
+        protocol: u8,
+        #[command(flatten)]
+        world: EmulatedWorld,
+    },
+}
+
+/// What an emulator streams and simulates besides its drone's own protocol.
+#[derive(Clone, Debug, clap::Args)]
+struct EmulatedWorld {
+    /// Where NatNet frames go: a unicast address, or a multicast group.
+    #[arg(long, value_name = "ADDR:PORT", default_value = "239.255.42.99:1511")]
+    natnet: std::net::SocketAddr,
+    /// NatNet command port (UDP), answering the connect request with the server info.
+    #[arg(long, value_name = "P", default_value_t = 1510)]
+    natnet_command_port: u16,
+    /// NatNet version to announce and stream (3.0 to 4.1).
+    #[arg(long, value_name = "X.Y", default_value = "4.1")]
+    natnet_version: String,
+    /// Stream Z-up (Motive's default is Y-up).
+    #[arg(long)]
+    z_up: bool,
+    /// No NatNet at all.
+    #[arg(long, conflicts_with_all = ["natnet", "natnet_command_port", "natnet_version", "z_up"])]
+    no_natnet: bool,
+    /// The simulator's seed (noise, wind, radio loss, the actors' deviations).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    seed: u64,
+    /// A script whose scene gives the actors (and the drone profile); none without it.
+    #[arg(long, value_name = "FILE.psl")]
+    script: Option<PathBuf>,
+    #[command(flatten)]
+    effects: SimEffects,
+    /// Serve the simulator's world (the drone and the actors where they truly are) to
+    /// Foxglove (its WebSocket protocol) on ADDR:PORT [default: 127.0.0.1:8765].
+    #[arg(long, value_name = "ADDR:PORT", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
+    live: Option<std::net::SocketAddr>,
 }
 
 /// Which simulator effects a simulated flight has (`shoot`, `emulate`).
@@ -357,7 +435,13 @@ fn run(cli: Cli) -> ExitCode {
     let color = cli.color.enabled();
     match cli.command {
         Command::Check { files, format } => check::run(&files, format == Format::Json, color),
-        Command::Fmt { files, check } => fmt::run(&files, check, color),
+        Command::Fmt {
+            files,
+            check,
+            expand: true,
+        } if !check => fmt::expand(&files, color),
+        Command::Fmt { files, check, .. } => fmt::run(&files, check, color),
+        Command::Explain { term } => explain::run(&term),
         Command::Compile {
             file,
             output,
@@ -395,6 +479,7 @@ fn run(cli: Cli) -> ExitCode {
             rig,
             no_forward_mocap,
             normal_priority,
+            live,
         } => shoot::run(&shoot::Args {
             file: &file,
             log: log.as_deref(),
@@ -418,38 +503,56 @@ fn run(cli: Cli) -> ExitCode {
             normal_priority,
             rig: rig.as_deref(),
             color,
+            live,
         }),
-        Command::Emulate {
-            kind:
+        Command::Emulate { kind } => {
+            let (drone, host, w) = match kind {
                 EmulateKind::Ardrone {
                     host,
                     at_port,
                     navdata_port,
-                    natnet,
-                    natnet_command_port,
-                    natnet_version,
-                    z_up,
-                    no_natnet,
-                    seed,
-                    script,
-                    effects,
-                },
-        } => emulate::run(&emulate::Args {
-            host,
-            at_port,
-            navdata_port,
-            natnet,
-            natnet_command_port,
-            natnet_version: &natnet_version,
-            z_up,
-            no_natnet,
-            seed,
-            script: script.as_deref(),
-            ideal: effects.ideal,
-            sim_off: &effects.sim_off,
-            color,
-        }),
-        Command::Replay { file, report } => replay::run(&file, report == ReportFormat::Json),
+                    world,
+                } => (
+                    emulate::Emulated::ArDrone {
+                        at_port,
+                        navdata_port,
+                    },
+                    host,
+                    world,
+                ),
+                EmulateKind::Crazyflie {
+                    host,
+                    port,
+                    protocol,
+                    world,
+                } => (emulate::Emulated::Crazyflie { port, protocol }, host, world),
+            };
+            emulate::run(&emulate::Args {
+                drone,
+                host,
+                natnet: w.natnet,
+                natnet_command_port: w.natnet_command_port,
+                natnet_version: &w.natnet_version,
+                z_up: w.z_up,
+                no_natnet: w.no_natnet,
+                seed: w.seed,
+                script: w.script.as_deref(),
+                ideal: w.effects.ideal,
+                sim_off: &w.effects.sim_off,
+                color,
+                live: w.live,
+            })
+        }
+        Command::Replay {
+            file,
+            report,
+            live,
+            speed,
+        } => replay::run(
+            &file,
+            report == ReportFormat::Json,
+            live.map(|a| (a, speed)),
+        ),
         Command::Status {
             drone,
             watch,

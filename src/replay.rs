@@ -9,7 +9,14 @@ use std::process::ExitCode;
 use dronecine_flight::replay;
 use dronecine_mcap::log::FlightLog;
 
-pub fn run(file: &Path, json: bool) -> ExitCode {
+/// `live`: then play the log to Foxglove on this address, at this speed (`--live`).
+pub fn run(file: &Path, json: bool, live: Option<(std::net::SocketAddr, f64)>) -> ExitCode {
+    if let Some((_, speed)) = live {
+        if let Err(e) = dronecine_live::check_speed(speed) {
+            errln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
     let log = match FlightLog::open(file) {
         Ok(l) => l,
         Err(e) => {
@@ -62,19 +69,20 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
             errln!("{text}");
         }
         // A log cut before the flight's end does not say how the flight ended.
+        use crate::report::{render, Ending, Next};
         let ended = log.events.iter().any(|e| e.kind == "flight_end");
-        let status = match (ended, r.report.completed) {
-            (false, _) => "unfinished log of a",
-            (true, true) => "completed",
-            (true, false) => "ABORTED",
+        let ending = match ended {
+            false => Ending::Unfinished,
+            true => Ending::of(&r.report),
         };
         out!(
             "{}",
-            crate::shoot::render_report_as(
+            render(
                 &r.report,
-                status,
+                ending,
                 &log.header.profile_name,
-                &log.header.controller.kind
+                &log.header.controller.kind,
+                Next::Replayed(file)
             )
         );
     }
@@ -136,6 +144,12 @@ pub fn run(file: &Path, json: bool) -> ExitCode {
              it, and no key frame after the gap gives it (a log written without key frames)",
             r.unreplayed
         );
+    }
+    if let Some((addr, speed)) = live {
+        if let Err(e) = crate::live::play(file, addr, speed) {
+            errln!("error: {e}");
+            ok = false;
+        }
     }
     if ok {
         ExitCode::SUCCESS

@@ -12,11 +12,12 @@ use std::time::{Duration, Instant};
 use dronecine_compiler::compile::{self, Options};
 use dronecine_compiler::director::Director;
 use dronecine_diag as diag;
-use dronecine_flight::report::{Figures, FlightReport};
+use dronecine_flight::report::FlightReport;
 use dronecine_flight::{FlightError, Observer, Progress};
 use dronecine_grammar::script::Scene;
+use dronecine_live::{LiveFeed, Tee};
 use dronecine_mcap::log::{FlightLogWriter, LogOptions, LogScene, LogThread};
-use dronecine_mcap::record::{Event, FlightHeader, Phase};
+use dronecine_mcap::record::{Event, FlightHeader, FlightSink, Phase};
 use dronecine_runtime::{HardwareFlight, SessionError, SimFlight};
 use dronecine_servo::setup::ControllerSetup;
 use dronecine_sim::{Effects, SimConfig};
@@ -53,6 +54,8 @@ pub struct Args<'a> {
     /// The rig file (rigid-body ids); default: the emulator's layout.
     pub rig: Option<&'a Path>,
     pub color: bool,
+    /// Serve the flight as it happens to Foxglove on this address (`--live`).
+    pub live: Option<std::net::SocketAddr>,
 }
 
 /// Where the flight happens.
@@ -207,6 +210,13 @@ pub fn run(a: &Args) -> ExitCode {
     if let Err(e) = crate::files::prepare_output(&log_path, "--log") {
         return fail(e);
     }
+    let live = match a.live.map(crate::live::serve).transpose() {
+        Ok(l) => l,
+        Err(e) => return fail(e),
+    };
+    if live.is_some() && matches!(target, Target::Sim) && !a.realtime {
+        errln!("note: the simulator flies as fast as it can; --realtime flies it at its pace");
+    }
     let flight = Flight {
         a,
         loaded: &loaded,
@@ -220,7 +230,7 @@ pub fn run(a: &Args) -> ExitCode {
         Ok(l) => l,
         Err(e) => return fail(e),
     };
-    flight.fly(log, &log_path)
+    flight.fly(log, &log_path, live.as_ref())
 }
 
 /// The target (the simulator, or the hardware `--drone`/`--mocap`/`--rig` name), the
@@ -276,7 +286,7 @@ fn compiler_verdict(a: &Args, loaded: &crate::compile::Loaded) -> Result<(), Exi
     let (r, profile) = (&loaded.file, &loaded.profile);
     let opts = Options { rate_hz: a.rate_hz };
     let no_output = |_: &_, _: &_| Ok::<(), std::io::Error>(());
-    let compiled = match compile::compile(loaded.script(), profile, &opts, no_output) {
+    let compiled = match dronecine_film::compile(loaded.script(), profile, &opts, no_output) {
         Ok(c) => c,
         Err(e) => return Err(fail(e)),
     };
@@ -302,7 +312,7 @@ fn compiler_verdict(a: &Args, loaded: &crate::compile::Loaded) -> Result<(), Exi
     }
     if !a.quiet {
         let warned =
-            crate::compile::with_script_warnings(&r.checked.diagnostics, &compiled.diagnostics);
+            crate::compile::with_script_warnings(&loaded.script_warnings(), &compiled.diagnostics);
         if let Some(line) = warnings_line(&warned, &r.name, &rate) {
             errln!("{line}");
         }
@@ -364,13 +374,11 @@ impl Flight<'_> {
         path: PathBuf,
         into_dir: Option<&Path>,
     ) -> Result<(LogThread, PathBuf), String> {
-        let (a, scene) = (self.a, self.loaded.scene());
-        let actor_names: Vec<String> = scene.actors.iter().map(|x| x.name.clone()).collect();
-        let heights: Vec<f64> = scene.actors.iter().map(|x| x.height_m).collect();
+        let a = self.a;
+        let (actor_names, heights, lens) = self.scene_parts();
         let header = self.header();
-        let lens = *Director::new(self.loaded.script(), scene, &self.loaded.profile).lens();
         let log_scene = LogScene {
-            stage: scene.stage,
+            stage: self.loaded.scene().stage,
             lens,
             actor_names: &actor_names,
             actor_heights_m: &heights,
@@ -400,9 +408,36 @@ impl Flight<'_> {
         }
     }
 
-    /// Flies, logging into `log`, and prints the report; the exit status says whether the
-    /// flight completed.
-    fn fly(&self, mut log: LogThread, log_path: &Path) -> ExitCode {
+    /// What the log's scene is made of: the actors' names and heights, the lens.
+    fn scene_parts(&self) -> (Vec<String>, Vec<f64>, dronecine_compiler::camera::Lens) {
+        let scene = self.loaded.scene();
+        let actor_names = scene.actors.iter().map(|x| x.name.clone()).collect();
+        let heights = scene.actors.iter().map(|x| x.height_m).collect();
+        let lens = *Director::new(self.loaded.script(), scene, &self.loaded.profile).lens();
+        (actor_names, heights, lens)
+    }
+
+    /// The live view's side of the loop, on `server`: the log's scene and topics.
+    fn live_feed(&self, server: &dronecine_live::LiveServer) -> std::io::Result<LiveFeed> {
+        let (actor_names, heights, lens) = self.scene_parts();
+        let scene = LogScene {
+            stage: self.loaded.scene().stage,
+            lens,
+            actor_names: &actor_names,
+            actor_heights_m: &heights,
+        };
+        let gimbal = self.loaded.profile.camera.gimbal != dronecine_profile::Gimbal::None;
+        LiveFeed::start(server, &scene, gimbal)
+    }
+
+    /// Flies, logging into `log` (and serving the flight on `live`), and prints the report;
+    /// the exit status says whether the flight completed.
+    fn fly(
+        &self,
+        mut log: LogThread,
+        log_path: &Path,
+        live: Option<&dronecine_live::LiveServer>,
+    ) -> ExitCode {
         let a = self.a;
         // Ctrl-C lands, a second Ctrl-C cuts the motors; SIGTERM and SIGHUP land (the flight
         // loop reads the count).
@@ -413,14 +448,30 @@ impl Flight<'_> {
         }
         let r = &self.loaded.file;
         let mut display = Display::new(a.quiet, &r.name, &r.text);
-        let result = self.fly_on_target(&mut log, &mut display);
+        let mut feed = match live.map(|server| self.live_feed(server)).transpose() {
+            Ok(f) => f,
+            Err(e) => return fail(format!("the live view cannot start: {e}")),
+        };
+        let result = match &mut feed {
+            Some(live) => self.fly_on_target(
+                &mut Tee {
+                    log: &mut log,
+                    live,
+                },
+                &mut display,
+            ),
+            None => self.fly_on_target(&mut log, &mut display),
+        };
         display.finish();
         let finished = log.finish();
+        if let Some(feed) = feed {
+            errln!("{}", crate::live::summary_line(&feed.finish()));
+        }
         let report = match result {
             Ok(report) => report,
             Err(SessionError::Flight(FlightError::Log(e, report))) => {
                 // The flight was flown (and landed for it): its report first.
-                let _ = self.tell_report(&report);
+                let _ = self.tell_report(&report, None);
                 return fail(format!(
                     "the flight log could not be written ({e}): the drone was landed\n  help: \
                      the log keeps the flight up to the failure (`dronecine replay {}` reads \
@@ -431,16 +482,15 @@ impl Flight<'_> {
             Err(e) => return self.not_flown(e, log_path),
         };
         if let Err(e) = finished {
-            let _ = self.tell_report(&report);
+            let _ = self.tell_report(&report, None);
             return fail(format!(
                 "the flight log `{}` is incomplete: {e}",
                 log_path.display()
             ));
         }
-        if let Err(code) = self.tell_report(&report) {
+        if let Err(code) = self.tell_report(&report, Some(log_path)) {
             return code;
         }
-        errln!("flight log: {}", log_path.display());
         if report.completed {
             ExitCode::SUCCESS
         } else {
@@ -448,16 +498,26 @@ impl Flight<'_> {
         }
     }
 
-    /// The report, as text or JSON.
-    fn tell_report(&self, report: &FlightReport) -> Result<(), ExitCode> {
+    /// The report, as text (ending with the log and how to see it, when `log` is given) or
+    /// JSON (the log's path then on stderr).
+    fn tell_report(&self, report: &FlightReport, log: Option<&Path>) -> Result<(), ExitCode> {
         if self.a.json {
             match serde_json::to_string_pretty(report) {
                 Ok(s) => outln!("{s}"),
                 Err(e) => return Err(fail(e)),
             }
+            if let Some(log) = log {
+                errln!("flight log: {}", log.display());
+            }
         } else {
+            use crate::report::{render, Ending, Next};
+            let next = log.map_or(Next::Nothing, Next::Shot);
             let profile = &self.loaded.profile.name;
-            out!("{}", render_report(report, profile, self.a.controller));
+            let ending = Ending::of(report);
+            out!(
+                "{}",
+                render(report, ending, profile, self.a.controller, next)
+            );
         }
         Ok(())
     }
@@ -465,7 +525,7 @@ impl Flight<'_> {
     /// The flight on the simulator or on the hardware the command line names.
     fn fly_on_target(
         &self,
-        log: &mut LogThread,
+        log: &mut dyn FlightSink,
         display: &mut Display,
     ) -> Result<FlightReport, SessionError> {
         let (a, r) = (self.a, &self.loaded.file);
@@ -802,131 +862,10 @@ impl EventTally {
     }
 }
 
-/// The report as `shoot` prints it, headed "completed" or "ABORTED".
-pub fn render_report(r: &FlightReport, profile_name: &str, controller: &str) -> String {
-    let status = if r.completed { "completed" } else { "ABORTED" };
-    render_report_as(r, status, profile_name, controller)
-}
-
-/// The report headed by `status` (`replay` of a log that ends before the flight did says
-/// so instead of "ABORTED").
-pub fn render_report_as(
-    r: &FlightReport,
-    status: &str,
-    profile_name: &str,
-    controller: &str,
-) -> String {
-    use std::fmt::Write;
-    let mut s = String::new();
-    // The five figures as printed: RMS and max position error in cm, RMS heading error in
-    // degrees, RMS framing error, saturation in %; one with nothing to average (no measured
-    // tick, no hold) as a dash.
-    let cells = |f: &Figures| {
-        let fig = |x: Option<f64>, decimals: usize| {
-            x.map_or("—".to_string(), |x| format!("{x:.decimals$}"))
-        };
-        let cm = |x: Option<f64>| x.map(|m| m * 100.0);
-        [
-            fig(cm(f.rms_position_error_m), 1),
-            fig(cm(f.max_position_error_m), 1),
-            fig(f.rms_heading_error_rad.map(f64::to_degrees), 2),
-            fig(f.rms_framing_error, 3),
-            fig(f.saturated_fraction.map(|x| x * 100.0), 1),
-        ]
-    };
-    let _ = writeln!(
-        s,
-        "{status} flight with {} ({}): {:.1} s in the air, {:.1} s of shots",
-        profile_name, controller, r.flight_time_s, r.shots_time_s
-    );
-    let [rms, max, heading, framing, saturated] = cells(&r.figures);
-    // The framing error is a distance on a screen two units wide: half of it is the share of
-    // the frame's width.
-    let _ = match r.figures.rms_framing_error {
-        Some(e) => writeln!(
-            s,
-            "  framing: the actors sat {:.1}% of the frame's width from their marks on screen \
-             (error RMS {framing})",
-            e * 50.0
-        ),
-        None => writeln!(s, "  framing: no hold framed an actor"),
-    };
-    let _ = match r.figures.rms_position_error_m {
-        Some(_) => writeln!(
-            s,
-            "  tracking: the drone kept within {rms} cm of its path (RMS; {max} cm at worst), its \
-             heading within {heading}° (RMS); the servo was at a limit on {saturated}% of ticks"
-        ),
-        None => writeln!(s, "  tracking: no tick flew a path with the drone tracked"),
-    };
-    if let Some(d) = r.figures.closest_actor_m {
-        let _ = write!(
-            s,
-            "  safety: the drone came no nearer an actor than {d:.2} m"
-        );
-        // The tracking margin the drone used where the reference was near the actors.
-        if let Some(c) = r.figures.cut_in_m {
-            let _ = write!(
-                s,
-                "; near them up to {:.1} cm nearer than its reference",
-                c * 100.0
-            );
-        }
-        s.push('\n');
-    }
-    let count = |n: u64, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
-    if r.failsafes + r.faults + r.deadline_misses > 0 {
-        let _ = writeln!(
-            s,
-            "  {}, {}, {} (see the log's /events)",
-            count(r.failsafes, "failsafe"),
-            count(r.faults, "controller fault"),
-            count(r.deadline_misses, "missed deadline")
-        );
-    }
-    if let Some(l) = r.lateness {
-        let _ = writeln!(
-            s,
-            "  timing: {} ticks ran {:.0} µs late at the median, {:.0} µs at the 99th \
-             percentile, {:.1} ms at worst",
-            l.ticks,
-            l.p50_s * 1e6,
-            l.p99_s * 1e6,
-            l.max_s * 1e3
-        );
-    }
-    if r.director_errors > 0 {
-        let _ = writeln!(
-            s,
-            "  {} against the live actors (see the log's /events)",
-            count(r.director_errors, "director error")
-        );
-    }
-    let _ = writeln!(
-        s,
-        "  {:>4}  {:>8}  {:>8}  {:>8}  {:>8}  {:>7}  shot",
-        "#", "RMS cm", "max cm", "head °", "framing", "sat %"
-    );
-    for shot in &r.shots {
-        let mut label = shot.label.clone();
-        if label.chars().count() > 60 {
-            label = label.chars().take(59).collect::<String>() + "…";
-        }
-        let [rms, max, heading, framing, saturated] = cells(&shot.figures);
-        let _ = writeln!(
-            s,
-            "  {:>4}  {rms:>8}  {max:>8}  {heading:>8}  {framing:>8}  {saturated:>7}  {label}",
-            shot.index + 1,
-        );
-    }
-    s
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{civil_from_days, effects_off_phrase, first_free, render_report, sim_effects};
+    use super::{civil_from_days, effects_off_phrase, first_free, sim_effects};
     use super::{Display, EventTally, DISPLAY_PERIOD};
-    use dronecine_flight::report::{Figures, FlightReport, ShotReport};
     use dronecine_flight::Progress;
     use dronecine_mcap::record::{Event, Phase};
     use dronecine_sim::Effects;
@@ -1063,91 +1002,6 @@ mod tests {
             err.starts_with("--sim-off: no simulator effect `latncy` (did you mean `latency`?)"),
             "{err}"
         );
-    }
-
-    #[test]
-    fn unmeasured_figures_print_as_dashes() {
-        let measured = Figures {
-            rms_position_error_m: Some(0.0123),
-            max_position_error_m: Some(0.05),
-            rms_heading_error_rad: Some(0.01),
-            rms_framing_error: Some(0.021),
-            saturated_fraction: Some(0.5),
-            closest_actor_m: Some(0.623),
-            cut_in_m: None,
-            measured_ticks: 100,
-        };
-        let blind = Figures {
-            saturated_fraction: Some(0.0),
-            ..Figures::default()
-        };
-        let shot = |index, figures| ShotReport {
-            index,
-            label: format!("shot {index}"),
-            start_s: 0.0,
-            end_s: 1.0,
-            figures,
-        };
-        let r = FlightReport {
-            completed: true,
-            flight_time_s: 10.0,
-            shots_time_s: 2.0,
-            figures: measured.clone(),
-            failsafes: 0,
-            faults: 0,
-            deadline_misses: 0,
-            lateness: None,
-            director_errors: 0,
-            latency_mean_s: None,
-            latency_max_s: None,
-            shots: vec![shot(0, measured), shot(1, blind)],
-        };
-        let text = render_report(&r, "ardrone2", "lqg");
-        assert!(!text.contains("director error"), "{text}");
-        let two = render_report(
-            &FlightReport {
-                director_errors: 2,
-                ..r.clone()
-            },
-            "ardrone2",
-            "lqg",
-        );
-        assert!(
-            two.contains("  2 director errors against the live actors (see the log's /events)"),
-            "{two}"
-        );
-        assert!(
-            text.contains(
-                "\n  framing: the actors sat 1.1% of the frame's width from their marks on \
-                 screen (error RMS 0.021)\n"
-            ),
-            "{text}"
-        );
-        assert!(
-            text.contains(
-                "\n  tracking: the drone kept within 1.2 cm of its path (RMS; 5.0 cm at worst), \
-                 its heading within 0.57° (RMS); the servo was at a limit on 50.0% of ticks\n"
-            ),
-            "{text}"
-        );
-        assert!(
-            text.contains("\n  safety: the drone came no nearer an actor than 0.62 m\n"),
-            "{text}"
-        );
-        let mut near = r.clone();
-        near.figures.cut_in_m = Some(0.0614);
-        let text_near = render_report(&near, "ardrone2", "lqg");
-        assert!(
-            text_near.contains(
-                "\n  safety: the drone came no nearer an actor than 0.62 m; near them up to \
-                 6.1 cm nearer than its reference\n"
-            ),
-            "{text_near}"
-        );
-        let rows: Vec<&str> = text.lines().filter(|l| l.ends_with("shot 1")).collect();
-        assert_eq!(rows.len(), 1, "{text}");
-        let cells: Vec<&str> = rows[0].split_whitespace().collect();
-        assert_eq!(cells[..6], ["2", "—", "—", "—", "—", "0.0"], "{text}");
     }
 
     /// A default log name already taken (two flights in one second) is numbered, never

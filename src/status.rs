@@ -113,22 +113,27 @@ fn print(url: &ArDroneUrl, s: &ArDroneStatus, json: bool) -> Result<(), String> 
 }
 
 pub fn run(a: &Args) -> ExitCode {
-    if a.drone.starts_with("mavlink:") {
+    let mavlink = a.drone.starts_with("mavlink:");
+    if mavlink || a.drone.starts_with("crazyflie") {
         let timeout_ok = a.timeout_s.is_finite() && a.timeout_s > 0.0 && a.timeout_s <= 60.0;
         let interval_ok = a.interval_s.is_finite() && (0.05..=60.0).contains(&a.interval_s);
         if !(timeout_ok && interval_ok) {
             return fail("--timeout must be in (0, 60] and --interval in [0.05, 60] seconds");
         }
+        let args = crate::status_mavlink::Args {
+            watch: a.watch,
+            json: a.json,
+            timeout_s: a.timeout_s,
+            interval_s: a.interval_s,
+        };
+        if !mavlink {
+            return match dronecine_crazyflie::CrazyflieUrl::parse(a.drone) {
+                Ok(url) => crate::status_crazyflie::run(&args, &url),
+                Err(e) => fail(format!("--drone: {e}")),
+            };
+        }
         return match dronecine_mavlink::MavlinkUrl::parse(a.drone) {
-            Ok(url) => crate::status_mavlink::run(
-                &crate::status_mavlink::Args {
-                    watch: a.watch,
-                    json: a.json,
-                    timeout_s: a.timeout_s,
-                    interval_s: a.interval_s,
-                },
-                &url,
-            ),
+            Ok(url) => crate::status_mavlink::run(&args, &url),
             Err(e) => fail(format!("--drone: {e}")),
         };
     }

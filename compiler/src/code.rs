@@ -15,11 +15,12 @@ dronecine_diag::codes! {
         Unframeable => "compile::unframeable": "No roll-free camera orientation puts the actors at the requested screen positions.",
         FramingOff => "compile::framing_off": "A hold's actors land away from the screen points the script gives them.",
         ActorsCollide => "compile::actors_collide": "The blocking walks two actors into each other.",
-        SizeOff => "compile::size_off": "An over-the-shoulder hold frames an actor two or more sizes from the one the script names.",
-        ProfileOff => "compile::profile_off": "An over-the-shoulder hold sees an actor from a side far from the profile the script names.",
+        SizeOff => "compile::size_off": "A two-actor framing cannot give the size the script names: the actors too far apart for it in one frame, written screen positions that fix the distance, or an over-the-shoulder's background actor out of its reach.",
         InMargin => "compile::in_margin": "A framing puts the camera inside the stage's safety margin: the drone is held at the margin, off its framing.",
-        BeyondReach => "compile::beyond_reach": "An over-the-shoulder's background size is just out of reach where the actors stand: the actor is framed a little larger.",
+        BeyondReach => "compile::beyond_reach": "An over-the-shoulder's background size is out of reach where the actors stand: the profiles keep the camera nearer, and the actor is framed larger.",
         TooShortForRate => "compile::too_short_for_rate": "A shot is shorter than one control period at the rate it is compiled or flown at: it has no tick of its own.",
+        CoverageOverruns => "compile::coverage_overruns": "A coverage's repositioning flights leave its shots less than their shortest hold: it lasts longer than written.",
+        NoCamera => "compile::no_camera": "The drone carries no camera: the shots are framed for its profile's nominal lens, and nothing is filmed.",
     }
 }
 

@@ -50,6 +50,18 @@ pub fn compile<E>(
     script: &Script,
     profile: &Profile,
     opts: &Options,
+    sink: impl FnMut(&Sample, &[ActorPose]) -> Result<(), E>,
+) -> Result<Compiled, E> {
+    compile_watched(script, profile, opts, None, sink)
+}
+
+/// [`compile`] with the director `watch`ed ([`crate::director::Watch`]): its findings are
+/// among the compilation's diagnostics.
+pub fn compile_watched<E>(
+    script: &Script,
+    profile: &Profile,
+    opts: &Options,
+    watch: Option<Box<dyn crate::director::Watch>>,
     mut sink: impl FnMut(&Sample, &[ActorPose]) -> Result<(), E>,
 ) -> Result<Compiled, E> {
     let refused = unflyable(script);
@@ -62,10 +74,14 @@ pub fn compile<E>(
         });
     };
     let mut diagnostics = static_warnings(script, profile);
+    diagnostics.extend(no_camera(script, profile));
     diagnostics.extend(shorter_than_a_tick(script, opts.rate_hz));
     let blocking = Blocking::new(scene);
     diagnostics.extend(collisions(&blocking));
     let mut director = Director::new(script, scene, profile);
+    if let Some(w) = watch {
+        director = director.watched(w);
+    }
     let mut poses = blocking.poses(0.0);
     let mut framing = FramingCheck::new(script.timeline.len());
     let mut framed_as = crate::framed_as::FramedAs::new(script);
@@ -93,15 +109,8 @@ pub fn compile<E>(
     let off = framing.diagnostics(script, &flown, |shot, actor| {
         framed_as.level_fix(script, shot, actor, &lens, gimbal)
     });
-    // A shot with an error is not reported again through its consequences.
-    let failed = |i: usize| {
-        let span = script.timeline[i].span;
-        flown.iter().any(|d| d.is_error() && d.span == span)
-    };
-    let shapes = framed_as.diagnostics(script, &lens, gimbal, failed);
     diagnostics.append(&mut flown);
     diagnostics.extend(off);
-    diagnostics.extend(shapes);
     diagnostics.sort_by_key(|d| (d.span.start, d.span.end, d.code));
     Ok(Compiled {
         timings,
@@ -236,6 +245,35 @@ fn shorter_than_a_tick(script: &Script, rate_hz: f64) -> Vec<Diagnostic> {
 const MAX_RATE_HZ: f64 = 1000.0;
 
 /// Warnings that need no flight: camera angles a drone without a gimbal cannot render.
+/// For a drone that carries no camera, one warning on the first shot: the framing is a
+/// nominal camera's (the lens the shots are framed for), and nothing is filmed.
+fn no_camera(script: &Script, profile: &Profile) -> Option<Diagnostic> {
+    let first = script.timeline.first()?;
+    if profile.camera.mounted {
+        return None;
+    }
+    let fov_x_rad = (script.scene.as_ref())
+        .and_then(|s| s.lens)
+        .map_or(profile.camera.fov_x_rad, |l| l.fov_x_rad);
+    Some(
+        Diagnostic::warning(
+            CompileCode::NoCamera,
+            first.span,
+            format!(
+                "{} carries no camera: the shots are framed for a nominal lens ({:.0}° across), \
+                 and nothing is filmed",
+                profile.name,
+                fov_x_rad.to_degrees()
+            ),
+        )
+        .with_label("framed for a nominal camera")
+        .with_help(
+            "the path is the one a camera on the drone would fly, and the framing figures are \
+             that camera's; fly a drone profile that carries a camera to film the shot",
+        ),
+    )
+}
+
 fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     if profile.camera.gimbal != Gimbal::None {
@@ -272,6 +310,32 @@ fn static_warnings(script: &Script, profile: &Profile) -> Vec<Diagnostic> {
 mod tests {
     use super::*;
     use crate::camera::Vec3;
+
+    /// A drone without a camera is told once, on the first shot, with the lens the shots
+    /// are framed for; a drone with one is not.
+    #[test]
+    fn a_drone_without_a_camera_is_told_its_framing_is_nominal() {
+        let text = "stage 8m x 6m x 3m\ndrone crazyflie21\nactor A height 1.80m at (0, 0) \
+                    facing 0deg\nMS on A front for 4s\nthen dolly to MS on A 34left over 4s\n";
+        let s = script(text);
+        let warned = |profile: &Profile| {
+            let c = compile(&s, profile, &Options::default(), |_, _| Ok::<(), ()>(())).unwrap();
+            (c.diagnostics.into_iter())
+                .filter(|d| d.code == CompileCode::NoCamera.code())
+                .collect::<Vec<_>>()
+        };
+        let crazyflie = Profile::builtin("crazyflie21").unwrap();
+        let told = warned(&crazyflie);
+        assert_eq!(told.len(), 1, "{told:?}");
+        assert!(!told[0].is_error());
+        assert_eq!(told[0].span, s.timeline[0].span);
+        assert!(
+            told[0].message.starts_with("crazyflie21 carries no camera: the shots are framed for a nominal lens (76° across)"),
+            "{}",
+            told[0].message
+        );
+        assert!(warned(&Profile::builtin("ardrone2").unwrap()).is_empty());
+    }
 
     fn script(text: &str) -> Script {
         let opts = dronecine_grammar::Options {

@@ -246,8 +246,8 @@ pub struct Director {
     /// it continues (`then`) a framing already told too close, as the monitor carries a lag
     /// over ([`Carried`]).
     clearance: Vec<Carried>,
-    /// By timeline index: `compile::beyond_reach` told.
-    beyond_reach: Vec<bool>,
+    /// Whether each two-actor framing gets its written size (`compile::size_off`).
+    sizes: crate::sized::SizeWatch,
     /// Per-tick scratch: the actors extrapolated, and their body axes.
     ahead: Vec<ActorPose>,
     /// The script's blocking: where a repositioning flight will find the actors when it
@@ -278,6 +278,36 @@ pub struct Director {
     /// ([`framing::BlendWay`]): the next tick goes on the same way.
     way: Option<(usize, framing::BlendWay)>,
     next_solved: usize,
+    /// What else watches the samples ([`Director::watched`]).
+    watch: Option<Box<dyn Watch>>,
+}
+
+/// The lens a scene is filmed with: its `lens` line, else the profile's camera.
+pub fn scene_lens(scene: &Scene, profile: &Profile) -> Lens {
+    match scene.lens {
+        Some(l) => Lens::new(l.fov_x_rad, l.aspect),
+        None => Lens::new(profile.camera.fov_x_rad, profile.camera.aspect),
+    }
+}
+
+/// What watches a director's samples besides its own monitor (film grammar's continuity
+/// checks, `dronecine-film`): told each sample, asked for a shot's findings when the
+/// director's are (so `compile` and a flight report them alike). `tick` runs on the flight's
+/// per-tick path: it allocates nothing.
+pub trait Watch: Send {
+    /// One tick: the sample, the actors at its time, and the shot being flown (`None`
+    /// during a repositioning flight, and before the script's clock starts).
+    fn tick(&mut self, sample: &Sample, actors: &[ActorPose], flying: Option<usize>);
+    /// The findings over shot `index`, into `out`.
+    fn findings(&self, index: usize, out: &mut Vec<Diagnostic>);
+    /// A copy, for a director that is cloned.
+    fn clone_box(&self) -> Box<dyn Watch>;
+}
+
+impl Clone for Box<dyn Watch> {
+    fn clone(&self) -> Self {
+        self.clone_box()
+    }
 }
 
 /// How many composition solves the director remembers: a tick solves at most two ends, for
@@ -302,10 +332,7 @@ impl Director {
     /// A director for a script with a scene. Diagnostics found while planning are kept and
     /// returned by [`Director::finish`].
     pub fn new(script: &Script, scene: &Scene, profile: &Profile) -> Director {
-        let lens = match scene.lens {
-            Some(l) => Lens::new(l.fov_x_rad, l.aspect),
-            None => Lens::new(profile.camera.fov_x_rad, profile.camera.aspect),
-        };
+        let lens = scene_lens(scene, profile);
         let lim = &profile.limits;
         let limits = SteerLimits {
             // The reference leaves a margin under the vertical speed and yaw-rate limits for
@@ -333,10 +360,13 @@ impl Director {
                 },
                 ShotContent::Composition(c) => Plan::Hold(c.clone()),
                 ShotContent::Path(_) => Plan::PathPending,
+                // A script the compiler did not expand (`crate::coverage::expand`): its
+                // establishing two-shot, held.
+                ShotContent::Coverage(c) => Plan::Hold(c.unexpanded()),
             };
             last_comp = match &shot.content {
                 ShotContent::Composition(c) => Some(c),
-                ShotContent::Path(_) => None,
+                ShotContent::Path(_) | ShotContent::Coverage(_) => None,
             };
             plans.push(plan);
         }
@@ -354,12 +384,22 @@ impl Director {
                 _ => [Vec::new(), Vec::new()],
             })
             .collect();
-        let prepare = |c: &Composition| Some(framing::Prepared::new(c, &names, &lens));
+        // Film grammar's established side of the line, for the framings that leave it free.
+        let sides = crate::line::established_sides(script, scene, &lens, &profile.camera.gimbal);
+        let prepare = |c: &Composition, side: Option<framing::Side>| {
+            Some(framing::Prepared::new(c, &names, &lens).on_side(side))
+        };
+        let side = |i: usize| sides.get(i).copied().flatten();
         let prepared = plans
             .iter()
-            .map(|plan| match plan {
-                Plan::Hold(c) => [prepare(c), None],
-                Plan::Move { from, to } => [prepare(from), prepare(to)],
+            .enumerate()
+            .map(|(i, plan)| match plan {
+                Plan::Hold(c) => [prepare(c, side(i)), None],
+                // A move starts from the framing of the shot before it.
+                Plan::Move { from, to } => [
+                    prepare(from, i.checked_sub(1).and_then(side)),
+                    prepare(to, side(i)),
+                ],
                 _ => [None, None],
             })
             .collect();
@@ -400,7 +440,7 @@ impl Director {
             warned: vec![false; script.timeline.len()],
             closest: vec![None; script.timeline.len()],
             clearance: vec![Carried::default(); script.timeline.len()],
-            beyond_reach: vec![false; script.timeline.len()],
+            sizes: crate::sized::SizeWatch::new(script.timeline.len()),
             ahead: Vec::with_capacity(scene.actors.len()),
             blocking: Blocking::new(scene),
             arriving: Vec::with_capacity(scene.actors.len()),
@@ -415,6 +455,7 @@ impl Director {
             blend_spare: None,
             way: None,
             next_solved: 0,
+            watch: None,
         }
     }
 
@@ -521,6 +562,16 @@ impl Director {
         if let (true, Some(k)) = (told_close, near) {
             out.remove(from + k);
         }
+        if let Some(w) = &self.watch {
+            w.findings(index, out);
+        }
+        if let (Some(span), Some(Plan::Hold(comp) | Plan::Move { to: comp, .. })) =
+            (span, self.plans.get(index))
+        {
+            let (names, lens, gimbal) = (&self.names, &self.lens, &self.gimbal);
+            let stage = (&self.stage_lo, &self.stage_hi);
+            out.extend((self.sizes).diagnostic(index, span, comp, names, lens, gimbal, stage));
+        }
     }
 
     /// Whether the camera has a position: some step's framing (or path) has solved, or
@@ -585,28 +636,6 @@ impl Director {
         }
     }
 
-    /// The visual of a two-shot hold being flown this tick, moved [`EPS_S`] ahead along θ at
-    /// its exact rate ([`framing::two_shot_theta_rate`]), if that applies and stays on the
-    /// torus.
-    fn held_two_shot_ahead(&self, actors: &[ActorPose]) -> Option<framing::Visual> {
-        let Phase::Shot { index, .. } = self.phase else {
-            return None;
-        };
-        let (Some(Plan::Hold(_)), Some(v @ framing::Visual::Two(t))) =
-            (self.plans.get(index), &self.visual)
-        else {
-            return None;
-        };
-        let rate = framing::two_shot_theta_rate(v, actors, &self.lens, &self.gimbal)?;
-        let theta = t.toric.theta_rad + rate * EPS_S;
-        let max = 2.0 * (std::f64::consts::PI - t.toric.alpha_rad);
-        (theta > 0.0 && theta < max).then(|| {
-            let mut t = *t;
-            t.toric.theta_rad = theta;
-            framing::Visual::Two(t)
-        })
-    }
-
     /// Whether a path shot is being flown (its target is the path's, not a framing's).
     fn on_path(&self) -> bool {
         matches!(self.phase, Phase::Shot { index, .. }
@@ -653,7 +682,22 @@ impl Director {
         let heading_target = self.steer_orientation(&tick, actors);
         self.last_target = (!self.failed_now).then_some((t_s, v_t, heading_target));
         self.last_t_s = t_s;
-        self.sample_and_record(t_s, &goal, actors)
+        let sample = self.sample_and_record(t_s, &goal, actors);
+        if let Some(w) = self.watch.as_mut() {
+            let flying = match self.phase {
+                Phase::Shot { index, .. } if t_s >= 0.0 => Some(index),
+                _ => None,
+            };
+            w.tick(&sample, actors, flying);
+        }
+        sample
+    }
+
+    /// The director with `watch` told every sample and asked for each shot's findings
+    /// ([`Watch`]).
+    pub fn watched(mut self, watch: Box<dyn Watch>) -> Director {
+        self.watch = Some(watch);
+        self
     }
 
     /// Starts the timeline on the first step and advances it to `t_s`: the tick's timing.
@@ -707,10 +751,6 @@ impl Director {
                 let target_ahead = if self.hold_stands_still(actors, &ahead) {
                     // The same solve against the same poses: the same target, bit for bit.
                     target
-                } else if let Some(v) = self.held_two_shot_ahead(actors) {
-                    // A two-shot held while the actors walk: its θ carried by its exact rate
-                    // instead of a second solve.
-                    framing::position_m(&v, &ahead, &self.lens, &self.gimbal)
                 } else {
                     self.target(clock_s + EPS_S, &ahead, false)
                 };
@@ -1231,21 +1271,30 @@ impl Director {
     /// at `end` s.
     fn tell_reposition(&mut self, to: usize, needed: f64, end: f64, flown: &Flown) {
         let shot = &self.shots[to];
-        self.diagnostics.push(
-            Diagnostic::warning(
-                CompileCode::Reposition,
-                shot.span,
+        let flight = format!("a {needed:.1} s repositioning flight ({flown}) is inserted before");
+        // Between a coverage's parts its holds are split for its flights (`crate::coverage`):
+        // a part starts late only as the coverage does, and no pin or gap is the fix.
+        let (message, label, help) = match shot.coverage.as_ref().filter(|p| p.part > 1) {
+            Some(part) => (
+                format!("{flight} {part}: it starts at {end:.1} s"),
+                "the drone flies between the coverage's shots",
+                "a single drone cannot jump between framings: the coverage's shots are held for \
+                 what its flights leave of its duration, and a longer coverage holds them longer",
+            ),
+            None => (
                 format!(
-                    "a {needed:.1} s repositioning flight ({flown}) is inserted before \
-                     this shot: it starts at {end:.1} s instead of {:.1} s",
+                    "{flight} this shot: it starts at {end:.1} s instead of {:.1} s",
                     shot.start_s
                 ),
-            )
-            .with_label("the drone flies here first")
-            .with_help(
-                "a single drone cannot jump between framings; pin the shot (`at Ns cut to \
-                 …`) or leave a gap to keep it on the script's clock",
+                "the drone flies here first",
+                "a single drone cannot jump between framings; pin the shot (`at Ns cut to …`) or \
+                 leave a gap to keep it on the script's clock",
             ),
+        };
+        self.diagnostics.push(
+            Diagnostic::warning(CompileCode::Reposition, shot.span, message)
+                .with_label(label)
+                .with_help(help),
         );
     }
 
@@ -1537,6 +1586,10 @@ impl Director {
     fn pivot(&self, to: usize, actors: &[ActorPose]) -> Option<Vec3> {
         let idx: Vec<usize> = match &self.shots[to].content {
             ShotContent::Composition(c) => c.actors().filter_map(|n| self.actor_index(n)).collect(),
+            ShotContent::Coverage(c) => [&c.a, &c.b]
+                .into_iter()
+                .filter_map(|n| self.actor_index(n))
+                .collect(),
             ShotContent::Path(_) => (0..actors.len()).collect(),
         };
         if idx.is_empty() {
@@ -1766,7 +1819,7 @@ impl Director {
                 }
                 p
             }
-            Some(Err(e)) => self.fail(index, e),
+            Some(Err(e)) => self.fail(index, e, actors),
             None => match &self.plans[index] {
                 Plan::Path(plan) => plan.at(into_s, actors).p,
                 _ => self.state.p,
@@ -1848,76 +1901,90 @@ impl Director {
     /// written, its size just out of the toric circle's reach where the actors stand
     /// (`framing::OVER_SHOULDER_REACH`): the help says how much further apart they would have
     /// to stand.
+    /// A two-actor end of shot `index` as solved this tick: how far its camera stands from
+    /// the written size's distance ([`crate::sized::SizeWatch`]).
     fn check_reach(&mut self, index: usize, end: usize, v: &framing::Visual, actors: &[ActorPose]) {
         let framing::Visual::Two(t) = v else {
             return;
         };
-        if self.beyond_reach[index] || t.stretch < REACH_TOLD {
-            return;
-        }
-        let (sized, other, band_sized, band_other) = match t.primary {
-            framing::Primary::A => (t.a, t.b, t.band_a_m, t.band_b_m),
-            framing::Primary::B => (t.b, t.a, t.band_b_m, t.band_a_m),
+        let comp = match (&self.plans[index], end) {
+            (Plan::Hold(c), _)
+            | (Plan::Move { from: c, .. }, 0)
+            | (Plan::Move { to: c, .. }, _) => c,
+            _ => return,
         };
-        let (Some(p), Some(q)) = (actors.get(sized), actors.get(other)) else {
-            return;
-        };
-        self.beyond_reach[index] = true;
-        let name = self.names.get(sized).map_or("an actor", String::as_str);
-        let other_name = self
-            .names
-            .get(other)
-            .map_or("the other actor", String::as_str);
-        let size = self
-            .composition(index, end)
-            .and_then(|c| {
-                c.framings
-                    .iter()
-                    .find(|f| f.subjects.iter().any(|s| s.actor == name))
-            })
-            .map_or("written", |f| f.size.as_str());
-        // The circle's diameter grows with the distance between the two aim points (band
-        // centres), the angle between them on screen fixed: apart enough when that distance
-        // has grown by the stretch.
-        let apart_m = dronecine_math::norm_xy(
-            p.position_m[0] - q.position_m[0],
-            p.position_m[1] - q.position_m[1],
-        );
-        let aims = framing::band_centre(p, band_sized) - framing::band_centre(q, band_other);
-        let needed_m = ((aims.norm() * t.stretch).powi(2) - aims.z * aims.z).sqrt();
-        let more_cm = ((needed_m - apart_m) * 100.0).ceil();
-        self.diagnostics.push(
-            Diagnostic::warning(
-                CompileCode::BeyondReach,
-                self.shots[index].span,
-                format!(
-                    "{name} is framed {:.0}% larger than {size}: {:.2} m from {other_name}, no camera \
-                     frames {name} as {size} with both actors at their screen points, so it \
-                     frames from as far as it can",
-                    (t.stretch - 1.0) * 100.0,
-                    apart_m
-                ),
-            )
-            .with_label(format!("{name} larger than {size}"))
-            .with_help(format!(
-                "block the actors about {more_cm:.0} cm further apart, write {name}'s size one \
-                 step tighter, or bring their screen positions closer together"
-            )),
-        );
+        self.sizes.see(index, comp, t, actors);
     }
 
     /// Record a framing failure once per shot and hold position this tick. The plan is
     /// kept: the next tick solves again, against the actors as they are then (on set, live
     /// poses that miss a solvable framing by a few centimetres for a moment must not cost
     /// the rest of the shot).
-    fn fail(&mut self, index: usize, e: framing::FramingError) -> Vec3 {
+    fn fail(&mut self, index: usize, e: framing::FramingError, actors: &[ActorPose]) -> Vec3 {
         self.failed_now = true;
         if !self.warned[index] {
             self.warned[index] = true;
-            self.diagnostics
-                .push(framing_diagnostic(&e, self.shots[index].span));
+            let mut d = framing_diagnostic(&e, self.shots[index].span);
+            if let FramingError::ProfilesConflict { .. } = e {
+                if let Some(help) = self.profiles_that_frame(index, actors) {
+                    d.help = Some(help);
+                }
+            }
+            self.diagnostics.push(d);
         }
         self.state.p
+    }
+
+    /// For an over-the-shoulder whose two profiles leave no camera: the background
+    /// profiles that frame with the foreground's as the actors stand, in words.
+    fn profiles_that_frame(&self, index: usize, actors: &[ActorPose]) -> Option<String> {
+        let Some(Plan::Hold(comp) | Plan::Move { to: comp, .. }) = self.plans.get(index) else {
+            return None;
+        };
+        let [fg, bg] = comp.framings.as_slice() else {
+            return None;
+        };
+        let (a, b) = (&fg.subjects.first()?.actor, &bg.subjects.first()?.actor);
+        let works = |clear_screens: bool| -> Vec<&str> {
+            dronecine_grammar::vocab::Profile::ALL
+                .into_iter()
+                .filter(|p| {
+                    let mut c = comp.clone();
+                    c.framings[1].subjects[0].profile = Some(*p);
+                    if clear_screens {
+                        for f in &mut c.framings {
+                            for s in &mut f.subjects {
+                                s.screen_x = None;
+                                s.screen_y = None;
+                            }
+                        }
+                    }
+                    framing::solve(&c, &self.names, actors, &self.lens, &self.gimbal).is_ok()
+                })
+                .map(|p| p.as_str())
+                .collect()
+        };
+        let fg_profile = fg.subjects[0].profile.map_or("", |p| p.as_str());
+        let (as_written, unscreened) = (works(false), works(true));
+        Some(if !as_written.is_empty() {
+            format!(
+                "with {a} {fg_profile}, the camera sees {b} from {}: the profiles of an \
+                 over-the-shoulder name the same side of the line between them",
+                as_written.join(", ")
+            )
+        } else if !unscreened.is_empty() {
+            format!(
+                "with {a} {fg_profile}, the camera sees {b} from {} once the screen positions \
+                 are left out: the ones written put the two in the order the other side of the \
+                 line shows",
+                unscreened.join(", ")
+            )
+        } else {
+            format!(
+                "no profile of {b} frames with {a} {fg_profile} as they stand: choose {a}'s \
+                 profile on the side {b} faces (the camera behind {a}, looking at {b})"
+            )
+        })
     }
 
     /// Heading and pitch that frame the current shot from `position`.
@@ -2085,12 +2152,6 @@ struct Closest {
     closest_s: f64,
 }
 
-/// From how much larger than written an over-the-shoulder's background actor is framed (its
-/// size out of the toric circle's reach) `compile::beyond_reach` is told: 2 %, under which
-/// no one sees it, and which live actors standing at the edge of reach cross back and forth
-/// by fractions of a percent.
-const REACH_TOLD: f64 = 1.02;
-
 /// `goal` held inside the box `[lo, hi]`: on an axis where its position is outside, the
 /// position is put on the box's face and the velocity and acceleration that would carry it
 /// further out are dropped.
@@ -2206,6 +2267,16 @@ fn framing_diagnostic(e: &FramingError, span: Span) -> Diagnostic {
             "drop the profile angle, or swap the actors' screen positions"
         }
         FramingError::ScreensCoincide => "give the two actors different screen positions",
+        FramingError::TwoProfiles => {
+            "write the profile on one of the two actors: the camera sees that one from that side"
+        }
+        FramingError::ProfileBlocked { .. } => {
+            "choose a profile that sees the two side by side (a three-quarter or side profile), \
+             or write an over-the-shoulder as two framings"
+        }
+        FramingError::ProfilesConflict { .. } => {
+            "the profiles of an over-the-shoulder name the same side of the line between the actors"
+        }
         FramingError::ActorsCoincide => {
             "the two actors stand at the same place here: frame one of them, or change the blocking"
         }

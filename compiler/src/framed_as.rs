@@ -1,26 +1,13 @@
-//! Whether each over-the-shoulder hold frames its actors at the sizes and from the sides the
-//! script names (`compile::size_off`, `compile::profile_off`).
+//! What each hold of two framings really frames, measured on the flown reference: the mean
+//! distance to each actor, for [`FramedAs::level_fix`], the size that brings a level camera's
+//! two aim points to one height (the help of `compile::framing_off`).
 //!
-//! A composition of two framings (`MS on Bob 34backright LS on Alice 34left`) asks for two
-//! sizes and up to two profiles, but once the screen positions fix the angle between the actors
-//! the toric solve can meet only one of them: the background's size, or a profile; the rest
-//! follows from where the actors stand. Usually it follows closely enough. When it does not,
-//! the shot is not the one written and nothing else says so:
-//! `MS on Bob 34backright MS on Alice 34left`, actors 2 m apart, puts the camera at Alice's
-//! MS distance (0.7 m) with Bob 2.5 m away, seen from the front: over Alice's shoulder, not
-//! Bob's, with both actors on their screen points.
-//!
-//! Measured over each hold from the reference's camera, as [`crate::compile`]'s screen check
-//! is: the mean horizontal distance to each framed actor gives the size the camera really
-//! frames (the nearest of the size table, `size.rs`, for that distance and lens), the mean
-//! bearing from the actor the profile. Reported when the size is two or more sizes off, or the
-//! profile more than one and a half profile steps (67.5°).
+//! (Which side each actor is seen from needs no check here: the solve keeps each written
+//! profile within its 45° sector, [`crate::framing`], and the stage's margin moves the
+//! camera by less than the rest of that sector.)
 
-use crate::code::CompileCode;
-use dronecine_diag::Diagnostic;
 use dronecine_grammar::script::{Script, ShotContent};
-use dronecine_grammar::vocab::{Profile, Size};
-use dronecine_math::wrap_angle_rad;
+use dronecine_grammar::vocab::Size;
 
 use crate::camera::Lens;
 use crate::reference::ActorPose;
@@ -29,20 +16,13 @@ use dronecine_profile::Gimbal;
 
 /// Sizes apart (in `Size::ALL` order) from which a framed size is reported.
 pub const SIZE_STEPS_OFF: usize = 2;
-/// Angle from the requested profile beyond which the side an actor is seen from is reported:
-/// one and a half steps of the eight profiles.
-pub const PROFILE_OFF_RAD: f64 = 1.5 * std::f64::consts::FRAC_PI_4;
 
 /// One actor's framing in a composition of several framings, and what the holds saw of it.
 #[derive(Clone, Debug)]
 struct Asked {
     actor: usize,
     size: Size,
-    profile: Option<Profile>,
     sum_distance_m: f64,
-    /// Sum of the unit vectors of the camera's bearing from the actor, relative to its facing.
-    sum_cos: f64,
-    sum_sin: f64,
     n: u64,
 }
 
@@ -75,10 +55,7 @@ impl FramedAs {
                         Some(Asked {
                             actor: names.iter().position(|n| *n == s.actor)?,
                             size,
-                            profile: s.profile,
                             sum_distance_m: 0.0,
-                            sum_cos: 0.0,
-                            sum_sin: 0.0,
                             n: 0,
                         })
                     })
@@ -93,11 +70,6 @@ impl FramedAs {
             names,
             heights_m,
         }
-    }
-
-    /// Actor `i`'s name, or `or`.
-    fn name<'a>(&'a self, i: usize, or: &'a str) -> &'a str {
-        self.names.get(i).map_or(or, String::as_str)
     }
 
     /// One tick of the hold of `shot`, the camera at `camera_m`.
@@ -124,113 +96,8 @@ impl FramedAs {
                 camera_m[1] - pose.position_m[1],
             );
             a.sum_distance_m += dronecine_math::norm_xy(dx, dy);
-            let (s, c) = math::sin_cos(math::atan2(dy, dx) - pose.facing_rad);
-            a.sum_cos += c;
-            a.sum_sin += s;
             a.n += 1;
         }
-    }
-
-    /// A warning for each actor of each hold framed two sizes or more off, or seen from a
-    /// side more than [`PROFILE_OFF_RAD`] from its profile; none on a shot that already has
-    /// an error (`skip`).
-    pub fn diagnostics(
-        &self,
-        script: &Script,
-        lens: &Lens,
-        gimbal: &Gimbal,
-        skip: impl Fn(usize) -> bool,
-    ) -> Vec<Diagnostic> {
-        let heights_m = &self.heights_m;
-        let mut out = Vec::new();
-        for (index, (asked, shot)) in self.shots.iter().zip(&script.timeline).enumerate() {
-            if skip(index) {
-                continue;
-            }
-            // The actor whose size the camera keeps, for the help.
-            let kept = asked
-                .iter()
-                .filter(|a| a.n > 0)
-                .find(|a| framed_size(a, lens, heights_m) == Some(a.size));
-            for a in asked.iter().filter(|a| a.n > 0) {
-                let who = self.name(a.actor, "an actor");
-                let distance_m = a.sum_distance_m / a.n as f64;
-                if let Some(got) = framed_size(a, lens, heights_m) {
-                    if (got as usize).abs_diff(a.size as usize) >= SIZE_STEPS_OFF {
-                        let asked_m = heights_m.get(a.actor).map_or(f64::NAN, |&h| {
-                            crate::size::centred_distance_m(
-                                crate::size::framed_height_m(a.size, h),
-                                lens,
-                            )
-                        });
-                        let rule = match kept {
-                            Some(k) => format!(
-                                "the camera keeps {}'s {}, and ",
-                                self.name(k.actor, "the other actor"),
-                                k.size.as_str()
-                            ),
-                            None => String::new(),
-                        };
-                        let write = if self.solves_with(script, index, a.actor, got, lens, gimbal) {
-                            format!("write {who}'s size as {}, or ", got.as_str())
-                        } else {
-                            String::new()
-                        };
-                        out.push(
-                            Diagnostic::warning(
-                                CompileCode::SizeOff,
-                                shot.span,
-                                format!(
-                                    "{who} is framed as {} {} ({distance_m:.1} m away), not as \
-                                     the {} this shot asks ({asked_m:.1} m)",
-                                    article(got),
-                                    got.as_str(),
-                                    a.size.as_str()
-                                ),
-                            )
-                            .with_label(format!("{who} framed as {}", got.as_str()))
-                            .with_help(format!(
-                                "two framings fix the angle between the actors on screen; \
-                                 then {rule}the other's size follows from where they stand: \
-                                 {write}block the actors so that their distances to the camera \
-                                 differ as the sizes do"
-                            )),
-                        );
-                    }
-                }
-                if let Some(p) = a.profile {
-                    let seen_rad = math::atan2(a.sum_sin, a.sum_cos);
-                    let off_rad = wrap_angle_rad(seen_rad - p.azimuth_rad()).abs();
-                    if off_rad > PROFILE_OFF_RAD && math::hypot(a.sum_sin, a.sum_cos) > 0.0 {
-                        let seen = nearest_profile(seen_rad);
-                        out.push(
-                            Diagnostic::warning(
-                                CompileCode::ProfileOff,
-                                shot.span,
-                                format!(
-                                    "{who} is seen from the {} side ({}), {:.0}° from the {} \
-                                     this shot asks",
-                                    side(seen),
-                                    seen.as_str(),
-                                    off_rad.to_degrees(),
-                                    p.as_str()
-                                ),
-                            )
-                            .with_label(format!("{who} seen {}", seen.as_str()))
-                            .with_help(
-                                "two framings fix the angle between the actors on screen and \
-                                 keep one actor's size or profile; the other's side follows \
-                                 from where they stand: drop this profile, write the one the \
-                                 camera gets, or block the actors so that the camera can be on \
-                                 the side each profile names"
-                                    .to_string(),
-                            ),
-                        );
-                    }
-                }
-            }
-        }
-        out
     }
 }
 
@@ -333,50 +200,9 @@ fn framed_size(a: &Asked, lens: &Lens, heights_m: &[f64]) -> Option<Size> {
     })
 }
 
-/// The profile nearest a bearing from the actor (relative to its facing).
-fn nearest_profile(bearing_rad: f64) -> Profile {
-    Profile::ALL
-        .into_iter()
-        .min_by(|x, y| {
-            let off = |p: Profile| wrap_angle_rad(bearing_rad - p.azimuth_rad()).abs();
-            off(*x).total_cmp(&off(*y))
-        })
-        .expect("eight profiles")
-}
-
-/// In words, which of the actor's sides a profile sees.
-fn side(p: Profile) -> &'static str {
-    match p {
-        Profile::Front => "front",
-        Profile::ThreeQuarterLeft => "front-left",
-        Profile::Left => "left",
-        Profile::ThreeQuarterBackLeft => "back-left",
-        Profile::Back => "back",
-        Profile::ThreeQuarterBackRight => "back-right",
-        Profile::Right => "right",
-        Profile::ThreeQuarterRight => "front-right",
-    }
-}
-
-fn article(s: Size) -> &'static str {
-    match s {
-        Size::ECU | Size::MCU | Size::MS | Size::MLS | Size::FS | Size::LS | Size::ELS => "an",
-        Size::BCU | Size::CU => "a",
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn profiles_name_the_side_they_see() {
-        for p in Profile::ALL {
-            assert_eq!(nearest_profile(p.azimuth_rad()), p);
-            assert_eq!(nearest_profile(p.azimuth_rad() + 0.3), p);
-        }
-        assert_eq!(side(nearest_profile(0.0)), "front");
-    }
 
     #[test]
     fn a_size_is_the_one_whose_distance_is_nearest() {
@@ -386,10 +212,7 @@ mod tests {
             let a = Asked {
                 actor: 0,
                 size,
-                profile: None,
                 sum_distance_m: 3.0 * d,
-                sum_cos: 0.0,
-                sum_sin: 0.0,
                 n: 3,
             };
             assert_eq!(

@@ -30,35 +30,26 @@
 //!   `x' = x/Sx`) and at the altitude `M_z − y·h` that puts M at `y`: the band then spans
 //!   `[y − 1, y + 1]` exactly at any `x`. A non-zero elevation cannot be rendered:
 //!   [`Flags::angle_not_rendered`].
-//! - **Two actors in one framing** (`MS on A and B`): A at x = −1/3, B at +1/3 unless screen
-//!   positions say otherwise; α from the two screen points; φ = elevation on the φ = 0 side
-//!   (A left) or π − elevation on the far side (A right); θ so that the *nearer* actor has its
-//!   size (toric distance constraints, both actors tried, the root nearest the symmetric
-//!   θ = π − α kept). If the first subject has a profile, the vantage formula gives (θ, φ)
-//!   instead and the size is not kept. Primary actor (aimed exactly) = the sized actor, or the
-//!   first subject when a profile was used.
-//! - **Over the shoulder** (two framings, foreground then background): toric pair (A =
-//!   foreground, B = background); θ ∈ the two roots of the background distance constraint, so
-//!   the background actor's size is exact; φ (and the root) minimise the angle between C − A
-//!   and the foreground's profile direction (or, without one, C − B and the background's
-//!   profile direction; without either, φ = elevation on the side of the screen order and the
-//!   root nearer the foreground actor). Screens are exact up to the roll-free error below; the
-//!   profile holds as well as the torus allows. Primary = background actor. Held tick after
-//!   tick ([`Prepared::solve_near`], as the director solves), the framing keeps its root until
-//!   the other frames the profile [`BRANCH_KEEP_RAD`] better: two roots that miss it alike
-//!   would otherwise trade places across the stage from one tick to the next.
-//! - **Two-actor orientation** (no roll): the primary's aim point lands exactly at its
-//!   screen point (heading and pitch from [`orient`]); the other actor lands exactly too when
-//!   both aim points are at the camera's height (equal heights and φ = 0 or π, e.g. eye-level
-//!   two-shots of equal-height actors, any θ); otherwise it lands off by the roll-free error
-//!   (≈ 0.28 in screen y at φ = 20°, θ = (π − α)/2 with a 43° lens). Default screen y's are 0.
-//!   With a pitch gimbal at eye level, a two-shot in one framing turns φ (about AB) to where
-//!   the other actor lands exactly too, within the gimbal's range (`both_exact`): a written
-//!   camera angle keeps its φ and the error.
-//! - **Default screens** follow the side: when no screen x is given and the profile puts the
-//!   camera across the line of action, the defaults swap (A right, B left) so a roll-free
-//!   camera can show them; explicit screens that a roll-free camera cannot show from the
-//!   profile's side are an error ([`FramingError::ScreenSideConflict`]).
+//! - **Two actors in one framing** (`MS on A and B`), film grammar's two-shot: the camera on
+//!   the perpendicular bisector of their band centres (θ = π − α), on the side of the line of
+//!   action it is told ([`Prepared::on_side`]), at the elevation; the size applies to both,
+//!   their screen points spreading symmetrically (A left of B on the φ = 0 side) until it
+//!   holds, at most [`TWO_SHOT_SCREEN_MAX`] from the centre, beyond which the size gives way
+//!   ([`TwoVisual::distance_ratio`]). The camera aims between them ([`Primary::Pair`]), and
+//!   actors of different heights land where it sees them, the taller higher. Written screen
+//!   positions outrank the size. A profile on one of the two puts the camera on the ray from
+//!   that actor along it, at their size's distance or as far as both fit; on both, or along
+//!   the line through them, it is refused.
+//! - **Over the shoulder** (two framings, foreground A then background B): the camera's
+//!   bearing from each actor within [`PROFILE_HALF_WIDTH_RAD`] of its profile's angle (a
+//!   foreground actor without one: behind them as B sees them); among those cameras, B at its
+//!   screen point and, where the geometry allows, its size, else from as near as the sectors
+//!   let it stand; A on the other half of the frame, where the camera sees them. No camera in
+//!   both sectors is [`FramingError::ProfilesConflict`]. Primary = B.
+//! - **Roll-free orientation**: the primary's aim point lands exactly at its screen point
+//!   (heading and pitch from [`orient`]); a pair's aim ([`Primary::Pair`]) puts the bisector
+//!   of the angle between them at the bisector of their screen points, both exact when they
+//!   stand at the camera's height.
 //!
 //! Holding a two-actor `Visual` keeps (α, θ, φ): as the actors move apart the distances scale.
 //! Re-solve each tick to keep the size exact; interpolate from the held `Visual` to a re-solved
@@ -69,7 +60,7 @@ use crate::reference::ActorPose;
 use crate::toric::Toric;
 use crate::{size, sphere, toric};
 use dronecine_grammar::script::{Composition, Subject};
-use dronecine_grammar::vocab::Size;
+use dronecine_grammar::vocab::{Profile, Size};
 use dronecine_math as math;
 use dronecine_math::wrap_angle_rad;
 use dronecine_profile::Gimbal;
@@ -112,6 +103,43 @@ pub struct OneVisual {
 pub enum Primary {
     A,
     B,
+    /// Neither: the camera aims where the bisector of the angle between the two band centres
+    /// meets the line through them, at the midpoint of their screen points, so that a
+    /// two-shot's errors (actors of different heights seen by a level camera) split evenly.
+    Pair,
+}
+
+/// Which side of the line of action a camera stands on, for an ordered pair (A, B): the sign
+/// of the vertical component of `(B − A) × (C − A)` (film grammar's line-of-action rule).
+/// `Right` (negative: the camera to the right of A→B seen from above) is the toric φ = 0
+/// side, from which a roll-free camera sees A screen-left of B.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    Right,
+    Left,
+}
+
+impl Side {
+    /// The side a camera at `c_m` stands on of the line from `a_m` to `b_m` (floor
+    /// coordinates); `None` on the line, or with A and B at one place.
+    pub fn of(a_m: &Vec3, b_m: &Vec3, c_m: &Vec3) -> Option<Side> {
+        let cross = (b_m.x - a_m.x) * (c_m.y - a_m.y) - (b_m.y - a_m.y) * (c_m.x - a_m.x);
+        if !cross.is_finite() || cross == 0.0 {
+            None
+        } else if cross < 0.0 {
+            Some(Side::Right)
+        } else {
+            Some(Side::Left)
+        }
+    }
+
+    /// The same side seen from the pair taken in the other order.
+    pub fn swapped(self) -> Side {
+        match self {
+            Side::Right => Side::Left,
+            Side::Left => Side::Right,
+        }
+    }
 }
 
 /// Two actors on the torus: A and B are the toric pair (A the first subject, or the
@@ -130,10 +158,12 @@ pub struct TwoVisual {
     /// The requested camera-angle elevation (for the fixed-pitch flag).
     pub elevation_rad: f64,
     pub over_shoulder: bool,
-    /// 1, or for an over-the-shoulder whose sized (primary, background) actor's size was out
-    /// of the toric circle's reach, how far out (its size's distance over the circle's
-    /// diameter, at most [`OVER_SHOULDER_REACH`]): the actor is framed that much larger.
-    pub stretch: f64,
+    /// The camera's distance from the sized actor's band centre (both actors' for a
+    /// symmetric two-shot) over the distance the written size asks: 1 when the size holds,
+    /// above 1 when the camera had to stand farther (the actors too far apart for the size
+    /// in one frame; an over-the-shoulder's background actor out of the size's reach from
+    /// behind the foreground actor), the sized actor then framed that much smaller.
+    pub distance_ratio: f64,
 }
 
 /// What [`place`] could not render exactly.
@@ -212,6 +242,17 @@ pub enum FramingError {
     ProfileUnreachable,
     /// No point of the torus frames the sized actor at this size.
     SizeUnreachable { size: Size },
+    /// A two-shot with a profile on both actors: it has one vantage.
+    TwoProfiles,
+    /// A two-shot's profile looks along the line through the two actors: one would stand in
+    /// front of the other, or behind the camera.
+    ProfileBlocked { profile: Profile },
+    /// No camera stands in both over-the-shoulder sectors: the foreground actor's profile
+    /// (behind them, without one) and the background actor's.
+    ProfilesConflict {
+        foreground: Option<Profile>,
+        background: Option<Profile>,
+    },
 }
 
 impl std::fmt::Display for FramingError {
@@ -246,6 +287,27 @@ impl std::fmt::Display for FramingError {
                  screen positions",
                 size.as_str()
             ),
+            FramingError::TwoProfiles => {
+                f.write_str("a two-shot is seen from one side: it takes one profile, not two")
+            }
+            FramingError::ProfileBlocked { profile } => write!(
+                f,
+                "from the {} side the camera looks along the line through the two actors: one \
+                 stands in front of the other",
+                profile.as_str()
+            ),
+            FramingError::ProfilesConflict {
+                foreground,
+                background,
+            } => {
+                let fg = foreground.map_or("behind the foreground actor".to_string(), |p| {
+                    format!("the foreground actor's {}", p.as_str())
+                });
+                let bg = background.map_or("the background actor in frame".to_string(), |p| {
+                    format!("the background actor's {}", p.as_str())
+                });
+                write!(f, "no camera stands both on {fg} side and on {bg} side")
+            }
         }
     }
 }
@@ -304,38 +366,6 @@ fn band_distance_m(
         math::sin(elevation_rad),
         size::band_angle_rad(lens, screen),
     )
-}
-
-/// Minimise a 1-D function on [lo, hi]: dense sampling, then golden-section refinement.
-fn minimise(f: impl Fn(f64) -> f64, lo: f64, hi: f64) -> (f64, f64) {
-    let n = 96;
-    let step = (hi - lo) / n as f64;
-    let mut best = (lo, f(lo));
-    for i in 1..=n {
-        let x = lo + step * i as f64;
-        let v = f(x);
-        if v < best.1 {
-            best = (x, v);
-        }
-    }
-    let (mut a, mut b) = ((best.0 - step).max(lo), (best.0 + step).min(hi));
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    for _ in 0..60 {
-        let c = b - g * (b - a);
-        let d = a + g * (b - a);
-        if f(c) < f(d) {
-            b = d;
-        } else {
-            a = c;
-        }
-    }
-    let x = (a + b) / 2.0;
-    let v = f(x);
-    if v < best.1 {
-        (x, v)
-    } else {
-        best
-    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -412,6 +442,9 @@ pub struct Prepared {
     elevation: f64,
     /// α of the two subjects' screen points (NaN for one subject or non-finite screens).
     alpha: f64,
+    /// The side of the line of action a two-actor framing that leaves it free stands on
+    /// (the first subject as A), set by [`Prepared::on_side`].
+    side: Option<Side>,
 }
 
 impl Prepared {
@@ -432,7 +465,15 @@ impl Prepared {
             ],
             elevation: sphere::elevation_rad(comp.camera_angle),
             alpha,
+            side: None,
         }
+    }
+
+    /// The same, with a two-actor framing whose side of the line of action its profiles and
+    /// screen positions leave free put on `side` (the line from the first subject to the
+    /// second): film grammar's established side, which the compiler gives each shot.
+    pub fn on_side(self, side: Option<Side>) -> Prepared {
+        Prepared { side, ..self }
     }
 
     /// Solve `comp` against the actors' poses: `comp` and `lens` must be those this was
@@ -451,9 +492,9 @@ impl Prepared {
     /// at last. An over-the-shoulder has up to two cameras that frame the background actor at
     /// its size, and the solve keeps the one nearer the profile written; as live actors move,
     /// the two can come to frame it equally badly, and a choice made afresh would then flip
-    /// from one to the other, across the stage in one tick. With `near`, the root nearer the
-    /// last solve is kept while the other frames the profile less than [`BRANCH_KEEP_RAD`]
-    /// better. And of the two, one whose camera comes within `clear_m` of an actor's body axis
+    /// from one to the other, across the stage in one tick. With `near`, each camera's cost
+    /// grows with its bearing's turn from the last solve's (`HOLD_WEIGHT_M_PER_RAD`), so the
+    /// one held is not given up for one that frames only as well. And of the two, one whose camera comes within `clear_m` of an actor's body axis
     /// is not chosen while the other is clear (a foreground actor walking toward the other
     /// brings one camera onto their own shoulder: 0.00 m from them, the other 2 m away framing
     /// the profile as well). Without `near` and with `clear_m` 0, or for other compositions, as
@@ -500,22 +541,21 @@ impl Prepared {
                 let pair = pair_of(sa, sb, (f.size, f.size))?;
                 let near = match near {
                     Some(Visual::Two(t)) if !t.over_shoulder && (t.a, t.b) == (pair.a, pair.b) => {
-                        Some((t.toric.theta_rad, t.toric.phi_rad))
+                        Some(t.toric)
                     }
                     _ => None,
                 };
-                solve_together(pair, sa, f.size, actors, lens, gimbal, near).map(Visual::Two)
+                solve_together(pair, sa, sb, actors, lens, gimbal, near, self.side).map(Visual::Two)
             }
             [fg, bg] if fg.subjects.len() == 1 && bg.subjects.len() == 1 => {
                 let (sa, sb) = (&fg.subjects[0], &bg.subjects[0]);
                 let pair = pair_of(sa, sb, (fg.size, bg.size))?;
                 let near = match near {
-                    Some(Visual::Two(t)) if t.over_shoulder => {
-                        Some((t.toric.theta_rad, t.toric.phi_rad))
-                    }
+                    Some(Visual::Two(t)) if t.over_shoulder => Some(t.toric),
                     _ => None,
                 };
-                solve_over_shoulder(pair, sa, sb, bg.size, actors, lens, near, clear_m)
+                let side = self.side;
+                solve_over_shoulder(pair, sa, sb, actors, lens, gimbal, near, clear_m, side)
                     .map(Visual::Two)
             }
             _ => Err(unsupported),
@@ -564,6 +604,7 @@ fn solve_one(
 }
 
 /// The common set-up of a two-actor solve: bands, aim points, screens, α (from [`Prepared`]).
+#[derive(Clone, Debug)]
 struct Pair {
     a: usize,
     b: usize,
@@ -634,18 +675,6 @@ impl Pair {
         self.screen_b[0] = -self.screen_b[0];
     }
 
-    /// Make the screen order agree with the side φ: swap defaults, or fail on explicit ones.
-    fn agree_with_side(&mut self, phi: f64) -> Result<(), FramingError> {
-        let near_side = math::cos(phi) >= 0.0;
-        if near_side != self.a_left() {
-            if self.order_fixed {
-                return Err(FramingError::ScreenSideConflict);
-            }
-            self.mirror();
-        }
-        Ok(())
-    }
-
     fn ab(&self) -> f64 {
         (self.mb - self.ma).norm()
     }
@@ -662,88 +691,18 @@ impl Pair {
             primary,
             elevation_rad: self.elevation,
             over_shoulder,
-            stretch: 1.0,
+            distance_ratio: 1.0,
         }
     }
 
-    /// The over-the-shoulder visual at (θ, φ), B (the background) sized, `stretch` as
-    /// [`TwoVisual::stretch`].
-    fn over_shoulder_visual(&self, theta: f64, phi: f64, stretch: f64) -> TwoVisual {
-        let toric = Toric {
-            alpha_rad: self.alpha,
-            theta_rad: theta,
-            phi_rad: phi,
+    /// The distance both actors' size asks of a camera that sees A at `screen_a` and B at
+    /// `screen_b`: the mean of the two (they differ for actors of different heights).
+    fn asked_distance(&self, lens: &Lens, screen_a: [f64; 2], screen_b: [f64; 2]) -> f64 {
+        let d = |band: [f64; 2], screen| {
+            band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, self.e, self.level)
+                .unwrap_or(f64::NAN)
         };
-        TwoVisual {
-            stretch,
-            ..self.visual(toric, Primary::B, true)
-        }
-    }
-
-    fn distance_a(&self, lens: &Lens) -> Option<f64> {
-        band_distance_m(
-            lens,
-            (self.band_a[1] - self.band_a[0]) / 2.0,
-            self.screen_a,
-            self.e,
-            self.level,
-        )
-    }
-
-    fn distance_b(&self, lens: &Lens) -> Option<f64> {
-        band_distance_m(
-            lens,
-            (self.band_b[1] - self.band_b[0]) / 2.0,
-            self.screen_b,
-            self.e,
-            self.level,
-        )
-    }
-
-    /// Refine θ so the sized actor's distance uses the camera's actual elevation seen from
-    /// that actor (the exact variant of the size distance depends on it; φ turns about AB,
-    /// so the elevation is not φ): a few fixed-point steps, each keeping the root nearest
-    /// the previous θ.
-    fn refine_theta(&self, lens: &Lens, theta: f64, phi: f64, sized: Primary) -> f64 {
-        if self.level {
-            return theta;
-        }
-        let (m, band, screen) = match sized {
-            Primary::A => (self.ma, self.band_a, self.screen_a),
-            Primary::B => (self.mb, self.band_b, self.screen_b),
-        };
-        let mut theta = theta;
-        for _ in 0..6 {
-            let v = Toric {
-                alpha_rad: self.alpha,
-                theta_rad: theta,
-                phi_rad: phi,
-            };
-            let Ok(c) = toric::position(&self.ma, &self.mb, &v) else {
-                break;
-            };
-            let to_c = c - m;
-            let elevation = math::atan2(to_c.z, to_c.xy().norm());
-            let Some(d) =
-                band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, elevation, false)
-            else {
-                break;
-            };
-            let roots = match sized {
-                Primary::A => toric::theta_for_distance_to_a(self.alpha, self.ab(), d),
-                Primary::B => toric::theta_for_distance_to_b(self.alpha, self.ab(), d),
-            };
-            match roots
-                .into_iter()
-                .min_by(|x, y| (x - theta).abs().total_cmp(&(y - theta).abs()))
-            {
-                // A fixed point, bit for bit: the remaining steps would repeat this one.
-                Some(t) if t.to_bits() == theta.to_bits() => break,
-                Some(t) => theta = t,
-                None => break,
-            }
-        }
-        theta
+        (d(self.band_a, screen_a) + d(self.band_b, screen_b)) / 2.0
     }
 
     /// φ on the side of the screen order, at the requested elevation.
@@ -756,389 +715,657 @@ impl Pair {
     }
 }
 
-/// How much nearer the symmetric θ the second subject's root must be to win over the
-/// first's (radians of θ).
-const TIE_MARGIN_RAD: f64 = 0.02;
+/// The widest a two-shot puts its actors on screen (|x| of their band centres): past it the
+/// size gives way, the camera standing back until they fit.
+pub const TWO_SHOT_SCREEN_MAX: f64 = 0.8;
 
-/// A two-shot: a camera on the toric surface of the screen points where the nearer actor is at
-/// the size, at the elevation. Of the up to four such θ, the one nearest the symmetric
-/// θ = π − α; held tick after tick (`near_theta_rad`, the last solve's θ), the one nearest the
-/// last: unheld, as actors walk, another root would come to be nearer the symmetric θ and the
-/// camera would cross the arc at once. A held two-shot still jumps when the nearer actor
-/// changes (at θ = π − α) between actors whose sizes are at different distances (different
-/// heights): the size moves to the other actor, and its distance with it. The profile-vantage
-/// two-shot has one camera, and no choice to hold.
-///
-/// With a pitch gimbal at eye level, φ is the one nearest the side's (held: nearest the last
-/// solve's) at which both actors land on their screen points ([`both_exact`]); `near` is the
-/// last solve's (θ, φ).
+/// A two-actor framing in one framing (`MS on A and B`), as film grammar reads it:
+/// - no profile: a symmetric two-shot ([`symmetric_two_shot`]);
+/// - a profile on one of the two: the camera sees that actor from that side
+///   ([`two_shot_from`]);
+/// - a profile on both: refused, a two-shot has one vantage.
+#[allow(clippy::too_many_arguments)]
 fn solve_together(
-    mut pair: Pair,
+    pair: Pair,
     sa: &Subject,
-    size_: Size,
+    sb: &Subject,
     actors: &[ActorPose],
     lens: &Lens,
     gimbal: &Gimbal,
-    near: Option<(f64, f64)>,
+    near: Option<Toric>,
+    side: Option<Side>,
 ) -> Result<TwoVisual, FramingError> {
-    let near_theta_rad = near.map(|n| n.0);
-    if let Some(profile) = sa.profile {
-        // Vantage from A: (θ, φ) exact, the size follows.
-        let u = sphere::direction(actors[pair.a].facing_rad, profile.azimuth_rad(), pair.e);
-        let c = toric::vantage_position(&pair.ma, &pair.mb, pair.alpha, &u)
-            .ok_or(FramingError::ProfileUnreachable)?;
-        let t =
-            toric::inverse(&pair.ma, &pair.mb, &c).map_err(|_| FramingError::ProfileUnreachable)?;
-        pair.agree_with_side(t.phi_rad)?;
-        let toric = Toric {
-            alpha_rad: pair.alpha,
-            ..t
-        };
-        return Ok(pair.visual(toric, Primary::A, false));
+    match (sa.profile, sb.profile) {
+        (Some(_), Some(_)) => Err(FramingError::TwoProfiles),
+        (Some(p), None) => two_shot_from(pair, Primary::A, p, actors, lens),
+        (None, Some(p)) => two_shot_from(pair, Primary::B, p, actors, lens),
+        (None, None) => symmetric_two_shot(pair, lens, gimbal, near, side),
     }
-    let phi = pair.side_phi();
-    let ab = pair.ab();
-    let r = toric::radius_m(ab, pair.alpha);
-    let alpha = pair.alpha;
-    let dist_a = |th: f64| 2.0 * r * math::sin(alpha + th / 2.0);
-    let dist_b = |th: f64| 2.0 * r * math::sin(th / 2.0);
-    // At most two roots each: on the stack (this runs every tick).
-    let mut candidates = [(0.0, Primary::A); 4];
-    let mut count = 0;
-    // A root for A's distance is at that distance (to rounding, far below the 1e-9 margin):
-    // only the other actor's distance is computed.
-    if let Some(d) = pair.distance_a(lens) {
-        for th in toric::theta_for_distance_to_a_on(alpha, r, d) {
-            if d <= dist_b(th) + 1e-9 {
-                candidates[count] = (th, Primary::A);
-                count += 1;
-            }
-        }
-    }
-    if let Some(d) = pair.distance_b(lens) {
-        for th in toric::theta_for_distance_to_b_on(alpha, r, d) {
-            if d <= dist_a(th) + 1e-9 {
-                candidates[count] = (th, Primary::B);
-                count += 1;
-            }
-        }
-    }
-    let candidates = &candidates[..count];
-    // The root nearest the symmetric θ = π − α; on a near tie (equal sizes and heights give
-    // mirror-image roots) the first subject keeps its size, so that the choice does not
-    // flicker with noise on live actors' poses.
-    let symmetric = PI - alpha;
-    let key = |c: &(f64, Primary)| match near_theta_rad {
-        Some(last) if last.is_finite() => (c.0 - last).abs(),
-        _ => {
-            (c.0 - symmetric).abs()
-                + if matches!(c.1, Primary::B) {
-                    TIE_MARGIN_RAD
-                } else {
-                    0.0
-                }
-        }
-    };
-    let (theta, primary) = candidates
-        .iter()
-        .copied()
-        .min_by(|x, y| key(x).total_cmp(&key(y)))
-        .ok_or(FramingError::SizeUnreachable { size: size_ })?;
-    let refined = pair.refine_theta(lens, theta, phi, primary);
-    let (theta, phi) = match gimbal {
-        Gimbal::Pitch {
-            min_rad, max_rad, ..
-        } if pair.elevation == 0.0 => {
-            // Held, from the last solve's φ when it is on this side.
-            let start = near
-                .map(|n| n.1)
-                .filter(|last| last.is_finite() && math::cos(last - phi) > 0.0)
-                .unwrap_or(phi);
-            both_exact(&pair, lens, theta, start, primary, (*min_rad, *max_rad))
-                .unwrap_or((refined, phi))
-        }
-        _ => (refined, phi),
-    };
-    Ok(pair.visual(
-        Toric {
-            alpha_rad: alpha,
-            theta_rad: theta,
-            phi_rad: phi,
-        },
-        primary,
-        false,
-    ))
 }
 
-/// How far from its start [`both_exact`] looks for φ, each way (radians): short of a quarter
-/// turn, so that the camera stays on its side of the line of action.
-const BOTH_EXACT_REACH_RAD: f64 = 1.4;
-
-/// The step of [`both_exact`]'s search for a change of sign (radians of φ).
-const BOTH_EXACT_STEP_RAD: f64 = 0.02;
-
-/// A roll-free camera on a pitch gimbal puts two points at different heights on their screen
-/// points when the plane through the camera and the two points holds the camera's right axis
-/// (horizontal: every plane holds a horizontal direction) at the tilt of the camera's pitch.
-/// The torus gives the angle between the two actors; turning about AB (φ) turns that plane;
-/// θ keeps the sized actor's size. So: the φ nearest `start` at which the camera that aims
-/// the primary exactly puts the other actor on its screen point too, with its θ refined for
-/// the size (from the root `theta0`), and a pitch inside the gimbal's range `pitch_range`.
-/// `None` when no such φ lies within [`BOTH_EXACT_REACH_RAD`] of `start`.
-///
-/// The other actor's miss is measured as the signed angle, about the primary's ray, from
-/// where it is asked to where it lands: both rays are α from the primary's, so it is one
-/// number, and zero only where the actor lands exactly.
-fn both_exact(
-    pair: &Pair,
+/// A two-shot with no profile: the camera on the perpendicular bisector of the two band
+/// centres (θ = π − α, equally far from both), on `side` of the line (else the held one,
+/// else A screen-left), at the written elevation, aimed between them ([`Primary::Pair`]).
+/// The size applies to both: without written screen positions the actors' screen points
+/// move apart or together symmetrically until the camera's distance is the one their size
+/// asks (the mean of the two, for actors of different heights), up to
+/// [`TWO_SHOT_SCREEN_MAX`], beyond which the size gives way ([`TwoVisual::distance_ratio`]);
+/// their screen points are then where that camera sees them, so that actors of different
+/// heights stand as they are, the taller higher in the frame (no roll-free camera puts two
+/// points at different heights on one screen line from equal distances). Written screen
+/// positions hold and the size follows; for actors of different heights their roll-free
+/// error splits evenly between the two.
+fn symmetric_two_shot(
+    mut pair: Pair,
     lens: &Lens,
-    theta0: f64,
-    start: f64,
-    primary: Primary,
-    pitch_range: (f64, f64),
-) -> Option<(f64, f64)> {
-    let (aimed, aimed_screen, other, other_screen) = match primary {
-        Primary::A => (pair.ma, pair.screen_a, pair.mb, pair.screen_b),
-        Primary::B => (pair.mb, pair.screen_b, pair.ma, pair.screen_a),
+    gimbal: &Gimbal,
+    near: Option<Toric>,
+    side: Option<Side>,
+) -> Result<TwoVisual, FramingError> {
+    let right = match (side, near) {
+        (Some(s), _) => s == Side::Right,
+        (None, Some(t)) if t.phi_rad.is_finite() => math::cos(t.phi_rad) >= 0.0,
+        _ => true,
     };
-    let u = lens.ray(aimed_screen).normalize();
-    let w = lens.ray(other_screen).normalize();
-    // (miss, θ, pitch) at φ.
-    let miss = |phi: f64| -> Option<(f64, f64, f64)> {
-        let theta = pair.refine_theta(lens, theta0, phi, primary);
-        let toric = Toric {
-            alpha_rad: pair.alpha,
-            theta_rad: theta,
-            phi_rad: phi,
-        };
-        let c = toric::position(&pair.ma, &pair.mb, &toric).ok()?;
-        let o = orient(lens, &c, &aimed, aimed_screen);
-        if o.clamped {
-            return None;
-        }
-        let camera = crate::camera::CameraPose {
-            position_m: c,
-            heading_rad: o.heading_rad,
-            pitch_rad: o.pitch_rad,
-        };
-        let v = camera.to_camera(&other).normalize();
-        let m = u.dot(&w.cross(&v));
-        m.is_finite().then_some((m, theta, o.pitch_rad))
+    if !pair.order_fixed && right != pair.a_left() {
+        pair.mirror();
+    }
+    let ratio = if pair.order_fixed {
+        let asked = pair.asked_distance(lens, pair.screen_a, pair.screen_b);
+        symmetric_distance(pair.ab(), pair.alpha) / asked
+    } else {
+        let (x, ratio) = spread_for_size(&pair, lens);
+        let sign = if pair.a_left() { 1.0 } else { -1.0 };
+        pair.screen_a[0] = -sign * x;
+        pair.screen_b[0] = sign * x;
+        pair.alpha = toric::alpha_from_screens(lens, pair.screen_a, pair.screen_b);
+        ratio
     };
-    let in_range = |(_, theta, pitch): (f64, f64, f64), phi: f64| {
-        (pitch >= pitch_range.0 && pitch <= pitch_range.1).then_some((theta, wrap_angle_rad(phi)))
+    if !(pair.alpha > 1e-9 && pair.alpha < PI) {
+        return Err(FramingError::ScreensCoincide);
+    }
+    let toric = Toric {
+        alpha_rad: pair.alpha,
+        theta_rad: PI - pair.alpha,
+        phi_rad: pair.side_phi(),
     };
-    let at = miss(start)?;
-    // The nearest change of sign, stepping out both ways.
-    let mut bracket = None;
-    let mut last = [(start, at); 2];
-    if at.0 != 0.0 {
-        let steps = (BOTH_EXACT_REACH_RAD / BOTH_EXACT_STEP_RAD) as usize;
-        'out: for k in 1..=steps {
-            for (side, sign) in [1.0, -1.0].into_iter().enumerate() {
-                let phi = start + sign * BOTH_EXACT_STEP_RAD * k as f64;
-                let Some(here) = miss(phi) else {
-                    continue;
-                };
-                let (phi0, before) = last[side];
-                if (before.0 < 0.0) != (here.0 < 0.0) || here.0 == 0.0 {
-                    bracket = Some(((phi0, before), (phi, here)));
-                    break 'out;
-                }
-                last[side] = (phi, here);
-            }
+    let mut visual = TwoVisual {
+        distance_ratio: ratio,
+        ..pair.visual(toric, Primary::Pair, false)
+    };
+    if !pair.order_fixed {
+        as_seen(&mut visual, &pair, lens, gimbal);
+    }
+    Ok(visual)
+}
+
+/// Puts a symmetric two-shot's screen points where its camera, aimed between the two, sees
+/// their band centres (the same angle between them: only heights move them off the line).
+/// The gimbal's range is not applied here, `place` applies it.
+fn as_seen(v: &mut TwoVisual, pair: &Pair, lens: &Lens, gimbal: &Gimbal) {
+    let Ok(mut c) = toric::position(&pair.ma, &pair.mb, &v.toric) else {
+        return;
+    };
+    let (da, db) = ((pair.ma - c).norm(), (pair.mb - c).norm());
+    let share = if da + db > 0.0 { da / (da + db) } else { 0.5 };
+    let target = pair.ma + (pair.mb - pair.ma) * share;
+    // The camera the composition asks for (a gimbal's pitch unclamped: a pitch out of its
+    // range shows as an error on these points, not in them).
+    let (heading, pitch) = if fixed_pitch(gimbal) {
+        c.z = target.z;
+        (orient_fixed_pitch(lens, &c, &target, 0.0, 0.0), 0.0)
+    } else {
+        let o = orient(lens, &c, &target, [0.0, 0.0]);
+        (o.heading_rad, o.pitch_rad)
+    };
+    let camera = crate::camera::CameraPose {
+        position_m: c,
+        heading_rad: heading,
+        pitch_rad: pitch,
+    };
+    if let (Some(a), Some(b)) = (
+        camera.project(lens, &pair.ma),
+        camera.project(lens, &pair.mb),
+    ) {
+        v.screen_a = a;
+        v.screen_b = b;
+    }
+}
+
+/// The camera's distance from each band centre on the bisector of a pair `ab_m` apart seen
+/// under α: `|AB| / (2 sin(α/2))`.
+fn symmetric_distance(ab_m: f64, alpha_rad: f64) -> f64 {
+    ab_m / (2.0 * math::sin(alpha_rad / 2.0))
+}
+
+/// Where a symmetric two-shot's size's distance and its widest spread's meet, the camera's
+/// distance blends from one to the other over this share of the size's distance (a smooth
+/// maximum): as the actors walk apart the camera starts to stand back smoothly, with no step
+/// in its acceleration for the drone to follow, framing at most half this share looser
+/// where the two meet.
+pub const SPREAD_BLEND: f64 = 0.1;
+
+/// The widest screen half-spread the size's root is looked for up to (rays 176° apart).
+const SPREAD_ROOT_MAX: f64 = 30.0;
+
+/// The screen half-spread x (A and B at ∓x) of a symmetric two-shot, and the ratio of the
+/// camera's distance to the one the pair's size asks: the size's distance (where the
+/// bisector distance, falling as x grows, meets the asked distance, growing: one root, found
+/// by regula falsi from the level camera's closed form `x = (|AB|/2)/(h·aspect)`), or the
+/// distance at [`TWO_SHOT_SCREEN_MAX`] when that is farther, the two blended over
+/// [`SPREAD_BLEND`]; x from the distance in closed form, `x = Sx·tan(asin(|AB|/2d))`.
+fn spread_for_size(pair: &Pair, lens: &Lens) -> (f64, f64) {
+    let ab = pair.ab();
+    let at = |x: f64| {
+        let (sa, sb) = ([-x, 0.0], [x, 0.0]);
+        let alpha = toric::alpha_from_screens(lens, sa, sb);
+        let asked = pair.asked_distance(lens, sa, sb);
+        (symmetric_distance(ab, alpha), asked)
+    };
+    let gap = |x: f64| {
+        let (d, asked) = at(x);
+        d - asked
+    };
+    let half = ((pair.band_a[1] - pair.band_a[0]) + (pair.band_b[1] - pair.band_b[0])) / 4.0;
+    let guess = (ab / 2.0) / (half * lens.aspect());
+    let (mut a, mut b) = (1e-6, SPREAD_ROOT_MAX);
+    let (mut fa, mut fb) = (gap(a), gap(b));
+    if guess > a && guess < b {
+        let fg = gap(guess);
+        if fg > 0.0 {
+            (a, fa) = (guess, fg);
+        } else {
+            (b, fb) = (guess, fg);
         }
     }
-    let ((mut a, mut fa), (mut b, mut fb)) = match bracket {
-        Some(((a, fa), (b, fb))) => ((a, fa.0), (b, fb.0)),
-        None if at.0 == 0.0 => return in_range(at, start),
-        None => return None,
-    };
-    // Regula falsi (Illinois: the end kept twice has its value halved); the miss is smooth
-    // in φ. The answer is the point evaluated with the smallest miss.
-    let mut best = if fa.abs() <= fb.abs() {
-        (a, miss(a)?)
-    } else {
-        (b, miss(b)?)
-    };
     let mut kept = 0i8;
-    for _ in 0..60 {
-        if best.1 .0 == 0.0 || (b - a).abs() < 1e-13 {
+    for _ in 0..80 {
+        if (b - a).abs() < 1e-12 || fa == 0.0 || fb == 0.0 {
             break;
         }
-        let mut phi = (a * fb - b * fa) / (fb - fa);
-        if !(phi > a.min(b) && phi < a.max(b)) {
-            phi = (a + b) / 2.0;
+        let mut x = (a * fb - b * fa) / (fb - fa);
+        if !(x > a.min(b) && x < a.max(b)) {
+            x = (a + b) / 2.0;
         }
-        let here = miss(phi)?;
-        if here.0.abs() < best.1 .0.abs() {
-            best = (phi, here);
-        }
-        if (here.0 < 0.0) == (fa < 0.0) {
-            (a, fa) = (phi, here.0);
+        let fx = gap(x);
+        if (fx > 0.0) == (fa > 0.0) {
+            (a, fa) = (x, fx);
             if kept == 1 {
                 fb /= 2.0;
             }
             kept = 1;
         } else {
-            (b, fb) = (phi, here.0);
+            (b, fb) = (x, fx);
             if kept == -1 {
                 fa /= 2.0;
             }
             kept = -1;
         }
     }
-    in_range(best.1, best.0)
+    let root = if fa.abs() < fb.abs() { a } else { b };
+    let d_size = at(root).0;
+    let d_fit = at(TWO_SHOT_SCREEN_MAX).0;
+    let d = smooth_max(d_size, d_fit, SPREAD_BLEND * d_size);
+    let half_angle = math::asin((ab / (2.0 * d)).min(1.0));
+    (lens.sx() * math::tan(half_angle), d / d_size)
 }
 
-/// How much farther than the toric circle allows an over-the-shoulder's background actor may
-/// be asked to be framed (its size's distance over the circle's diameter) and still be framed,
-/// from the circle's farthest point: up to this, the background actor is framed a little
-/// larger than written (by at most this factor) with both actors on their screen points,
-/// instead of the composition failing. A shot written at the edge of reach against its
-/// blocking (as `scene.psl`'s reverse shot is) comes out of reach against live actors, who
-/// stand a few centimetres closer at moments; without this allowance the drone would hold the
-/// camera, unframed, for part of the shot.
-pub const OVER_SHOULDER_REACH: f64 = 1.15;
+/// A smooth maximum of `a` and `b`: `(a + b + √((a − b)² + w²))/2`, at most `w/2` above the
+/// larger, where they meet.
+fn smooth_max(a: f64, b: f64, w: f64) -> f64 {
+    (a + b + ((a - b) * (a - b) + w * w).sqrt()) / 2.0
+}
 
-/// How much nearer its profile (radians) the other root of an over-the-shoulder must frame
-/// before a held framing leaves its own (see [`Prepared::solve_near`]).
-pub const BRANCH_KEEP_RAD: f64 = 0.35;
+/// Directions a two-shot's profile may not look along: within this of the line to the
+/// other actor, one actor stands in front of the other (or behind the camera).
+pub const PROFILE_BLOCKED_RAD: f64 = 0.35;
 
-/// `near`: the (θ, φ) this composition was solved at last (a hold, solved again each tick);
-/// `clear_m`: how far from each actor's body axis a root's camera must be to be preferred
-/// (see [`Prepared::solve_near`]).
-#[allow(clippy::too_many_arguments)]
-fn solve_over_shoulder(
+/// A two-shot with a profile on one actor X (`which`): the camera on the ray from X's band
+/// centre along the profile (at the written elevation; level for a fixed-pitch camera), at
+/// the distance X's size asks, or farther until both actors fit within
+/// [`TWO_SHOT_SCREEN_MAX`] of the centre with the camera aimed between them
+/// ([`Primary::Pair`]). Refused when the profile looks along the line through the two
+/// ([`FramingError::ProfileBlocked`]).
+fn two_shot_from(
     mut pair: Pair,
-    sa: &Subject,
-    sb: &Subject,
-    bg_size: Size,
+    which: Primary,
+    profile: Profile,
     actors: &[ActorPose],
     lens: &Lens,
-    near: Option<(f64, f64)>,
-    clear_m: f64,
 ) -> Result<TwoVisual, FramingError> {
-    let ab = pair.ab();
-    let alpha = pair.alpha;
-    let d = pair
-        .distance_b(lens)
-        .ok_or(FramingError::SizeUnreachable { size: bg_size })?;
-    let mut thetas = toric::theta_for_distance_to_b(alpha, ab, d);
-    let mut stretch = 1.0;
-    if thetas.is_empty() {
-        // Just out of reach: framed from the farthest point of the circle instead.
-        let farthest = 2.0 * toric::radius_m(ab, alpha);
-        if d <= farthest * OVER_SHOULDER_REACH {
-            thetas = toric::theta_for_distance_to_b(alpha, ab, farthest * (1.0 - 1e-12));
-            stretch = d / farthest;
-        }
-    }
-    if thetas.is_empty() {
-        return Err(FramingError::SizeUnreachable { size: bg_size });
-    }
-    // The direction to match: the foreground's profile seen from A, else the background's seen
-    // from B.
-    let target = match (sa.profile, sb.profile) {
-        (Some(p), _) => Some((
-            pair.ma,
-            sphere::direction(actors[pair.a].facing_rad, p.azimuth_rad(), pair.e),
-        )),
-        (None, Some(p)) => Some((
-            pair.mb,
-            sphere::direction(actors[pair.b].facing_rad, p.azimuth_rad(), pair.e),
-        )),
-        (None, None) => None,
+    let (x_actor, mx, my, band) = match which {
+        Primary::B => (pair.b, pair.mb, pair.ma, pair.band_b),
+        _ => (pair.a, pair.ma, pair.mb, pair.band_a),
     };
-    let Some((origin, u)) = target else {
-        // No profile: the side of the screen order, the root nearer the foreground actor.
-        let phi = pair.side_phi();
-        let theta = pair.refine_theta(lens, thetas[thetas.len() - 1], phi, Primary::B);
-        return Ok(pair.over_shoulder_visual(theta, phi, stretch));
-    };
-    let (ma, mb) = (pair.ma, pair.mb);
-    let cost = |theta: f64, phi: f64| -> f64 {
-        match toric::position(
-            &ma,
-            &mb,
-            &Toric {
-                alpha_rad: alpha,
-                theta_rad: theta,
-                phi_rad: phi,
-            },
-        ) {
-            Ok(c) => crate::camera::angle(&(c - origin), &u),
-            Err(_) => f64::INFINITY,
-        }
-    };
-    let (lo, hi) = if !pair.order_fixed {
-        (-PI, PI)
-    } else if pair.a_left() {
-        (-FRAC_PI_2, FRAC_PI_2)
-    } else {
-        (FRAC_PI_2, 3.0 * FRAC_PI_2)
-    };
-    // Each root with its best φ (at most two: on the stack, this runs every tick), and the
-    // best of them (the first on a tie).
-    let mut found = [(f64::NAN, f64::NAN, f64::INFINITY); 2];
-    let mut count = 0;
-    for &th in thetas.iter().take(found.len()) {
-        let (phi, v) = minimise(|phi| cost(th, phi), lo, hi);
-        found[count] = (th, phi, v);
-        count += 1;
+    let u = sphere::direction(actors[x_actor].facing_rad, profile.azimuth_rad(), pair.e);
+    let to_other = my - mx;
+    let gamma = crate::camera::angle(
+        &Vec3::new(u.x, u.y, 0.0),
+        &Vec3::new(to_other.x, to_other.y, 0.0),
+    );
+    if !(gamma > PROFILE_BLOCKED_RAD && gamma < PI - PROFILE_BLOCKED_RAD) {
+        return Err(FramingError::ProfileBlocked { profile });
     }
-    let mut roots: &[(f64, f64, f64)] = &found[..count];
-    // A root whose camera stands inside an actor's distance gives way to one that does not.
-    if clear_m > 0.0 && count == 2 {
-        let (a, b) = (&actors[pair.a], &actors[pair.b]);
-        let clear = |r: &(f64, f64, f64)| {
-            toric::position(
-                &ma,
-                &mb,
-                &Toric {
-                    alpha_rad: alpha,
-                    theta_rad: r.0,
-                    phi_rad: r.1,
-                },
-            )
-            .is_ok_and(|c| {
-                body_axis_distance_m(&c, a) >= clear_m && body_axis_distance_m(&c, b) >= clear_m
-            })
-        };
-        match (clear(&roots[0]), clear(&roots[1])) {
-            (true, false) => roots = &roots[..1],
-            (false, true) => roots = &roots[1..],
-            _ => {}
-        }
+    // The half angle the two subtend at a camera r along u, and the spread it puts them at.
+    let half_angle =
+        |r: f64| crate::camera::angle(&(mx - (mx + u * r)), &(my - (mx + u * r))) / 2.0;
+    let spread = |r: f64| lens.sx() * math::tan(half_angle(r));
+    let half = (band[1] - band[0]) / 2.0;
+    // The size's distance depends on the screen x; two fixed-point steps settle it.
+    let mut r = band_distance_m(lens, half, [0.0, 0.0], pair.e, pair.level).unwrap_or(1.0);
+    for _ in 0..2 {
+        let x = spread(r).min(TWO_SHOT_SCREEN_MAX);
+        r = band_distance_m(lens, half, [x, 0.0], pair.e, pair.level).unwrap_or(r);
     }
-    let mut best = (f64::NAN, f64::NAN, f64::INFINITY);
-    for &r in roots {
-        if r.2 < best.2 {
-            best = r;
+    let asked = r;
+    if !(spread(r) <= TWO_SHOT_SCREEN_MAX) {
+        // Farther along u the angle between them shrinks: bisect for the widest spread.
+        let (mut lo, mut hi) = (r, r * 2.0);
+        while spread(hi) > TWO_SHOT_SCREEN_MAX && hi < 1e4 {
+            lo = hi;
+            hi *= 2.0;
         }
-    }
-    // A held framing keeps its root while the other is not clearly better.
-    let (theta, phi, _) = match near {
-        Some((theta0, phi0)) => {
-            let apart =
-                |r: &(f64, f64, f64)| (r.0 - theta0).abs() + wrap_angle_rad(r.1 - phi0).abs();
-            let held = roots
-                .iter()
-                .copied()
-                .min_by(|x, y| apart(x).total_cmp(&apart(y)))
-                .unwrap_or(best);
-            if held.2 <= best.2 + BRANCH_KEEP_RAD {
-                held
+        for _ in 0..60 {
+            let mid = (lo + hi) / 2.0;
+            if spread(mid) > TWO_SHOT_SCREEN_MAX {
+                lo = mid;
             } else {
-                best
+                hi = mid;
             }
         }
-        None => best,
+        r = hi;
+    }
+    let c = mx + u * r;
+    let t = toric::inverse(&pair.ma, &pair.mb, &c).map_err(|_| FramingError::ActorsCoincide)?;
+    let x = spread(r);
+    let a_left = Side::of(&pair.ma, &pair.mb, &c) != Some(Side::Left);
+    if pair.order_fixed && a_left != pair.a_left() {
+        return Err(FramingError::ScreenSideConflict);
+    }
+    pair.screen_a = [if a_left { -x } else { x }, 0.0];
+    pair.screen_b = [if a_left { x } else { -x }, 0.0];
+    pair.alpha = t.alpha_rad;
+    Ok(TwoVisual {
+        distance_ratio: r / asked,
+        ..pair.visual(t, Primary::Pair, false)
+    })
+}
+
+/// Half-width of the bearings a profile names, about its angle: film grammar's ±22.5°
+/// (each of the eight profiles a 45° sector), less a margin for live actors and rounding.
+pub const PROFILE_HALF_WIDTH_RAD: f64 = 20.0 * PI / 180.0;
+
+/// Without a profile on the foreground actor, an over-the-shoulder camera stands behind
+/// them: within this of the line from the background actor through the foreground one.
+pub const BEHIND_HALF_WIDTH_RAD: f64 = PI / 3.0;
+
+/// The weight (metres per radian) of a profile's deviation from its angle against the
+/// background actor's size (metres of camera distance) in the over-the-shoulder's choice:
+/// small, the size comes first and the profiles only choose among cameras that keep it.
+const PROFILE_WEIGHT_M_PER_RAD: f64 = 0.05;
+
+/// The weight (metres per radian) of a held over-the-shoulder's bearing from its last: a
+/// camera that frames as well elsewhere does not take its place.
+const HOLD_WEIGHT_M_PER_RAD: f64 = 0.02;
+
+/// How far from the frame's centre an over-the-shoulder's foreground actor is asked to be at
+/// least, on the other half from the background actor (screen units).
+const OTS_FOREGROUND_GAP: f64 = 0.05;
+
+/// The farthest an over-the-shoulder's camera stands from the background actor, in multiples
+/// of its size's distance or of the actors' separation (the larger): where the two sectors
+/// meet only farther away, no camera frames the composition.
+const OTS_REACH: f64 = 4.0;
+
+/// The bearings from the background actor the over-the-shoulder's search samples (across
+/// a profile's sector, or the whole turn), before it refines the best.
+const OTS_SAMPLES: usize = 48;
+
+/// The horizontal bearings (a wedge with its apex at an actor's feet) a camera's bearing
+/// from that actor must lie in.
+#[derive(Clone, Copy, Debug)]
+struct Wedge {
+    apex: [f64; 2],
+    centre_rad: f64,
+    half_rad: f64,
+}
+
+impl Wedge {
+    /// The wedge of a written profile, or `None`.
+    fn of_profile(p: &ActorPose, profile: Option<Profile>) -> Option<Wedge> {
+        profile.map(|pr| Wedge {
+            apex: [p.position_m[0], p.position_m[1]],
+            centre_rad: wrap_angle_rad(p.facing_rad + pr.azimuth_rad()),
+            half_rad: PROFILE_HALF_WIDTH_RAD,
+        })
+    }
+
+    /// How far the bearing of `q` from the apex is from the wedge's centre.
+    fn deviation(&self, q: [f64; 2]) -> f64 {
+        let b = math::atan2(q[1] - self.apex[1], q[0] - self.apex[0]);
+        wrap_angle_rad(b - self.centre_rad).abs()
+    }
+
+    /// The range of `r ≥ 0` for which `q + r·w` lies in the wedge (its two half-planes:
+    /// the wedge is narrower than a half turn), or `None`.
+    fn ray_interval(&self, q: [f64; 2], w: [f64; 2]) -> Option<(f64, f64)> {
+        let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+        let (lo, hi) = (
+            self.centre_rad - self.half_rad,
+            self.centre_rad + self.half_rad,
+        );
+        let (e_lo, e_hi) = (
+            [math::cos(lo), math::sin(lo)],
+            [math::cos(hi), math::sin(hi)],
+        );
+        let d = [q[0] - self.apex[0], q[1] - self.apex[1]];
+        let (mut r0, mut r1) = (0.0f64, f64::INFINITY);
+        // cross(e_lo, d + r w) ≥ 0 and cross(d + r w, e_hi) ≥ 0.
+        for (c0, c1) in [
+            (cross(e_lo, d), cross(e_lo, w)),
+            (-cross(e_hi, d), -cross(e_hi, w)),
+        ] {
+            if c1.abs() < 1e-15 {
+                if c0 < 0.0 {
+                    return None;
+                }
+            } else if c1 > 0.0 {
+                r0 = r0.max(-c0 / c1);
+            } else {
+                r1 = r1.min(-c0 / c1);
+            }
+        }
+        (r0 <= r1).then_some((r0, r1))
+    }
+}
+
+/// One camera of the over-the-shoulder's search: its bearing and horizontal distance from
+/// the background actor, which side of the line it stands on, and its cost.
+#[derive(Clone, Copy, Debug)]
+struct OtsCandidate {
+    bearing_rad: f64,
+    r_m: f64,
+    side: Side,
+    cost: f64,
+}
+
+/// An over-the-shoulder composition (`SIZE on A PROFILE_A SIZE on B PROFILE_B`, A the
+/// foreground actor), as film grammar defines it: the camera's bearing from A within
+/// [`PROFILE_HALF_WIDTH_RAD`] of PROFILE_A's angle (without one, behind A as B sees them,
+/// within [`BEHIND_HALF_WIDTH_RAD`]), and from B within that of PROFILE_B's; then, among
+/// those cameras, B framed at its size and screen point where the geometry allows and
+/// otherwise from as near the size's distance as they allow ([`TwoVisual::distance_ratio`]),
+/// the profiles as near their angles as the size leaves, A on the other half of the frame,
+/// every camera at least `clear_m` from both actors' body axes. A's screen point and size
+/// follow from where the camera is. No camera in both sectors is
+/// [`FramingError::ProfilesConflict`].
+///
+/// Held (`near`: the last solve's toric coordinates), the search prefers the camera nearest
+/// the last.
+/// `side`: the side of the line the camera must stand on when the profiles leave it free.
+#[allow(clippy::too_many_arguments)]
+fn solve_over_shoulder(
+    pair: Pair,
+    sa: &Subject,
+    sb: &Subject,
+    actors: &[ActorPose],
+    lens: &Lens,
+    gimbal: &Gimbal,
+    near: Option<Toric>,
+    clear_m: f64,
+    side: Option<Side>,
+) -> Result<TwoVisual, FramingError> {
+    let (pa, pb) = (&actors[pair.a], &actors[pair.b]);
+    let a_xy = [pa.position_m[0], pa.position_m[1]];
+    let b_xy = [pb.position_m[0], pb.position_m[1]];
+    let behind = math::atan2(a_xy[1] - b_xy[1], a_xy[0] - b_xy[0]);
+    let wedge_a = Wedge::of_profile(pa, sa.profile).unwrap_or(Wedge {
+        apex: a_xy,
+        centre_rad: behind,
+        half_rad: BEHIND_HALF_WIDTH_RAD,
+    });
+    let wedge_b = Wedge::of_profile(pb, sb.profile);
+    // The side the written screen order or the hint fixes, if any.
+    let fixed_side = if pair.order_fixed {
+        Some(if pair.a_left() {
+            Side::Right
+        } else {
+            Side::Left
+        })
+    } else {
+        side
     };
-    let phi = wrap_angle_rad(phi);
-    pair.agree_with_side(phi)?;
-    let theta = pair.refine_theta(lens, theta, phi, Primary::B);
-    Ok(pair.over_shoulder_visual(theta, phi, stretch))
+    let last = near.and_then(|t| {
+        let c = toric::position(&pair.ma, &pair.mb, &t).ok()?;
+        Some(math::atan2(c.y - b_xy[1], c.x - b_xy[0]))
+    });
+    let search = OtsSearch {
+        pair: &pair,
+        a: pa,
+        b: pb,
+        wedge_a,
+        wedge_b,
+        lens,
+        gimbal,
+        clear_m,
+        fixed_side,
+        last,
+    };
+    let best = search.best().ok_or(FramingError::ProfilesConflict {
+        foreground: sa.profile,
+        background: sb.profile,
+    })?;
+    search.visual(&best)
+}
+
+/// The over-the-shoulder's search ([`solve_over_shoulder`]).
+struct OtsSearch<'a> {
+    pair: &'a Pair,
+    a: &'a ActorPose,
+    b: &'a ActorPose,
+    wedge_a: Wedge,
+    wedge_b: Option<Wedge>,
+    lens: &'a Lens,
+    gimbal: &'a Gimbal,
+    clear_m: f64,
+    fixed_side: Option<Side>,
+    last: Option<f64>,
+}
+
+impl OtsSearch<'_> {
+    fn b_xy(&self) -> [f64; 2] {
+        [self.b.position_m[0], self.b.position_m[1]]
+    }
+
+    /// B's screen point for a camera on `side`: as written, or the third away from A.
+    fn screen_b(&self, side: Side) -> [f64; 2] {
+        let s = self.pair.screen_b;
+        if self.pair.order_fixed {
+            return s;
+        }
+        let x = s[0].abs().max(1e-3);
+        [if side == Side::Right { x } else { -x }, s[1]]
+    }
+
+    /// The horizontal distance from B at which B has its size, at B's screen point.
+    fn asked_r(&self, screen: [f64; 2]) -> Option<f64> {
+        let p = self.pair;
+        let d = band_distance_m(
+            self.lens,
+            (p.band_b[1] - p.band_b[0]) / 2.0,
+            screen,
+            p.e,
+            p.level,
+        )?;
+        Some(if p.level { d } else { d * math::cos(p.e) })
+    }
+
+    /// The best camera on the ray from B at `bearing`, if the ray meets A's wedge.
+    fn along(&self, bearing: f64) -> Option<OtsCandidate> {
+        let b = self.b_xy();
+        let w = [math::cos(bearing), math::sin(bearing)];
+        let (r0, r1) = self.wedge_a.ray_interval(b, w)?;
+        let probe = [b[0] + w[0] * (r0 + 1.0), b[1] + w[1] * (r0 + 1.0)];
+        let side = Side::of(
+            &Vec3::new(self.a.position_m[0], self.a.position_m[1], 0.0),
+            &Vec3::new(b[0], b[1], 0.0),
+            &Vec3::new(probe[0], probe[1], 0.0),
+        )?;
+        if self.fixed_side.is_some_and(|s| s != side) {
+            return None;
+        }
+        let screen = self.screen_b(side);
+        let asked = self.asked_r(screen)?;
+        let r0 = r0.max(self.clear_m);
+        // Sectors that meet only far away (nearly parallel) frame nothing the shot names.
+        let ab = math::hypot(self.a.position_m[0] - b[0], self.a.position_m[1] - b[1]);
+        if r0 > r1 || r0 > OTS_REACH * asked.max(ab) {
+            return None;
+        }
+        let mut r = asked.clamp(r0, r1);
+        r = self.clear_of_a(b, w, r, r1)?;
+        let c = [b[0] + w[0] * r, b[1] + w[1] * r];
+        let mut cost = (r - asked).abs();
+        cost += PROFILE_WEIGHT_M_PER_RAD
+            * (self.wedge_a.deviation(c) + self.wedge_b.map_or(0.0, |wb| wb.deviation(c)));
+        if let Some(l) = self.last {
+            cost += HOLD_WEIGHT_M_PER_RAD * wrap_angle_rad(bearing - l).abs();
+        }
+        if !self.a_on_other_half(c, screen) {
+            cost += 100.0;
+        }
+        Some(OtsCandidate {
+            bearing_rad: bearing,
+            r_m: r,
+            side,
+            cost,
+        })
+    }
+
+    /// `r`, or farther along the ray (up to `r_max`) until the camera is `clear_m` from A's
+    /// feet; `None` when no such camera is left.
+    fn clear_of_a(&self, b: [f64; 2], w: [f64; 2], r: f64, r_max: f64) -> Option<f64> {
+        let a = [self.a.position_m[0], self.a.position_m[1]];
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let at = |r: f64| math::hypot(d[0] + w[0] * r, d[1] + w[1] * r);
+        if at(r) >= self.clear_m {
+            return Some(r);
+        }
+        // |d + r w|² = clear²: the far root.
+        let bq = d[0] * w[0] + d[1] * w[1];
+        let cq = d[0] * d[0] + d[1] * d[1] - self.clear_m * self.clear_m;
+        let far = -bq + (bq * bq - cq).max(0.0).sqrt();
+        (far <= r_max).then_some(far)
+    }
+
+    /// Whether A lands on the other half of the frame from B, inside it, for a level camera
+    /// at `c` that puts B at `screen`.
+    fn a_on_other_half(&self, c: [f64; 2], screen: [f64; 2]) -> bool {
+        let b = self.b_xy();
+        let bearing_b = math::atan2(b[1] - c[1], b[0] - c[0]);
+        let bearing_a = math::atan2(self.a.position_m[1] - c[1], self.a.position_m[0] - c[0]);
+        let sx = self.lens.sx();
+        let heading = bearing_b + math::atan(screen[0] / sx);
+        let off = wrap_angle_rad(heading - bearing_a);
+        let x_a = sx * math::tan(off);
+        off.abs() < FRAC_PI_2 && x_a.abs() <= 1.0 && x_a * screen[0] < 0.0
+    }
+
+    /// The bearings the search samples: across B's sector, or the whole turn.
+    fn range(&self) -> (f64, f64) {
+        match &self.wedge_b {
+            Some(w) => (w.centre_rad - w.half_rad, w.centre_rad + w.half_rad),
+            None => (-PI, PI),
+        }
+    }
+
+    /// The cheapest camera: sampled, then refined by golden section about the best sample.
+    fn best(&self) -> Option<OtsCandidate> {
+        let (lo, hi) = self.range();
+        let step = (hi - lo) / OTS_SAMPLES as f64;
+        let mut best: Option<OtsCandidate> = None;
+        let mut keep = |c: Option<OtsCandidate>| {
+            if let Some(c) = c {
+                if best.is_none_or(|b| c.cost < b.cost) {
+                    best = Some(c);
+                }
+            }
+        };
+        for i in 0..=OTS_SAMPLES {
+            keep(self.along(lo + step * i as f64));
+        }
+        let found = best?;
+        let cost = |x: f64| self.along(x).map_or(f64::INFINITY, |c| c.cost);
+        let (mut a, mut b) = (found.bearing_rad - step, found.bearing_rad + step);
+        if self.wedge_b.is_some() {
+            (a, b) = (a.max(lo), b.min(hi));
+        }
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        for _ in 0..40 {
+            let c = b - g * (b - a);
+            let d = a + g * (b - a);
+            if cost(c) < cost(d) {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        let refined = self.along((a + b) / 2.0);
+        Some(match refined {
+            Some(r) if r.cost < found.cost => r,
+            _ => found,
+        })
+    }
+
+    /// The visual of the chosen camera: its toric coordinates about the band centres, B's
+    /// screen point as asked (the side's third by default), A's where the camera sees it.
+    fn visual(&self, best: &OtsCandidate) -> Result<TwoVisual, FramingError> {
+        let mut pair = self.pair.clone();
+        let b = self.b_xy();
+        let screen_b = self.screen_b(best.side);
+        let (w0, w1) = (math::cos(best.bearing_rad), math::sin(best.bearing_rad));
+        let mb = pair.mb;
+        let z = if pair.level {
+            mb.z
+        } else {
+            mb.z + best.r_m * math::tan(pair.e)
+        };
+        let mut c = Vec3::new(b[0] + w0 * best.r_m, b[1] + w1 * best.r_m, z);
+        let asked = self.asked_r(screen_b).unwrap_or(best.r_m);
+        pair.screen_b = screen_b;
+        if pair.level {
+            // The altitude that puts B's band centre at its screen y (place_two's rule).
+            let xp = screen_b[0] / self.lens.sx();
+            let depth = best.r_m / (1.0 + xp * xp).sqrt();
+            c.z = mb.z - screen_b[1] * depth / self.lens.sy();
+        }
+        let (heading, pitch, _) = aim(self.lens, self.gimbal, &c, &mb, screen_b);
+        let camera = crate::camera::CameraPose {
+            position_m: c,
+            heading_rad: heading,
+            pitch_rad: pitch,
+        };
+        // The foreground actor is asked where the camera sees them, on the other half of the
+        // frame from B: a camera that cannot show them there misses it, and says so.
+        let other_half = if screen_b[0] >= 0.0 {
+            (-1.0, -OTS_FOREGROUND_GAP)
+        } else {
+            (OTS_FOREGROUND_GAP, 1.0)
+        };
+        let seen = camera
+            .project(self.lens, &pair.ma)
+            .unwrap_or([-screen_b[0], 0.0]);
+        pair.screen_a = [
+            seen[0].clamp(other_half.0, other_half.1),
+            seen[1].clamp(-1.0, 1.0),
+        ];
+        let t = toric::inverse(&pair.ma, &pair.mb, &c).map_err(|_| FramingError::ActorsCoincide)?;
+        pair.alpha = t.alpha_rad;
+        Ok(TwoVisual {
+            distance_ratio: best.r_m / asked,
+            ..pair.visual(t, Primary::B, true)
+        })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1210,7 +1437,7 @@ fn aim_target(
                 (q, size::band_aim_screen(lens, o.screen))
             }
         }
-        Visual::Two(t) => primary_target(t, actors),
+        Visual::Two(t) => primary_target(t, actors, lens, c),
         Visual::Blend { from, to, s } => {
             let (p0, s0) = aim_target(from, actors, lens, gimbal, c);
             let (p1, s1) = aim_target(to, actors, lens, gimbal, c);
@@ -1267,10 +1494,29 @@ pub fn balanced_heading(
     h.is_finite().then_some(h)
 }
 
-fn primary_target(t: &TwoVisual, actors: &[ActorPose]) -> (Vec3, [f64; 2]) {
+/// The point a two-actor visual aims exactly from a camera at `c`, and its screen point:
+/// the primary's band centre, or for [`Primary::Pair`] the point where the bisector of the
+/// angle at `c` between the two band centres meets the line through them (the angle
+/// bisector theorem: it divides AB as |CA| to |CB|), at the screen point of the bisector of
+/// their two screen points' rays: the angle between the rays is the angle between the
+/// actors, so both land on their points when the two split it evenly.
+fn primary_target(t: &TwoVisual, actors: &[ActorPose], lens: &Lens, c: &Vec3) -> (Vec3, [f64; 2]) {
+    let ma = band_centre(&actors[t.a], t.band_a_m);
+    let mb = band_centre(&actors[t.b], t.band_b_m);
     match t.primary {
-        Primary::A => (band_centre(&actors[t.a], t.band_a_m), t.screen_a),
-        Primary::B => (band_centre(&actors[t.b], t.band_b_m), t.screen_b),
+        Primary::A => (ma, t.screen_a),
+        Primary::B => (mb, t.screen_b),
+        Primary::Pair => {
+            let (da, db) = ((ma - c).norm(), (mb - c).norm());
+            let share = if da + db > 0.0 { da / (da + db) } else { 0.5 };
+            let ray = lens.ray(t.screen_a).normalize() + lens.ray(t.screen_b).normalize();
+            let screen = if ray.y > 0.0 {
+                [ray.x * lens.sx() / ray.y, ray.z * lens.sy() / ray.y]
+            } else {
+                lerp2(t.screen_a, t.screen_b, 0.5)
+            };
+            (ma + (mb - ma) * share, screen)
+        }
     }
 }
 
@@ -1591,8 +1837,8 @@ fn place_two(
         Err(_) => {
             // Degenerate pair: frame the primary alone, from the front.
             let (actor, band, screen) = match t.primary {
-                Primary::A => (t.a, t.band_a_m, t.screen_a),
                 Primary::B => (t.b, t.band_b_m, t.screen_b),
+                _ => (t.a, t.band_a_m, t.screen_a),
             };
             let level = fixed_pitch(gimbal);
             let e = if level { 0.0 } else { t.elevation_rad };
@@ -1615,7 +1861,7 @@ fn place_two(
     if fixed_pitch(gimbal) {
         flags.angle_not_rendered = t.elevation_rad.abs() > 1e-9;
         // Level camera: the altitude puts the primary's aim point at its screen y.
-        let (target, screen) = primary_target(t, actors);
+        let (target, screen) = primary_target(t, actors, lens, &c);
         let rho = (target - c).xy().norm();
         let sx = lens.sx();
         let xp = screen[0] / sx;
@@ -1653,10 +1899,11 @@ pub fn swap_pair(t: &TwoVisual) -> TwoVisual {
         primary: match t.primary {
             Primary::A => Primary::B,
             Primary::B => Primary::A,
+            Primary::Pair => Primary::Pair,
         },
         elevation_rad: t.elevation_rad,
         over_shoulder: t.over_shoulder,
-        stretch: t.stretch,
+        distance_ratio: t.distance_ratio,
     }
 }
 
@@ -1916,50 +2163,6 @@ pub fn body_axis_distances_m(point_m: &Vec3, actors: &[ActorPose]) -> Vec<f64> {
         .iter()
         .map(|a| body_axis_distance_m(point_m, a))
         .collect()
-}
-
-/// How fast a two-shot's θ turns while the actors walk with their velocities, for a visual
-/// whose θ is a root of its sized actor's distance constraint with a level camera (a
-/// two-actor framing without profile: what [`solve`] gives each tick). From θ = θ₀ + 2s·β',
-/// β' = arccos(ρ), ρ = d·sin α/|AB| (θ₀ = π − 2α when A has the size, π when B has it; s = ±1
-/// the root): `dθ/dt = 2s·ρ/(|AB|·√(1 − ρ²)) · d|AB|/dt`. α, φ, the bands and the screens
-/// do not change while the actors keep their heights, so this and the actors' velocities
-/// give the held framing's motion without solving again. `None` when it does not apply:
-/// another visual, a gimbal (θ is then refined against the elevation), a θ that is not that
-/// root (a profile's vantage), or a root near the tangent (ρ > 0.999).
-pub fn two_shot_theta_rate(
-    v: &Visual,
-    actors: &[ActorPose],
-    lens: &Lens,
-    gimbal: &Gimbal,
-) -> Option<f64> {
-    let Visual::Two(t) = v else {
-        return None;
-    };
-    if !fixed_pitch(gimbal) || t.over_shoulder || !valid_indices(v, actors.len()) {
-        return None;
-    }
-    let (pa, pb) = (&actors[t.a], &actors[t.b]);
-    let ab_m = band_centre(pb, t.band_b_m) - band_centre(pa, t.band_a_m);
-    let ab = ab_m.norm();
-    let alpha = t.toric.alpha_rad;
-    let (band, screen, theta0) = match t.primary {
-        Primary::A => (t.band_a_m, t.screen_a, PI - 2.0 * alpha),
-        Primary::B => (t.band_b_m, t.screen_b, PI),
-    };
-    let d = band_distance_m(lens, (band[1] - band[0]) / 2.0, screen, 0.0, true)?;
-    let ratio = d / (2.0 * toric::radius_m(ab, alpha));
-    if !(ratio < 0.999 && ratio > 0.0) {
-        return None;
-    }
-    let theta = t.toric.theta_rad;
-    let s = if theta >= theta0 { 1.0 } else { -1.0 };
-    if (theta0 + s * 2.0 * math::acos(ratio) - theta).abs() > 1e-9 {
-        return None;
-    }
-    let relative_mps = Vec3::from(pb.velocity_mps) - Vec3::from(pa.velocity_mps);
-    let ab_rate_mps = ab_m.dot(&relative_mps) / ab;
-    Some(s * 2.0 * ratio / (ab * (1.0 - ratio * ratio).sqrt()) * ab_rate_mps)
 }
 
 /// Feed-forward velocity of [`place`]'s position for a held visual while the actors move with

@@ -9,6 +9,7 @@
 //! - `director`: **the one evaluator**, `Director::step(t, actors) -> Sample`, which
 //!   `compile` runs over the scripted blocking and `shoot` runs against live actors.
 //! - `feasibility`: the monitor of a reference against the profile's limits and the stage.
+//! - `coverage`: a `coverage A and B` line expanded into the classic set of shots.
 //! - `compile`: the whole script, sampled; `reference`: the samples.
 //! - `code`: the `compile::` diagnostic codes.
 //!
@@ -19,14 +20,17 @@ pub mod blocking;
 pub mod camera;
 pub mod code;
 pub mod compile;
+pub mod coverage;
 pub mod director;
 pub mod feasibility;
 pub mod framed_as;
 pub mod framing;
+pub mod line;
 pub mod paths;
 pub mod reference;
 pub mod route;
 pub mod size;
+pub mod sized;
 pub mod sphere;
 pub mod steering;
 pub mod toric;

@@ -35,6 +35,55 @@ pub fn band(size: Size, height_m: f64) -> (f64, f64) {
     (b * height_m, t * height_m)
 }
 
+/// How far a framed band may be from its size's (as a ratio of heights, either way) and
+/// still be that size.
+pub const SIZE_SLACK: f64 = 1.1;
+
+/// The framed height of a size as a share of stature.
+fn share(size: Size) -> f64 {
+    let (b, t) = band_fractions(size);
+    t - b
+}
+
+/// The size a camera frames standing `ratio` times the distance `asked` wants: the nearest
+/// of the table, in the ratio of framed heights, to `asked`'s band scaled by `ratio`.
+pub fn framed_at_ratio(asked: Size, ratio: f64) -> Size {
+    let shown = share(asked) * ratio;
+    Size::ALL
+        .into_iter()
+        .min_by(|x, y| {
+            let off = |s: Size| math::ln(shown / share(s)).abs();
+            off(*x).total_cmp(&off(*y))
+        })
+        .unwrap_or(asked)
+}
+
+/// Whether a camera `ratio` times the distance `asked` wants still frames that size
+/// (within [`SIZE_SLACK`]).
+pub fn holds_at_ratio(ratio: f64) -> bool {
+    ratio <= SIZE_SLACK && ratio * SIZE_SLACK >= 1.0
+}
+
+/// The size to write for a framing whose camera stands `ratio` times the distance `asked`
+/// wants. Above 1 (the camera cannot come nearer), the tightest size that needs the camera
+/// no nearer than it stands, within [`SIZE_SLACK`]: written, it holds. Below 1 (the camera
+/// cannot stand farther: written screen positions fix its distance), the size that camera
+/// frames within the slack, or the nearest.
+pub fn size_to_write(asked: Size, ratio: f64) -> Size {
+    let shown = share(asked) * ratio;
+    let found = if ratio >= 1.0 {
+        Size::ALL
+            .into_iter()
+            .find(|s| shown / share(*s) <= SIZE_SLACK)
+    } else {
+        Size::ALL
+            .into_iter()
+            .rev()
+            .find(|s| holds_at_ratio(shown / share(*s)))
+    };
+    found.unwrap_or_else(|| framed_at_ratio(asked, ratio))
+}
+
 /// Framed height W of a size for an actor of `height_m`.
 pub fn framed_height_m(size: Size, height_m: f64) -> f64 {
     let (b, t) = band(size, height_m);

@@ -184,6 +184,7 @@ pub enum ShotBody<'a> {
     Framed(FramedShot<'a>),
     Hold(HoldShot<'a>),
     Path(PathShot<'a>),
+    Coverage(CoverageShot<'a>),
 }
 
 impl ShotBody<'_> {
@@ -192,6 +193,7 @@ impl ShotBody<'_> {
             ShotBody::Framed(s) => s.span,
             ShotBody::Hold(s) => s.span,
             ShotBody::Path(s) => s.span,
+            ShotBody::Coverage(s) => s.span,
         }
     }
 
@@ -200,8 +202,21 @@ impl ShotBody<'_> {
             ShotBody::Framed(s) => s.duration.as_ref(),
             ShotBody::Hold(s) => s.duration.as_ref(),
             ShotBody::Path(s) => s.duration.as_ref(),
+            ShotBody::Coverage(s) => s.duration.as_ref(),
         }
     }
+}
+
+/// `[transition] coverage [SIZE [on]] A and B [duration]`
+#[derive(Clone, Debug, PartialEq)]
+pub struct CoverageShot<'a> {
+    pub span: Span,
+    pub transition: Option<Transition<'a>>,
+    /// The establishing two-shot's size, if written.
+    pub size: Option<(Span, Size)>,
+    pub a: Text<'a>,
+    pub b: Text<'a>,
+    pub duration: Option<Duration<'a>>,
 }
 
 /// `[transition] composition [duration]`

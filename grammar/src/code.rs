@@ -46,6 +46,9 @@ dronecine_diag::codes! {
         Internal => "psl::internal": "The parser met a case it does not handle; please report it.",
         ActorsOverlap => "psl::actors_overlap": "Two actors start in the same place.",
         TooShort => "psl::too_short": "A duration is shorter than 1 ms, the shortest control period dronecine flies at.",
+        CoverageTooShort => "psl::coverage_too_short": "A coverage is too short for its five shots and the flights between them.",
+        ThenToCoverage => "psl::then_to_coverage": "A `then` move leads into a coverage, which is a set of cuts.",
+        ThenAfterCoverage => "psl::then_after_coverage": "A `then` line continues a coverage, whose last shot the compiler chooses.",
     }
 }
 

@@ -9,6 +9,7 @@
 use std::fmt::Write as _;
 
 use crate::ast::*;
+use crate::script::{self, Script, ShotContent};
 use crate::vocab::ScreenThird;
 
 /// Format a parsed file. The caller ensures it parsed without syntax errors.
@@ -159,6 +160,19 @@ fn body(out: &mut String, b: &ShotBody<'_>, after_first: bool) {
             out.push_str("hold");
             duration(out, h.duration.as_ref());
         }
+        ShotBody::Coverage(c) => {
+            match &c.transition {
+                Some(t) => transition(out, t),
+                None if after_first => out.push_str("cut to "),
+                None => {}
+            }
+            out.push_str("coverage ");
+            if let Some((_, size)) = c.size {
+                let _ = write!(out, "{} on ", size.as_str());
+            }
+            let _ = write!(out, "{} and {}", c.a.text, c.b.text);
+            duration(out, c.duration.as_ref());
+        }
         ShotBody::Path(p) => {
             if let Some(t) = &p.transition {
                 transition(out, t);
@@ -293,4 +307,105 @@ fn q(x: &Quantity<'_>) -> String {
 
 fn point(p: &Point<'_>) -> String {
     format!("({}, {})", q(&p.x), q(&p.y))
+}
+
+/// The text of script `src` with each coverage line replaced by the shots of `expanded`
+/// (the script with its coverages expanded, each part carrying its coverage's span), as PSL
+/// in canonical form: a comment naming the coverage, then its parts, back to back, each
+/// with a comment saying what it frames. Written back, it resolves to the shots of
+/// `expanded` (the parts' holds are whole milliseconds). The syntax errors of `src`, if any.
+pub fn expanded_text(
+    src: &str,
+    expanded: &Script,
+) -> Result<String, Vec<dronecine_diag::Diagnostic>> {
+    let (file, diagnostics) = crate::parser::parse(src);
+    if diagnostics.iter().any(dronecine_diag::Diagnostic::is_error) {
+        return Err(diagnostics);
+    }
+    let mut text = String::with_capacity(src.len() * 2);
+    for line in &file.lines {
+        let raw = src.get(line.span.start..line.span.end).unwrap_or("");
+        let covered = matches!(
+            &line.statement,
+            Some(Statement::Shot(Shot {
+                body: ShotBody::Coverage(_),
+                ..
+            }))
+        );
+        let parts: Vec<&script::Shot> = expanded
+            .timeline
+            .iter()
+            .filter(|s| {
+                s.coverage.is_some()
+                    && line.span.start <= s.span.start
+                    && s.span.end <= line.span.end
+            })
+            .collect();
+        if !covered || parts.is_empty() {
+            text.push_str(raw);
+            text.push('\n');
+            continue;
+        }
+        let statement = line
+            .statement
+            .as_ref()
+            .map_or("", |s| src.get(s.span().start..s.span().end).unwrap_or(""));
+        let _ = write!(text, "# {statement}: expanded into {} shots", parts.len());
+        if let Some(c) = line.comment {
+            let _ = write!(text, " {}", c.text.trim_start_matches('#').trim_start());
+        }
+        text.push('\n');
+        for part in parts {
+            shot_line(&mut text, part);
+        }
+    }
+    let (file, diagnostics) = crate::parser::parse(&text);
+    if diagnostics.iter().any(dronecine_diag::Diagnostic::is_error) {
+        return Err(diagnostics);
+    }
+    Ok(format_file(&file))
+}
+
+/// A part of an expanded coverage as a PSL line: its pin, its dissolve (a cut goes without
+/// saying), its composition and its hold, with a comment saying what it frames.
+fn shot_line(out: &mut String, shot: &script::Shot) {
+    let ShotContent::Composition(comp) = &shot.content else {
+        return;
+    };
+    if shot.pinned {
+        let _ = write!(out, "at {}s ", seconds(shot.start_s));
+    }
+    if shot.transition == script::Transition::Dissolve {
+        out.push_str("dissolve to ");
+    }
+    let _ = write!(out, "{comp} for {}s", seconds(shot.end_s - shot.start_s));
+    let what = match comp.framings.as_slice() {
+        [f] if f.subjects.len() == 2 => "establishing two-shot".to_string(),
+        [fg, bg] => match (fg.subjects.first(), bg.subjects.first()) {
+            (Some(a), Some(b)) => format!("over {}'s shoulder, on {}", a.actor, b.actor),
+            _ => String::new(),
+        },
+        [f] => f
+            .subjects
+            .first()
+            .map_or(String::new(), |s| format!("single on {}", s.actor)),
+        _ => String::new(),
+    };
+    match &shot.coverage {
+        Some(part) => {
+            let _ = writeln!(out, "  # {}/{}: {what}", part.part, part.parts);
+        }
+        None => out.push('\n'),
+    }
+}
+
+/// Seconds as a script writes them: to the microsecond, without trailing zeros.
+fn seconds(s: f64) -> String {
+    let text = format!("{s:.6}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".to_string()
+    } else {
+        text.to_string()
+    }
 }

@@ -14,6 +14,7 @@ pub mod ast;
 pub mod code;
 pub mod format;
 pub mod parser;
+pub mod reference;
 pub mod resolve;
 pub mod rules;
 pub mod script;

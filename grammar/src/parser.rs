@@ -364,6 +364,7 @@ impl Builder {
             Rule::framed_shot => ShotBody::Framed(self.framed(p)?),
             Rule::hold_shot => ShotBody::Hold(self.hold(p)?),
             Rule::path_shot => ShotBody::Path(self.path(p)?),
+            Rule::coverage_shot => ShotBody::Coverage(self.coverage(p)?),
             _ => return Err(self.bug(&p, "a shot")),
         })
     }
@@ -389,6 +390,37 @@ impl Builder {
             composition,
             duration,
         })
+    }
+
+    fn coverage<'a>(&self, p: Pair<'a, Rule>) -> Result<CoverageShot<'a>> {
+        let span = self.span(&p);
+        let mut transition = None;
+        let mut size = None;
+        let mut names = Vec::with_capacity(2);
+        let mut duration = None;
+        for c in p.into_inner() {
+            match c.as_rule() {
+                Rule::transition => transition = Some(self.transition(c)?),
+                Rule::size => {
+                    let s = Size::parse(c.as_str()).ok_or_else(|| self.bug(&c, "a size"))?;
+                    size = Some((self.span(&c), s));
+                }
+                Rule::name => names.push(self.text(&c)),
+                Rule::duration => duration = Some(self.duration(c)?),
+                _ => {}
+            }
+        }
+        match names.as_slice() {
+            [a, b] => Ok(CoverageShot {
+                span,
+                transition,
+                size,
+                a: *a,
+                b: *b,
+                duration,
+            }),
+            _ => Err(internal(span, "a coverage without its two actors".into())),
+        }
     }
 
     fn hold<'a>(&self, p: Pair<'a, Rule>) -> Result<HoldShot<'a>> {

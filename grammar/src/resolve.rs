@@ -1119,6 +1119,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                         transition: pending.transition,
                         content: pending.content.clone().expect("checked above"),
                         span,
+                        coverage: None,
                     });
                 }
                 clock.now_s = end;
@@ -1423,6 +1424,7 @@ impl<'o, 'a> Resolver<'o, 'a> {
                     is_move: false,
                 }
             }
+            ShotBody::Coverage(c) => self.coverage(c, declared, annotation),
             ShotBody::Path(p) => {
                 if let Some(t) = &p.transition {
                     if matches!(t.kind, TransitionKind::Move { .. }) {
@@ -1452,6 +1454,99 @@ impl<'o, 'a> Resolver<'o, 'a> {
         }
     }
 
+    /// A `coverage` line: its actors declared and distinct, a cut or a dissolve into it, and
+    /// a duration the classic pattern fits in, written with `for`.
+    fn coverage(
+        &mut self,
+        c: &ast::CoverageShot<'_>,
+        declared: &HashMap<&str, Span>,
+        annotation: bool,
+    ) -> Pending {
+        let transition = match c.transition.as_ref().map(|t| (t.span, &t.kind)) {
+            Some((span, TransitionKind::Move { .. })) => {
+                self.err(
+                    Diagnostic::error(
+                        PslCode::ThenToCoverage,
+                        span,
+                        "a `then` move cannot lead into a coverage: a coverage is a set of cuts",
+                    )
+                    .with_label("moves end on a composition")
+                    .with_help(
+                        "start the coverage with `cut to coverage …` (or just `coverage …`)",
+                    ),
+                );
+                Transition::Cut
+            }
+            Some((_, TransitionKind::Dissolve)) => Transition::Dissolve,
+            _ => Transition::Cut,
+        };
+        let a_known = self.actor_ref(&c.a, declared, annotation);
+        let b_known = self.actor_ref(&c.b, declared, annotation);
+        let distinct = c.a.text != c.b.text;
+        if !distinct {
+            self.err(
+                Diagnostic::error(
+                    PslCode::TwoShotSameActor,
+                    c.b.span,
+                    format!("`{}` is covered twice in one coverage", c.b.text),
+                )
+                .with_label("the same actor again")
+                .with_related(c.a.span, "first here")
+                .with_help("a coverage frames two different actors: name the other actor here"),
+            );
+        }
+        let duration_s = c.duration.as_ref().and_then(|d| {
+            if d.keyword == DurationKeyword::Over {
+                self.err(
+                    Diagnostic::warning(
+                        PslCode::DurationKeyword,
+                        d.span,
+                        "a coverage is timed with `for`: it is a set of held shots",
+                    )
+                    .with_label("`over` times a camera move")
+                    .with_help(format!("write `for {}`", quantity_text(&d.value))),
+                );
+            }
+            let v = self.duration(d)?;
+            if v < COVERAGE_MIN_S {
+                self.err(
+                    Diagnostic::error(
+                        PslCode::CoverageTooShort,
+                        d.value.span,
+                        format!(
+                            "a coverage of {}s is too short for its {COVERAGE_PARTS} shots",
+                            fmt_num(v)
+                        ),
+                    )
+                    .with_label(format!("at least {}s", fmt_num(COVERAGE_MIN_S)))
+                    .with_help(format!(
+                        "give it at least `for {}s`: {COVERAGE_PARTS} shots of at least {}s \
+                         each and a repositioning flight of about {}s between two; or write the \
+                         shots themselves",
+                        fmt_num(COVERAGE_MIN_S),
+                        fmt_num(COVERAGE_MIN_HOLD_S),
+                        fmt_num(COVERAGE_MIN_FLIGHT_S)
+                    )),
+                );
+                return None;
+            }
+            Some(v)
+        });
+        let content = (a_known && b_known && distinct).then(|| {
+            ShotContent::Coverage(Coverage {
+                a: c.a.text.to_string(),
+                b: c.b.text.to_string(),
+                size: c.size.map(|(_, s)| s),
+            })
+        });
+        Pending {
+            transition,
+            content,
+            duration_s,
+            is_move: false,
+        }
+    }
+
     /// Check that a `then` line has a composition to continue; return it.
     fn continues<'p>(
         &mut self,
@@ -1475,6 +1570,19 @@ impl<'o, 'a> Resolver<'o, 'a> {
                         "`then` cannot continue a path: a path has no composition to move from",
                     )
                     .with_related(*pspan, "the path")
+                    .with_help("write `cut to` and the composition instead"),
+                );
+                None
+            }
+            Some((cspan, Some(ShotContent::Coverage(_)))) => {
+                self.err(
+                    Diagnostic::error(
+                        PslCode::ThenAfterCoverage,
+                        span,
+                        "`then` cannot continue a coverage: it ends on a single the compiler \
+                         chooses",
+                    )
+                    .with_related(*cspan, "the coverage")
                     .with_help("write `cut to` and the composition instead"),
                 );
                 None

@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::vocab::{CameraAngle, MoveKind, Profile, Size};
+use crate::vocab::{CameraAngle, MoveKind, Profile, ScreenThird, Size};
 use dronecine_diag::Span;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -164,6 +164,26 @@ pub struct Shot {
     pub transition: Transition,
     pub content: ShotContent,
     pub span: Span,
+    /// The coverage this shot is a part of, when the compiler expanded it from a `coverage`
+    /// line (whose span it carries).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<CoveragePart>,
+}
+
+impl Shot {
+    /// How a report or a preview names the shot: its line of `source` (the script's text),
+    /// or, for a part of an expanded coverage, which part it is and what it frames (`part
+    /// 2/5 of the coverage of Rick and Ilsa: MS on Rick 34backright MS on Ilsa 34left`).
+    pub fn label(&self, source: &str) -> String {
+        let line = source
+            .get(self.span.start..self.span.end)
+            .unwrap_or("")
+            .trim();
+        match (&self.coverage, &self.content) {
+            (Some(part), ShotContent::Composition(c)) => format!("{part}: {c}"),
+            _ => line.to_string(),
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -187,6 +207,96 @@ pub enum Transition {
 pub enum ShotContent {
     Composition(Composition),
     Path(Path),
+    /// `coverage A and B for Ns`: the compiler expands it into [`COVERAGE_PARTS`] shots of
+    /// compositions before it flies the script.
+    Coverage(Coverage),
+}
+
+impl ShotContent {
+    /// The composition the shot frames: its own, or an unexpanded coverage's
+    /// ([`Coverage::unexpanded`]); `None` for a path.
+    pub fn framed(&self) -> Option<std::borrow::Cow<'_, Composition>> {
+        match self {
+            ShotContent::Composition(c) => Some(std::borrow::Cow::Borrowed(c)),
+            ShotContent::Coverage(c) => Some(std::borrow::Cow::Owned(c.unexpanded())),
+            ShotContent::Path(_) => None,
+        }
+    }
+}
+
+/// The shots a coverage expands into: an establishing two-shot, an over-the-shoulder over
+/// each actor's shoulder, a single on each.
+pub const COVERAGE_PARTS: usize = 5;
+
+/// The shortest hold of a shot of a coverage: a cut shorter than this does not read.
+pub const COVERAGE_MIN_HOLD_S: f64 = 1.5;
+
+/// The shortest repositioning flight the compiler expects between two shots of a coverage:
+/// the AR.Drone's flight between its two singles, 0.3 m apart and turned 57°, takes 2.0 s
+/// (`shots/coverage.psl`); most take twice as long.
+pub const COVERAGE_MIN_FLIGHT_S: f64 = 2.0;
+
+/// The shortest coverage the language accepts (`psl::coverage_too_short`): every part held
+/// [`COVERAGE_MIN_HOLD_S`], with a flight of [`COVERAGE_MIN_FLIGHT_S`] between two parts.
+pub const COVERAGE_MIN_S: f64 = COVERAGE_PARTS as f64 * COVERAGE_MIN_HOLD_S
+    + (COVERAGE_PARTS - 1) as f64 * COVERAGE_MIN_FLIGHT_S;
+
+/// The coverage of a pair of actors (`coverage [SIZE on] A and B`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Coverage {
+    pub a: String,
+    pub b: String,
+    /// The establishing two-shot's size; `None`: the compiler chooses the tightest that holds.
+    pub size: Option<Size>,
+}
+
+impl Coverage {
+    /// The size of the establishing two-shot of a coverage framed as written, unexpanded.
+    pub const UNEXPANDED_SIZE: Size = Size::FS;
+
+    /// What a coverage frames when a compiler does not expand it: its establishing two-shot
+    /// for the whole duration, at the size written (else [`Coverage::UNEXPANDED_SIZE`]).
+    pub fn unexpanded(&self) -> Composition {
+        self.two_shot(self.size.unwrap_or(Coverage::UNEXPANDED_SIZE))
+    }
+
+    /// The establishing two-shot, `SIZE on A and B`.
+    pub fn two_shot(&self, size: Size) -> Composition {
+        let subject = |actor: &str| Subject {
+            actor: actor.to_string(),
+            profile: None,
+            screen_x: None,
+            screen_y: None,
+        };
+        Composition {
+            camera_angle: CameraAngle::EyeLevel,
+            framings: vec![Framing {
+                size,
+                subjects: vec![subject(&self.a), subject(&self.b)],
+            }],
+        }
+    }
+}
+
+/// Which shot of which coverage an expanded shot is.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CoveragePart {
+    /// From 1.
+    pub part: usize,
+    pub parts: usize,
+    pub a: String,
+    pub b: String,
+}
+
+impl std::fmt::Display for CoveragePart {
+    /// `part 2/5 of the coverage of A and B`: the words every caption and label use.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "part {}/{} of the coverage of {} and {}",
+            self.part, self.parts, self.a, self.b
+        )
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -194,6 +304,43 @@ pub struct Composition {
     pub camera_angle: CameraAngle,
     /// One or more framings; several make an over-the-shoulder composition.
     pub framings: Vec<Framing>,
+}
+
+impl std::fmt::Display for Composition {
+    /// The composition as PSL text (`MS on Rick 34backright MS on Ilsa 34left screen right`),
+    /// which the parser resolves to it again: a screen x at a third is written as the third,
+    /// any other point as `screen (x, y)`, each number in the shortest form that reads back
+    /// to the same value. (PSL writes a screen y with its x only: a subject with a y and no x,
+    /// which no line resolves to, is written with x = 0.)
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.camera_angle != CameraAngle::EyeLevel {
+            write!(f, "{} ", self.camera_angle.as_str())?;
+        }
+        for (i, framing) in self.framings.iter().enumerate() {
+            if i > 0 {
+                f.write_str(" ")?;
+            }
+            write!(f, "{} on ", framing.size.as_str())?;
+            for (j, s) in framing.subjects.iter().enumerate() {
+                if j > 0 {
+                    f.write_str(" and ")?;
+                }
+                f.write_str(&s.actor)?;
+                if let Some(p) = s.profile {
+                    write!(f, " {}", p.as_str())?;
+                }
+                let third = [ScreenThird::Left, ScreenThird::Center, ScreenThird::Right]
+                    .into_iter()
+                    .find(|t| Some(t.screen_x()) == s.screen_x);
+                match (s.screen_x, s.screen_y, third) {
+                    (None, None, _) => {}
+                    (Some(_), None, Some(t)) => write!(f, " screen {}", t.as_str())?,
+                    (x, y, _) => write!(f, " screen ({}, {})", x.unwrap_or(0.0), y.unwrap_or(0.0))?,
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Composition {

@@ -48,6 +48,7 @@ enum Expect {
     Arrow,
     Timecode,
     Event,
+    Coverage,
     EndOfLine,
 }
 
@@ -124,6 +125,7 @@ impl Expect {
             R::event | R::kw_as | R::event_text => Expect::Event,
             R::comment | R::EOI => Expect::EndOfLine,
             R::path_shot | R::kw_path => Expect::PathKind,
+            R::coverage_shot | R::kw_coverage => Expect::Coverage,
             _ => return None,
         })
     }
@@ -161,6 +163,7 @@ impl Expect {
             Expect::Arrow => "`-->`",
             Expect::Timecode => "a timecode such as `00:01:03`",
             Expect::Event => "`as` and what happens",
+            Expect::Coverage => "a coverage such as `coverage A and B for 24s`",
             Expect::EndOfLine => "the end of the line",
         }
     }
@@ -170,7 +173,7 @@ impl Expect {
     fn words(self) -> [&'static [&'static str]; 2] {
         const STATEMENT_STARTS: &[&str] = &[
             "stage", "lens", "drone", "actor", "at", "cut", "dissolve", "then", "path", "high",
-            "low", "eye",
+            "low", "eye", "coverage",
         ];
         const ANGLE_STARTS: &[&str] = &["high", "low", "eye"];
         let one: &'static [&'static str] = match self {
@@ -204,6 +207,7 @@ impl Expect {
             Expect::LookingAt => &["looking"],
             Expect::At => &["at"],
             Expect::Event => &["as"],
+            Expect::Coverage => &["coverage"],
             _ => &[],
         };
         [one, &[]]
@@ -222,6 +226,7 @@ fn form_of(first_word: &str) -> Option<&'static str> {
         "cut" => "cut to MS on A front for 4s",
         "dissolve" => "dissolve to MS on A front for 4s",
         "at" => "at 6s A walks to (1, 1.5) over 4s",
+        "coverage" => "coverage A and B for 24s (or `coverage FS on A and B for 24s`)",
         _ => return None,
     })
 }
@@ -402,6 +407,7 @@ fn short_expected(expected: &[Expect]) -> String {
             Expect::Arrow => "-->",
             Expect::Timecode => "timecode",
             Expect::Event => "as",
+            Expect::Coverage => "coverage",
             Expect::EndOfLine => "end of line",
         })
         .collect();

@@ -37,6 +37,9 @@ pub const PROFILE_NAMES: &[&str] = &[
 ];
 /// The camera moves in `MoveKind::ALL` order.
 pub const MOVE_NAMES: &[&str] = &["hold", "pan", "dolly", "crane", "track", "follow"];
+/// The words that start a shot after the first: a new shot (`cut`, `dissolve`) or its
+/// continuation (`then`).
+pub const TRANSITION_NAMES: &[&str] = &["cut", "dissolve", "then"];
 
 impl Size {
     pub const ALL: [Size; 9] = [
@@ -125,6 +128,8 @@ pub enum CameraAngle {
 }
 
 impl CameraAngle {
+    pub const ALL: [CameraAngle; 3] = [CameraAngle::EyeLevel, CameraAngle::High, CameraAngle::Low];
+
     pub fn as_str(self) -> &'static str {
         match self {
             CameraAngle::EyeLevel => "eye level",
@@ -267,6 +272,7 @@ pub const KEYWORDS: &[&str] = &[
     "counterclockwise",
     "looking",
     "x",
+    "coverage",
 ];
 
 pub fn is_keyword(word: &str) -> bool {
@@ -366,6 +372,12 @@ mod tests {
         }
         for p in Profile::ALL {
             assert!(is_keyword(p.as_str()));
+        }
+        for w in MOVE_NAMES.iter().chain(TRANSITION_NAMES) {
+            assert!(is_keyword(w), "{w}");
+        }
+        for a in CameraAngle::ALL {
+            assert!(a.as_str().split(' ').all(is_keyword), "{a:?}");
         }
     }
 }

@@ -1,11 +1,14 @@
-//! The hardware a flight flies: the drone's address (the AR.Drone's protocol or MAVLink's),
+//! The hardware a flight flies: the drone's address (the AR.Drone's protocol, MAVLink's or
+//! the Crazyflie's CRTP),
 //! the motion capture's (NatNet, or the truth of ArduPilot's simulator), and the backends
 //! connected from them, ready for the flight loop.
 //!
 //! An ArduPilot vehicle is prepared before the flight: its parameters are checked (a wrong
 //! one refuses the flight, named with the value it needs), the EKF's origin is set, and the
 //! motion capture is forwarded to it until it reports navigating on it; during the flight
-//! every pose of the drone the flight reads is forwarded as well ([`Forwarding`]).
+//! every pose of the drone the flight reads is forwarded as well ([`Forwarding`]). A Crazyflie
+//! is given the motion capture the same way, as its estimator's external pose, until its
+//! estimate agrees with it.
 
 use std::time::Duration;
 
@@ -14,6 +17,7 @@ use dronecine_ardrone::url::ArDroneUrl;
 use dronecine_backend::clock::WallClock;
 use dronecine_backend::{BackendError, Backends, BodyPose, Drone, Mocap, MocapFrame};
 use dronecine_compiler::blocking::Blocking;
+use dronecine_crazyflie::{CrazyflieDrone, CrazyflieOptions, CrazyflieUrl};
 use dronecine_grammar::script::{Scene, Script};
 use dronecine_mavlink::{MavlinkDrone, MavlinkOptions, MavlinkUrl, PoseForwarder};
 use dronecine_natnet::client::{NatNetClient, NatNetOptions};
@@ -24,11 +28,12 @@ use dronecine_sim::SimConfig;
 
 use crate::SessionError;
 
-/// A drone's address: `ardrone://…` or `mavlink://…`.
+/// A drone's address: `ardrone://…`, `mavlink://…` or `crazyflie+…://…`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum DroneUrl {
     ArDrone(ArDroneUrl),
     Mavlink(MavlinkUrl),
+    Crazyflie(CrazyflieUrl),
 }
 
 impl DroneUrl {
@@ -38,6 +43,10 @@ impl DroneUrl {
             MavlinkUrl::parse(text)
                 .map(DroneUrl::Mavlink)
                 .map_err(|e| e.to_string())
+        } else if text.starts_with("crazyflie") {
+            CrazyflieUrl::parse(text)
+                .map(DroneUrl::Crazyflie)
+                .map_err(|e| e.to_string())
         } else if text.starts_with("ardrone:") {
             ArDroneUrl::parse(text)
                 .map(DroneUrl::ArDrone)
@@ -46,7 +55,9 @@ impl DroneUrl {
             Err(format!(
                 "`{text}` is not a drone address: write `ardrone://HOST` (an AR.Drone 2.0) or \
                  `mavlink://udp:HOST:PORT`, `mavlink://tcp:HOST:PORT`, \
-                 `mavlink:///dev/PORT?baud=N` (an ArduPilot Copter)"
+                 `mavlink:///dev/PORT?baud=N` (an ArduPilot Copter), \
+                 `crazyflie+radio://N/CHANNEL/RATE/ADDRESS` or `crazyflie+udp://HOST:PORT` (a \
+                 Crazyflie)"
             ))
         }
     }
@@ -57,6 +68,7 @@ impl std::fmt::Display for DroneUrl {
         match self {
             DroneUrl::ArDrone(u) => u.fmt(f),
             DroneUrl::Mavlink(u) => u.fmt(f),
+            DroneUrl::Crazyflie(u) => u.fmt(f),
         }
     }
 }
@@ -108,6 +120,9 @@ pub struct HardwareTarget {
 /// How long an ArduPilot vehicle may take to navigate on the forwarded motion capture.
 const EXTERNAL_NAV_TIMEOUT: Duration = Duration::from_secs(30);
 
+/// How long an ArduPilot vehicle that navigates may take to confirm its EKF origin.
+const ORIGIN_TIMEOUT: Duration = Duration::from_secs(10);
+
 /// How long an ArduPilot vehicle may take to pass its pre-arm checks once it navigates (its
 /// EKF settles on the motion capture).
 const PREARM_TIMEOUT: Duration = Duration::from_secs(60);
@@ -115,6 +130,12 @@ const PREARM_TIMEOUT: Duration = Duration::from_secs(60);
 /// The stream rate asked of an ArduPilot vehicle whose truth is the motion capture (SITL):
 /// the flight's positions come at this rate.
 const TRUTH_HZ: f64 = 100.0;
+
+/// How long a Crazyflie's estimate may take to agree with the motion capture it is given.
+const ESTIMATE_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// How near the motion capture a Crazyflie's estimate must be before it flies.
+const ESTIMATE_WITHIN_M: f64 = 0.05;
 
 /// The backends of a flight on hardware, connected, and the wall clock they share.
 pub struct Hardware {
@@ -161,9 +182,19 @@ pub fn connect_hardware(
         }
         DroneUrl::Mavlink(url) => {
             let truth = target.mocap == MocapUrl::SitlTruth;
+            let defaults = MavlinkOptions::default();
             let options = MavlinkOptions {
                 stream_hz: if truth { TRUTH_HZ } else { 20.0 },
-                ..MavlinkOptions::default()
+                origin: url
+                    .origin
+                    .map_or(defaults.origin, |[lat_deg, lon_deg, alt_m]| {
+                        dronecine_mavlink::GeoOrigin {
+                            lat_deg,
+                            lon_deg,
+                            alt_m,
+                        }
+                    }),
+                ..defaults
             };
             let mut drone = MavlinkDrone::connect(url, options).map_err(setup)?;
             let mocap: Box<dyn Mocap> = if truth {
@@ -182,7 +213,54 @@ pub fn connect_hardware(
                 clock,
             })
         }
+        DroneUrl::Crazyflie(url) => {
+            let mocap = natnet(target, scene, &clock)?;
+            let mut drone = CrazyflieDrone::connect(url, profile, CrazyflieOptions::default())
+                .map_err(setup)?;
+            let mocap = prepare_crazyflie(&mut drone, mocap, target.forward_mocap)?;
+            Ok(Hardware {
+                drone: Box::new(drone),
+                mocap,
+                clock,
+            })
+        }
     }
+}
+
+/// With `forward`, gives a Crazyflie's estimator the motion capture (the Kalman estimator
+/// restarted on it) until its estimate agrees within [`ESTIMATE_WITHIN_M`]; the motion
+/// capture then goes on forwarding in the flight.
+fn prepare_crazyflie(
+    drone: &mut CrazyflieDrone,
+    mut mocap: Box<dyn Mocap>,
+    forward: bool,
+) -> Result<Box<dyn Mocap>, SessionError> {
+    if !forward {
+        return Ok(mocap);
+    }
+    let refused = |e: BackendError| SessionError::Setup(format!("drone: {e}"));
+    let mut forwarder = drone.forwarder();
+    let mut frame = MocapFrame::default();
+    let mut forward = |_: &mut CrazyflieDrone| -> Result<Option<[f64; 3]>, BackendError> {
+        if mocap.poll(&mut frame)? {
+            if let Some(pose) = frame.drone {
+                forwarder.forward(frame.t_s, &pose)?;
+            }
+        }
+        Ok(frame.drone.map(|p| p.position_m))
+    };
+    // Some poses first, so that the restarted estimator starts from them.
+    drone
+        .wait_for_estimate(f64::INFINITY, ESTIMATE_TIMEOUT, &mut forward)
+        .map_err(refused)?;
+    drone.reset_estimator().map_err(refused)?;
+    drone
+        .wait_for_estimate(ESTIMATE_WITHIN_M, ESTIMATE_TIMEOUT, &mut forward)
+        .map_err(refused)?;
+    Ok(Box::new(Forwarding {
+        inner: mocap,
+        forwarder: Box::new(forwarder),
+    }))
 }
 
 /// The NatNet client of `target` (an error for `sitl`, which only an ArduPilot simulator
@@ -246,18 +324,40 @@ fn prepare_ardupilot(
         .wait_for_external_nav(EXTERNAL_NAV_TIMEOUT, &mut forward)
         .map_err(refused)?;
     drone
+        .wait_for_origin(ORIGIN_TIMEOUT, &mut forward)
+        .map_err(refused)?;
+    drone
         .wait_for_prearm(PREARM_TIMEOUT, &mut forward)
         .map_err(refused)?;
     Ok(Box::new(Forwarding {
         inner: mocap,
-        forwarder,
+        forwarder: Box::new(forwarder),
     }))
 }
 
-/// A motion capture that sends each pose of the drone it gives to the autopilot as well.
+/// Where [`Forwarding`] sends the drone's poses: an autopilot's EKF, a Crazyflie's estimator.
+pub trait PoseSink {
+    /// Sends the pose captured at `t_s` unless the last went out too recently: `true` when
+    /// sent.
+    fn forward(&mut self, t_s: f64, pose: &BodyPose) -> Result<bool, BackendError>;
+}
+
+impl PoseSink for PoseForwarder {
+    fn forward(&mut self, t_s: f64, pose: &BodyPose) -> Result<bool, BackendError> {
+        PoseForwarder::forward(self, t_s, pose)
+    }
+}
+
+impl PoseSink for dronecine_crazyflie::PoseForwarder {
+    fn forward(&mut self, t_s: f64, pose: &BodyPose) -> Result<bool, BackendError> {
+        dronecine_crazyflie::PoseForwarder::forward(self, t_s, pose)
+    }
+}
+
+/// A motion capture that sends each pose of the drone it gives to the drone as well.
 pub struct Forwarding {
     inner: Box<dyn Mocap>,
-    forwarder: PoseForwarder,
+    forwarder: Box<dyn PoseSink>,
 }
 
 impl Mocap for Forwarding {

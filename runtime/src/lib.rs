@@ -384,7 +384,7 @@ mod tests {
         assert!(e.to_string().contains("needs a `mavlink://` drone"), "{e}");
     }
 
-    /// Both schemes parse; anything else names both.
+    /// Each scheme parses; anything else names them all.
     #[test]
     fn drone_addresses_name_their_protocol() {
         assert!(matches!(
@@ -395,8 +395,17 @@ mod tests {
             DroneUrl::parse("mavlink://tcp:127.0.0.1:5760"),
             Ok(DroneUrl::Mavlink(_))
         ));
+        assert!(matches!(
+            DroneUrl::parse("crazyflie+udp://127.0.0.1:19850"),
+            Ok(DroneUrl::Crazyflie(_))
+        ));
         let e = DroneUrl::parse("crazyflie://x").unwrap_err();
-        assert!(e.contains("ardrone://") && e.contains("mavlink://"), "{e}");
+        assert!(e.contains("crazyflie+radio://"), "{e}");
+        let e = DroneUrl::parse("tello://x").unwrap_err();
+        assert!(
+            e.contains("ardrone://") && e.contains("mavlink://") && e.contains("crazyflie+udp://"),
+            "{e}"
+        );
     }
 
     #[test]

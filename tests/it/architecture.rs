@@ -297,7 +297,7 @@ fn no_crate_calls_the_platforms_transcendental_functions() {
 }
 
 /// Every code of every crate, with the namespace its crate owns.
-fn every_code() -> Vec<(dronecine_diag::Code, &'static str)> {
+pub(crate) fn every_code() -> Vec<(dronecine_diag::Code, &'static str)> {
     let mut codes = Vec::new();
     codes.extend(
         dronecine_grammar::PslCode::ALL
@@ -313,6 +313,11 @@ fn every_code() -> Vec<(dronecine_diag::Code, &'static str)> {
         dronecine_compiler::CompileCode::ALL
             .iter()
             .map(|c| (c.code(), "compile")),
+    );
+    codes.extend(
+        dronecine_film::FilmCode::ALL
+            .iter()
+            .map(|c| (c.code(), "film")),
     );
     codes.extend(
         dronecine_natnet::rig::RigCode::ALL

@@ -367,6 +367,46 @@ fn calibrates_yaw_through_the_emulator_over_the_wire() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `calibrate` through the Crazyflie backend: `dronecine emulate crazyflie` flying the
+/// crazyflie21 model, its yaw gain measured over CRTP and NatNet.
+#[test]
+fn calibrates_yaw_through_the_crazyflie_emulator_over_the_wire() {
+    let dir = temp_dir("calibrate-crazyflie");
+    let script = dir.join("stage.psl");
+    std::fs::write(&script, "stage 8m x 6m x 3m\ndrone crazyflie21\n").unwrap();
+    let emulator = Emulator::start_as(
+        "crazyflie",
+        &["--ideal", "--script", script.to_str().unwrap()],
+    );
+    let out_file = dir.join("out.toml");
+    let o = dronecine(&[
+        "calibrate",
+        "--profile",
+        "crazyflie21",
+        "--drone",
+        &emulator.drone_url,
+        "--mocap",
+        &emulator.mocap_url,
+        "--axis",
+        "yaw",
+        "--repeats",
+        "1",
+        "-o",
+        out_file.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}{}", text(&o.stdout), text(&o.stderr));
+    let got = load(&out_file);
+    let plant = Profile::builtin("crazyflie21").unwrap();
+    close("K_psi", got.model.gain_yaw, plant.model.gain_yaw, 0.10);
+    assert!(!got.camera.mounted, "the prior's camera, none");
+    assert!(
+        got.description
+            .contains(&format!("calibrated on {}", emulator.drone_url)),
+        "{}",
+        got.description
+    );
+}
+
 #[test]
 fn hardware_arguments_are_checked_before_any_flight() {
     let dir = temp_dir("calibrate-hw-args");

@@ -67,6 +67,10 @@ fn check_json_gives_code_message_file_line_column_help() {
         (Some(3), Some(16))
     );
     assert_eq!(missing_unit["help"], "write `1.80m`");
+    assert_eq!(
+        missing_unit["explain"],
+        "dronecine explain psl::missing_unit"
+    );
     assert_eq!(missing_unit["severity"], "error");
     let files = v["files"].as_array().unwrap();
     assert_eq!(files[0]["ok"], false);

@@ -127,8 +127,8 @@ pub fn free_port() -> u16 {
         .port()
 }
 
-/// `dronecine emulate ardrone` on free loopback ports, NatNet unicast to this machine;
-/// killed when dropped.
+/// `dronecine emulate ardrone` (or `crazyflie`) on free loopback ports, NatNet unicast to
+/// this machine; killed when dropped.
 pub struct Emulator {
     child: std::process::Child,
     /// `--drone` for it.
@@ -138,20 +138,39 @@ pub struct Emulator {
 }
 
 impl Emulator {
-    /// Starts it with `args` added (`--ideal`, `--seed N`, `--script FILE`) and waits until
+    /// `dronecine emulate ardrone` with `args` added (`--ideal`, `--seed N`, `--script FILE`).
+    pub fn start(args: &[&str]) -> Emulator {
+        Emulator::start_as("ardrone", args)
+    }
+
+    /// `dronecine emulate KIND` (`ardrone`, `crazyflie`) with `args` added, waited for until
     /// it listens. The ports are free when picked, not held: a test running beside this one
     /// can take one before the emulator binds it, and the emulator then exits; such a start
     /// is tried again on new ports, three times at most (then what it said is the panic).
-    pub fn start(args: &[&str]) -> Emulator {
+    pub fn start_as(kind: &str, args: &[&str]) -> Emulator {
         let mut said = String::new();
         for _ in 0..3 {
-            let (at, nav, cmd, data) = (free_port(), free_port(), free_port(), free_port());
+            let (first, second, cmd, data) = (free_port(), free_port(), free_port(), free_port());
+            let (ports, drone_url): (Vec<String>, String) = match kind {
+                "crazyflie" => (
+                    vec!["--port".into(), first.to_string()],
+                    format!("crazyflie+udp://127.0.0.1:{first}"),
+                ),
+                _ => (
+                    vec![
+                        "--at-port".into(),
+                        first.to_string(),
+                        "--navdata-port".into(),
+                        second.to_string(),
+                    ],
+                    format!("ardrone://127.0.0.1:{first}:{second}"),
+                ),
+            };
             // What it says goes to a file (a pipe nobody reads would block its writes).
             let mut told = tempfile::tempfile().expect("a temporary file");
             let mut child = Command::new(env!("CARGO_BIN_EXE_dronecine"))
-                .args(["emulate", "ardrone"])
-                .args(["--at-port", &at.to_string()])
-                .args(["--navdata-port", &nav.to_string()])
+                .args(["emulate", kind])
+                .args(&ports)
                 .args(["--natnet", &format!("127.0.0.1:{data}")])
                 .args(["--natnet-command-port", &cmd.to_string()])
                 .args(args)
@@ -162,7 +181,7 @@ impl Emulator {
             // Until it listens (a connect that fails too early would fail the test for
             // nothing), or exits.
             let started = std::time::Instant::now();
-            while std::net::UdpSocket::bind(("127.0.0.1", at)).is_ok()
+            while std::net::UdpSocket::bind(("127.0.0.1", first)).is_ok()
                 && started.elapsed() < std::time::Duration::from_secs(5)
             {
                 if child.try_wait().ok().flatten().is_some() {
@@ -179,7 +198,7 @@ impl Emulator {
             }
             return Emulator {
                 child,
-                drone_url: format!("ardrone://127.0.0.1:{at}:{nav}"),
+                drone_url,
                 mocap_url: format!("natnet://127.0.0.1:{cmd}?unicast&data_port={data}"),
             };
         }

@@ -1,7 +1,8 @@
 //! End to end through the real wire protocols: `dronecine emulate ardrone` (the simulator
-//! behind AR.Drone AT/navdata and NatNet on loopback) flown by `dronecine shoot --drone
-//! --mocap`, in real time. Its tracking error must stay within twice the in-process
-//! simulator's for the same seed, and its log must replay exactly.
+//! behind AR.Drone AT/navdata and NatNet on loopback) and `dronecine emulate crazyflie` (CRTP
+//! over UDP and NatNet) flown by `dronecine shoot --drone --mocap`, in real time. The tracking
+//! error must stay within twice the in-process simulator's for the same seed and profile,
+//! and the log must replay exactly.
 
 use std::process::Command;
 
@@ -21,12 +22,27 @@ fn report(out: &std::process::Output) -> serde_json::Value {
 
 #[test]
 fn shoot_through_the_emulator_tracks_like_the_simulator() {
-    let dir = crate::common::temp_dir("e2e");
+    through_the_emulator("ardrone", "ardrone2");
+}
+
+#[test]
+fn shoot_through_the_crazyflie_emulator_tracks_like_the_simulator() {
+    through_the_emulator("crazyflie", "crazyflie21");
+}
+
+/// `SCRIPT` flown by `drone` through `dronecine emulate KIND` and on the in-process
+/// simulator, seed 4.
+fn through_the_emulator(kind: &str, drone: &str) {
+    let dir = crate::common::temp_dir(&format!("e2e-{kind}"));
     let script = dir.join("walk.psl");
-    std::fs::write(&script, SCRIPT).unwrap();
+    std::fs::write(
+        &script,
+        SCRIPT.replace("drone ardrone2", &format!("drone {drone}")),
+    )
+    .unwrap();
     let script = script.to_str().unwrap();
     let bin = env!("CARGO_BIN_EXE_dronecine");
-    let emulator = crate::common::Emulator::start(&["--seed", "4", "--script", script]);
+    let emulator = crate::common::Emulator::start_as(kind, &["--seed", "4", "--script", script]);
 
     let log = dir.join("e2e.mcap");
     let wire = report(
@@ -50,7 +66,7 @@ fn shoot_through_the_emulator_tracks_like_the_simulator() {
         wire["rms_position_error_m"].as_f64().unwrap(),
         sim["rms_position_error_m"].as_f64().unwrap(),
     );
-    eprintln!("RMS position error: through the protocols {w:.4} m, in process {s:.4} m");
+    eprintln!("{kind}: RMS position error through the protocols {w:.4} m, in process {s:.4} m");
     assert!(w <= 2.0 * s, "{w} m against {s} m in process");
     assert!(wire["rms_framing_error"].as_f64().unwrap() < 0.1, "{wire}");
 

@@ -42,6 +42,9 @@ then   as  A   looks up   dolly to MS A 34backright over 6s\r
 MS on A and B screen centre for 5s\r
 MS B 34backright MLS A 34left screen right for 3s   # over the shoulder\r
 path square altitude 1.5m center (0, 0) side 2m looking at A for 20s\r
+coverage   A and   B for 20s\r
+at 80s  dissolve to coverage MLS  A and B for 20s\r
+coverage on B and A for 20s\r
 \r
 ";
 
@@ -58,6 +61,9 @@ then as A looks up dolly to MS on A 34backright over 6s
 cut to MS on A and B screen center for 5s
 cut to MS on B 34backright MLS on A 34left screen right for 3s  # over the shoulder
 path square side 2m center (0, 0) altitude 1.5m for 20s looking at A
+cut to coverage A and B for 20s
+at 80s dissolve to coverage MLS on A and B for 20s
+cut to coverage B and A for 20s
 ";
     assert_eq!(fmt(MESSY), expected);
 }

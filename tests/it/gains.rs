@@ -240,7 +240,7 @@ fn unknown_profiles_fail_with_exit_code_1() {
     for part in [
         "--profile `ardrone3` is not a built-in drone profile, nor a file",
         "did you mean `ardrone2`?",
-        "`ardrone2`, `ardrone2-outdoor` or `arducopter-quad`",
+        "`ardrone2`, `ardrone2-outdoor`, `arducopter-quad` or `crazyflie21`",
         "`--profile mine.toml`",
     ] {
         assert!(stderr(&o).contains(part), "{part}: {}", stderr(&o));
@@ -250,7 +250,7 @@ fn unknown_profiles_fail_with_exit_code_1() {
     assert!(!stderr(&o).contains("did you mean"), "{}", stderr(&o));
     assert!(
         stderr(&o)
-            .contains("built-in profiles are `ardrone2`, `ardrone2-outdoor` or `arducopter-quad`"),
+            .contains("built-in profiles are `ardrone2`, `ardrone2-outdoor`, `arducopter-quad` or `crazyflie21`"),
         "{}",
         stderr(&o)
     );

@@ -1,6 +1,6 @@
 //! A drone with a camera gimbal (`tests/data/ardrone2-gimbal.toml`: the AR.Drone's model with
 //! a pitch gimbal, -90° to +30° at 90°/s): the compiler frames with the camera's pitch free
-//! (a high angle; two actors of different heights, both on their screen points), the
+//! (a high angle, of one actor or of two of different heights), the
 //! reference's pitch turns no faster than the gimbal, the simulator's gimbal follows the
 //! flight's commands, and the flight measures the framing with the pitch the gimbal reports
 //! and logs it on `/gimbal`.
@@ -189,18 +189,30 @@ fn a_high_angle_is_framed_with_the_gimbal() {
     );
 }
 
-/// Two actors of different heights: with a level camera the second actor lands off its
-/// screen line; with the gimbal the camera turns about the actors' line until the plane
-/// through it and the two actors holds its right axis, and both land where the script puts
-/// them.
+/// Two actors of different heights (`shots/two-heights.psl`): the two-shot frames them as
+/// they stand, both on their screen points with a level camera as with the gimbal; the high
+/// angle that follows is rendered by the gimbal (the camera pitched down in its hold), where
+/// the level camera can only say it is not (`compile::angle_not_rendered`).
 #[test]
 fn two_heights_are_both_framed_with_the_gimbal() {
     let text = two_heights();
-    let level = compiled_framing_errors(&script_of(&text), &Profile::builtin("ardrone2").unwrap());
+    let level_profile = Profile::builtin("ardrone2").unwrap();
+    let level = compiled_framing_errors(&script_of(&text), &level_profile);
     let level_worst = worst(&level);
+    assert!(level_worst < 0.02, "the level camera: {level_worst}");
+    let c = compile::<()>(
+        &script_of(&text),
+        &level_profile,
+        &Options::default(),
+        |_, _| Ok(()),
+    )
+    .unwrap();
     assert!(
-        level_worst > 0.05,
-        "the level camera's floor: {level_worst}"
+        c.diagnostics
+            .iter()
+            .any(|d| d.code == dronecine_compiler::CompileCode::AngleNotRendered),
+        "{:?}",
+        c.diagnostics
     );
 
     let profile = gimbal_profile();
@@ -220,8 +232,14 @@ fn two_heights_are_both_framed_with_the_gimbal() {
     }
     let (samples, _) = run(&script, &profile);
     assert_pitch_within_the_gimbal(&samples, &profile.camera.gimbal);
-    // The gimbal is used: the camera is not level.
-    assert!(samples.iter().any(|s| s.camera_pitch_rad.abs() > 0.02));
+    // The high angle's hold (the last shot): the camera pitched down.
+    let last = samples.last().unwrap().shot;
+    let held: Vec<_> = samples.iter().filter(|s| s.shot == last).collect();
+    assert!(
+        held.iter().all(|s| s.camera_pitch_rad < -0.1),
+        "{:?}",
+        held.last()
+    );
 }
 
 /// `dronecine shoot` of a script on the simulator, seeded: the report and the log's path.
@@ -278,8 +296,8 @@ fn replays_exactly(log: &Path) {
 }
 
 /// `shots/two-heights.psl` flown with the gimbal profile frames both actors within 0.02 of
-/// their screen points (RMS, seeds 1 and 7); flown as shipped (a level camera) it keeps the
-/// level camera's figure. The gimbal's log holds the pitch asked and the pitch reported at
+/// their screen points (RMS, seeds 1 and 7), and flown as shipped (a level camera) too, the
+/// high angle then flown level. The gimbal's log holds the pitch asked and the pitch reported at
 /// every tick, the reported one following the asked one at most at the gimbal's rate; and the
 /// flight replays exactly.
 #[test]
@@ -312,7 +330,7 @@ fn two_heights_flies_within_two_hundredths_with_the_gimbal() {
     let (report, log) = shoot(dir.path(), "level", &text, 1);
     let e = framing_error(&report);
     eprintln!("two-heights with a level camera, seed 1: RMS framing error {e:.4}");
-    assert!(e > 0.06 && e < 0.075, "{e}");
+    assert!(e <= 0.02, "{e}");
     assert_eq!(gimbal_topic(&log).0.len(), 0, "no gimbal, no /gimbal");
 }
 

@@ -77,6 +77,7 @@ const WORDS: &[&str] = &[
     "walks",
     "turns",
     "path",
+    "coverage",
     "square",
     "helix",
     "orbit",
@@ -374,6 +375,56 @@ proptest! {
                 d.code == CompileCode::TooShortForRate && d.span == shot.span && d.is_error()
             });
             prop_assert_eq!(short, told, "{}\n{:?}", src, c.diagnostics);
+        }
+    }
+}
+
+/// Coverages where no framing of the classic pattern fits (a 1 m stage, actors at their
+/// closest or a metre and a half apart in a corner, one of them 0.2 m tall, facings any
+/// way) expand and compile without a panic, to finite samples, every diagnostic with a
+/// help line.
+#[test]
+fn coverages_that_cannot_be_framed_expand_and_compile_without_a_panic() {
+    let profile = dronecine_profile::Profile::builtin("ardrone2").unwrap();
+    let cases = [
+        (
+            "1m x 1m x 1m",
+            "(-0.45, -0.45)",
+            "(-0.15, -0.45)",
+            "0.2m",
+            "-90deg",
+        ),
+        (
+            "3m x 3m x 1m",
+            "(-1.4, -1.4)",
+            "(0.1, -1.4)",
+            "1.8m",
+            "45deg",
+        ),
+        ("8m x 6m x 3m", "(0, 0)", "(0.3, 0)", "3m", "180deg"),
+    ];
+    for (stage, a, b, h, facing) in cases {
+        let src = format!(
+            "stage {stage}\nactor A height 1.8m at {a} facing 0deg\n\
+             actor B height {h} at {b} facing {facing}\ncoverage A and B for 16s\n"
+        );
+        let checked = check(&src, &Options::default());
+        assert!(!checked.has_errors(), "{src}\n{:?}", checked.diagnostics);
+        let script = checked.script.unwrap();
+        let (expanded, told) = dronecine_compiler::coverage::expand(&script, &profile);
+        assert_eq!(expanded.timeline.len(), 5, "{src}");
+        let c = dronecine_compiler::compile::compile(
+            &expanded,
+            &profile,
+            &Default::default(),
+            |s, _| {
+                assert!(s.position_m.iter().all(|x| x.is_finite()), "{src}\n{s:?}");
+                Ok::<(), ()>(())
+            },
+        )
+        .unwrap();
+        for d in told.iter().chain(&c.diagnostics) {
+            assert!(d.help.is_some(), "{src}\n{d:?}");
         }
     }
 }

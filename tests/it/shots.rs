@@ -163,6 +163,7 @@ fn the_long_scene_uses_most_of_the_language() {
                 PathShape::Waypoints { ref points_m, .. } => waypoints = points_m.len() == 5,
                 _ => {}
             },
+            ShotContent::Coverage(_) => {}
         }
     }
     assert!(cut && dissolve && pinned && ots && two && orbit && waypoints && screen);
@@ -178,4 +179,59 @@ fn the_annotation_needs_no_scene_and_takes_times_from_timecodes() {
     assert_eq!((s.timeline[0].start_s, s.timeline[0].end_s), (1.0, 5.0));
     // 00:01:00 ends the last entry, which started at 00:00:26.
     assert_eq!(s.timeline.last().unwrap().end_s, 60.0);
+}
+
+/// The psl blocks of `docs/language.md`.
+fn language_examples() -> Vec<String> {
+    let doc = std::fs::read_to_string(crate::common::workspace().join("docs/language.md")).unwrap();
+    doc.split("```psl\n")
+        .skip(1)
+        .filter_map(|b| b.split("```").next().map(str::to_string))
+        .collect()
+}
+
+/// Every whole scene of the language's page (a block with a `stage` line) checks without
+/// an error, its files found next to the shipped scripts; its coverage example is the
+/// shipped one, and the expansion the page prints is the one `fmt --expand` prints.
+#[test]
+fn the_language_pages_scenes_check_and_its_coverage_expands_as_it_says() {
+    let scenes: Vec<String> = language_examples()
+        .into_iter()
+        .filter(|b| b.lines().any(|l| l.starts_with("stage ")))
+        .collect();
+    assert!(scenes.len() >= 4, "{}", scenes.len());
+    let base = crate::common::workspace().join("shots");
+    for text in &scenes {
+        let opts = dronecine_grammar::Options {
+            known_drones: dronecine_profile::BUILTIN_NAMES,
+            base_dir: Some(&base),
+        };
+        let c = dronecine_grammar::check(text, &opts);
+        assert!(!c.has_errors(), "{text}\n{:?}", c.diagnostics);
+    }
+    let coverage = scenes
+        .iter()
+        .find(|b| b.contains("\ncoverage "))
+        .expect("a coverage example");
+    let shipped =
+        std::fs::read_to_string(crate::common::workspace().join("shots/coverage.psl")).unwrap();
+    let statements = |t: &str| -> Vec<String> {
+        t.lines()
+            .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+            .map(str::to_string)
+            .collect()
+    };
+    assert_eq!(statements(coverage), statements(&shipped));
+    let doc = std::fs::read_to_string(crate::common::workspace().join("docs/language.md")).unwrap();
+    let o = crate::common::dronecine(&["fmt", "--expand", "shots/coverage.psl"]);
+    assert!(o.status.success(), "{}", crate::common::stderr(&o));
+    let printed = crate::common::stdout(&o);
+    let from = printed
+        .find("# coverage Rick and Ilsa")
+        .expect("the expansion's comment");
+    assert!(
+        doc.contains(&printed[from..]),
+        "docs/language.md does not show:\n{}",
+        &printed[from..]
+    );
 }

@@ -27,6 +27,11 @@ const EXTERNAL_NAV_PARAMS: &str = "VISO_TYPE 1\nGPS1_TYPE 0\nEK3_SRC1_POSXY 6\n\
 const GIMBAL_PARAMS: &str = "MNT1_TYPE 1\nRC6_OPTION 213\nSERVO5_FUNCTION 8\n\
                              SERVO6_FUNCTION 7\nSERVO7_FUNCTION 6\n";
 
+/// Where SITL's vehicle is on Earth (latitude, longitude in degrees, altitude in metres):
+/// its home, and the EKF origin the flight sets (the compass is checked against the Earth's
+/// field there).
+const SITL_HOME: &str = "-35.363261,149.165230,584";
+
 /// The position error a flight through SITL must keep under (RMS, m), and its ratio to the
 /// embedded simulator's on the same script.
 const MAX_RMS_M: f64 = 0.10;
@@ -95,8 +100,9 @@ fn fly_sitl(
     let inside = format!(
         "ip link set lo up || exit 1; cd '{dir}' || exit 1; \
          '{binary}' --model quad --speedup 1 --wipe --defaults '{defaults},{params}' -I0 \
-           --home -35.363261,149.165230,584,0 > sitl.log 2>&1 & sitl=$!; sleep 2; \
-         '{dronecine}' shoot '{script}' --drone mavlink://tcp:127.0.0.1:5760 --mocap sitl \
+           --home {SITL_HOME},0 > sitl.log 2>&1 & sitl=$!; sleep 2; \
+         '{dronecine}' shoot '{script}' --drone 'mavlink://tcp:127.0.0.1:5760?origin={SITL_HOME}' \
+           --mocap sitl \
            --report json -q --log '{dir}/flight.mcap' > report.json 2> shoot.err; rc=$?; \
          kill $sitl; wait $sitl 2>/dev/null; exit $rc",
         dir = dir.display(),

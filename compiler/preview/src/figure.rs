@@ -5,9 +5,10 @@
 //! through [`CameraPose::project`], so its size on screen follows the distance exactly as the
 //! compiler's framing does (an MS reads as an MS). It has legs and a torso (outlines of two
 //! boxes, which are wide seen from the front and narrow seen from the side), a head (a sphere:
-//! a circle), the eyes that face the camera, and a nose: together they read the profile at a
-//! glance (front: two eyes, nose in the middle; 3/4: two eyes, off centre; side: one eye, the
-//! nose sticking out; back: no eye, no nose).
+//! a circle), its hair, the eyes that face the camera, and a nose: together they read the
+//! profile at a glance (front: a face with two eyes under a fringe, nose in the middle; 3/4:
+//! two eyes, off centre; side: one eye, the nose sticking out, hair behind; back: hair over
+//! all of the head but the nape, no eye, no nose).
 //!
 //! All coordinates are screen coordinates of [`CameraPose::project`]: x right, y up, the frame
 //! is [−1, 1]²; lengths (radii) are in screen-y units (multiply by half the frame height in
@@ -41,6 +42,13 @@ const EYE_LIFT: f64 = 0.2;
 const EYE_SPREAD_RAD: f64 = 0.55;
 /// Nose tip distance from the head centre, in head radii.
 const NOSE_REACH: f64 = 1.45;
+/// The hair covers the part of the head whose surface normal `n` has `n·d ≥ HAIR_EDGE`, `d`
+/// pointing back from the facing and up by [`HAIR_TILT_RAD`]: the back and the crown, down to
+/// the nape behind and to a hairline about 35° above the eyes in front.
+const HAIR_EDGE: f64 = -0.25;
+const HAIR_TILT_RAD: f64 = 0.7;
+/// Points drawn along each arc of the hair's outline.
+const HAIR_ARC_POINTS: usize = 24;
 /// Screen coordinates are clamped to this (a point very near the camera plane projects far
 /// out; the frame clips it anyway).
 const SCREEN_CLAMP: f64 = 1000.0;
@@ -74,6 +82,68 @@ pub struct Figure {
     pub nose_in_front: bool,
     /// The top of the head.
     pub crown: Option<[f64; 2]>,
+    /// The hair as seen: drawn over the head's disk and cut to it.
+    pub hair: Hair,
+}
+
+/// The part of a head's disk the hair covers.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Hair {
+    /// No hair shows (a face seen from below the hairline).
+    None,
+    /// The hair inside this outline; its edge on the head's outline lies a little outside
+    /// the disk, for the disk to cut it.
+    Inside(Vec<[f64; 2]>),
+    /// Hair over the whole disk but this outline (skin).
+    AllBut(Vec<[f64; 2]>),
+    /// Hair over the whole disk.
+    All,
+}
+
+impl Hair {
+    /// The share of a head's disk the hair covers, the disk of `radius` (screen-y units)
+    /// about `centre` through a lens of `aspect`: the share of a grid of points over the disk
+    /// inside the hair (screen x is `aspect` times shorter than screen y).
+    pub fn share(&self, centre: [f64; 2], radius: f64, aspect: f64) -> f64 {
+        let (n, mut inside, mut hair) = (60, 0usize, 0usize);
+        for i in 0..n {
+            for j in 0..n {
+                let u = [
+                    (i as f64 + 0.5) / n as f64 * 2.0 - 1.0,
+                    (j as f64 + 0.5) / n as f64 * 2.0 - 1.0,
+                ];
+                if u[0] * u[0] + u[1] * u[1] > 1.0 {
+                    continue;
+                }
+                inside += 1;
+                let p = [
+                    centre[0] + u[0] * radius / aspect,
+                    centre[1] + u[1] * radius,
+                ];
+                hair += usize::from(match self {
+                    Hair::None => false,
+                    Hair::Inside(o) => contains(o, p),
+                    Hair::AllBut(o) => !contains(o, p),
+                    Hair::All => true,
+                });
+            }
+        }
+        hair as f64 / inside.max(1) as f64
+    }
+}
+
+/// Whether `p` is inside the outline (even-odd rule).
+fn contains(outline: &[[f64; 2]], p: [f64; 2]) -> bool {
+    let mut inside = false;
+    for (i, a) in outline.iter().enumerate() {
+        let b = outline[(i + 1) % outline.len()];
+        if (a[1] > p[1]) != (b[1] > p[1])
+            && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+        {
+            inside = !inside;
+        }
+    }
+    inside
 }
 
 fn clamp_screen(p: [f64; 2]) -> [f64; 2] {
@@ -207,6 +277,10 @@ pub fn figure(pose: &CameraPose, lens: &Lens, actor: &ActorPose) -> Option<Figur
     };
     let nose_in_front = facing.dot(&to_camera(&head_c)) > 0.0;
 
+    let (sh, ch) = math::sin_cos(HAIR_TILT_RAD);
+    let hair_dir = Vec3::z() * sh - facing * ch;
+    let hair = hair(pose, lens, &head_c, head_r, &hair_dir, head_centre);
+
     let mid = base + Vec3::z() * (0.5 * h);
     Some(Figure {
         depth_m: pose.to_camera(&mid).y,
@@ -245,7 +319,115 @@ pub fn figure(pose: &CameraPose, lens: &Lens, actor: &ActorPose) -> Option<Figur
         nose,
         nose_in_front,
         crown: project(pose, lens, &(base + Vec3::z() * h)),
+        hair,
     })
+}
+
+/// Two unit vectors that make a right-handed frame with the unit vector `d`.
+fn basis(d: &Vec3) -> (Vec3, Vec3) {
+    let seed = if d.z.abs() < 0.9 {
+        Vec3::z()
+    } else {
+        Vec3::x()
+    };
+    let e1 = seed.cross(d).normalize();
+    (e1, d.cross(&e1))
+}
+
+/// Where on the circle `centre + radius (cos t e1 + sin t e2)` (unit normals) the normal's
+/// dot with `w` reaches `at_least`: the arc `(mid, half)`, `t` in `mid ± half`; `half` is π
+/// for the whole circle, `None` for none of it.
+fn arc(centre: &Vec3, radius: f64, e: (Vec3, Vec3), w: &Vec3, at_least: f64) -> Option<(f64, f64)> {
+    let a = centre.dot(w) - at_least;
+    let (b1, b2) = (radius * e.0.dot(w), radius * e.1.dot(w));
+    let b = math::hypot(b1, b2);
+    if b < 1e-12 {
+        return (a >= 0.0).then_some((0.0, std::f64::consts::PI));
+    }
+    let c = -a / b;
+    (c <= 1.0).then(|| (math::atan2(b2, b1), math::acos(c.max(-1.0))))
+}
+
+/// The hair of a head of radius `r` about `c` seen from `pose`: the part of its visible
+/// surface whose normal `n` has `n·d ≥ HAIR_EDGE`. Its outline is the arc of the visible
+/// rim (normals with `n·v = r/D`, `v` toward the camera `D` away) inside the hair, then the
+/// arc of the hairline (`n·d = HAIR_EDGE`) on the visible side.
+fn hair(pose: &CameraPose, lens: &Lens, c: &Vec3, r: f64, d: &Vec3, centre_px: [f64; 2]) -> Hair {
+    let to_cam = pose.position_m - c;
+    let dist = to_cam.norm();
+    if !(dist > r) {
+        return Hair::None;
+    }
+    let v = to_cam / dist;
+    let s = r / dist;
+    // The rim: normals s·v + ρ(cos t e1 + sin t e2); the hairline: k·d + σ(cos u g1 + sin u g2).
+    let (rim_c, rim_r, rim_e) = (v * s, (1.0 - s * s).sqrt(), basis(&v));
+    let k = HAIR_EDGE;
+    let (line_c, line_r, line_e) = (d * k, (1.0 - k * k).sqrt(), basis(d));
+    let point = |centre: &Vec3, radius: f64, e: &(Vec3, Vec3), t: f64| {
+        let (st, ct) = math::sin_cos(t);
+        centre + (e.0 * ct + e.1 * st) * radius
+    };
+    let rim = arc(&rim_c, rim_r, rim_e, d, k);
+    let line = arc(&line_c, line_r, line_e, &v, s);
+    let to_screen = |n: Vec3, push: f64| {
+        project(pose, lens, &(c + n * r)).map(|p| {
+            [
+                centre_px[0] + (p[0] - centre_px[0]) * push,
+                centre_px[1] + (p[1] - centre_px[1]) * push,
+            ]
+        })
+    };
+    let samples = |centre: &Vec3, radius: f64, e: &(Vec3, Vec3), from: f64, to: f64, push: f64| {
+        (0..=HAIR_ARC_POINTS)
+            .map(|i| {
+                let t = from + (to - from) * i as f64 / HAIR_ARC_POINTS as f64;
+                to_screen(point(centre, radius, e, t), push)
+            })
+            .collect::<Option<Vec<[f64; 2]>>>()
+    };
+    let full = std::f64::consts::PI - 1e-9;
+    let whole_hairline = || {
+        samples(
+            &line_c,
+            line_r,
+            &line_e,
+            0.0,
+            2.0 * std::f64::consts::PI,
+            1.0,
+        )
+    };
+    let outline = match (rim, line) {
+        (None, None) => return Hair::None,
+        (Some((_, half)), _) if half >= full => {
+            // The whole rim is hair: the skin, if any, is a patch inside it.
+            return match line {
+                Some((_, h)) if h >= full => whole_hairline().map_or(Hair::All, Hair::AllBut),
+                _ => Hair::All,
+            };
+        }
+        (None, Some((_, half))) if half >= full => whole_hairline(),
+        (Some((t, a)), Some((u, b))) => {
+            // The rim's arc ends where the hairline's does; walk the hairline back from there.
+            let rim_end = point(&rim_c, rim_r, &rim_e, t + a);
+            let near_hi = (point(&line_c, line_r, &line_e, u + b) - rim_end).norm();
+            let near_lo = (point(&line_c, line_r, &line_e, u - b) - rim_end).norm();
+            let (from, to) = if near_hi <= near_lo {
+                (u + b, u - b)
+            } else {
+                (u - b, u + b)
+            };
+            // Pushed out a tenth: the head's disk cuts the rim's arc.
+            let rim_pts = samples(&rim_c, rim_r, &rim_e, t - a, t + a, 1.1);
+            let line_pts = samples(&line_c, line_r, &line_e, from, to, 1.0);
+            rim_pts.zip(line_pts).map(|(mut p, q)| {
+                p.extend(q);
+                p
+            })
+        }
+        _ => return Hair::None,
+    };
+    outline.map_or(Hair::None, Hair::Inside)
 }
 
 /// Clips the world segment `a`–`b` to the part in front of the camera and projects it.

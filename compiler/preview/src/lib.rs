@@ -13,7 +13,9 @@
 //!   shot boundaries marked;
 //! - `storyboard.svg`/`.png`: a contact sheet, one row per shot, the camera's view at the
 //!   start, middle and end of the shot with the actors drawn as simple figures (see
-//!   [`figure`]), labelled with the shot's PSL text.
+//!   [`figure`]: a face, or the back of a head in hair), each named clear of every figure,
+//!   labelled with the shot's PSL text and each frame captioned with its shot type
+//!   ([`shot_type`]).
 //!
 //! The SVGs are written by hand ([`svg`]); the PNGs are the same SVGs rasterised by `resvg`
 //! with an embedded font (DejaVu Sans, a subset: `assets/DejaVuSans-subset.ttf`), so the
@@ -24,6 +26,7 @@
 //! differentiated from an assumed rate.
 
 pub mod figure;
+mod labels;
 mod plan;
 mod plots;
 mod raster;
@@ -34,14 +37,15 @@ use std::fs;
 use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
 
-use dronecine_grammar::script::Stage;
+use dronecine_grammar::script::{OrbitCenter, PathShape, ShotContent, Stage};
 
 use dronecine_compiler::camera::Lens;
 use dronecine_compiler::reference::{ActorPose, Sample};
 use dronecine_profile::{Limits, Model};
 
 pub use plots::tilt_commands_rad;
-pub use raster::svg_to_png;
+pub use raster::{svg_to_png, Rasteriser};
+pub use resvg::usvg;
 pub use storyboard::frame_sample_indices;
 
 /// What kind of stretch of the timeline a shot entry is.
@@ -77,6 +81,57 @@ pub struct ShotInfo {
     /// The PSL line (or a description of the repositioning).
     pub label: String,
     pub kind: ShotKind,
+    /// What the camera frames at the entry's start and at its end, named by shot type
+    /// ([`shot_type`]): the same twice for a hold or a path, the two compositions of a camera
+    /// move, the shot flown to for a repositioning.
+    pub framing: [String; 2],
+}
+
+/// A shot's type, from its composition: one framing of one actor is a single ("single on
+/// A"), of two a two-shot ("two-shot of A and B"); two framings are an over-the-shoulder shot
+/// over the first framing's actor, the foreground ("OTS over A (on B)"); a path is named by
+/// its kind and what the camera looks at ("orbit around A", "path looking at B"; an orbit
+/// around an actor that does not look at them is "looking ahead").
+pub fn shot_type(content: &ShotContent) -> String {
+    let path = match content {
+        ShotContent::Composition(c) => {
+            let actors = |i: usize| -> Vec<&str> {
+                c.framings.get(i).map_or(Vec::new(), |f| {
+                    f.subjects.iter().map(|s| s.actor.as_str()).collect()
+                })
+            };
+            return match (actors(0).as_slice(), actors(1).as_slice()) {
+                ([a], []) => format!("single on {a}"),
+                ([a, b], []) => format!("two-shot of {a} and {b}"),
+                ([a], [b]) => format!("OTS over {a} (on {b})"),
+                _ => format!("{} actors", c.actors().count()),
+            };
+        }
+        ShotContent::Coverage(c) => return format!("coverage of {} and {}", c.a, c.b),
+        ShotContent::Path(p) => p,
+    };
+    let around = match &path.shape {
+        PathShape::Orbit {
+            center: OrbitCenter::Actor { name },
+            ..
+        } => Some(name.as_str()),
+        _ => None,
+    };
+    let kind = match &path.shape {
+        PathShape::Square { .. } => "square path".to_string(),
+        PathShape::Helix { .. } => "helix".to_string(),
+        PathShape::Orbit { .. } => match around {
+            Some(a) => format!("orbit around {a}"),
+            None => "orbit".to_string(),
+        },
+        PathShape::Waypoints { .. } => "path".to_string(),
+    };
+    // An orbit around an actor looks at them unless it says otherwise.
+    match (path.looking_at.as_deref(), around) {
+        (Some(b), _) if Some(b) != around => format!("{kind} looking at {b}"),
+        (None, Some(_)) => format!("{kind} looking ahead"),
+        _ => kind,
+    }
 }
 
 /// Everything the previews draw.
@@ -245,7 +300,7 @@ pub fn write_previews(dir: &Path, input: &PreviewInput) -> io::Result<Vec<PathBu
         ("top", plan::top_view(input)),
         ("side", plan::side_view(input)),
         ("timeseries", plots::time_series(input)),
-        ("storyboard", storyboard::storyboard(input)),
+        ("storyboard", storyboard::storyboard(input, &rasteriser)),
     ];
     let mut written = Vec::with_capacity(images.len() * 2);
     for (name, svg) in images {
@@ -267,7 +322,41 @@ mod tests {
             end_s,
             label: String::new(),
             kind,
+            framing: Default::default(),
         }
+    }
+
+    #[test]
+    fn a_shot_is_named_by_its_type() {
+        let src =
+            "stage 8m x 6m x 3m\nactor A height 1.8m at (-1, 0)\nactor B height 1.7m at (1, 0)\n\
+                   MS on A front for 2s\ncut to MS on B and A for 2s\n\
+                   cut to MS on A 34backright MS on B 34left for 2s\n\
+                   cut to path orbit around A radius 2m altitude 1.5m for 5s looking at A\n\
+                   cut to path orbit around A radius 2m altitude 1.5m for 5s looking at B\n\
+                   cut to path orbit around A radius 2m altitude 1.5m for 5s\n\
+                   cut to path square side 2m altitude 1.5m for 5s\n\
+                   cut to path helix radius 1m from 1m to 2m for 5s looking at B\n";
+        let checked = dronecine_grammar::check(src, &dronecine_grammar::Options::default());
+        let script = checked.script.expect("the script checks");
+        let types: Vec<String> = script
+            .timeline
+            .iter()
+            .map(|s| shot_type(&s.content))
+            .collect();
+        assert_eq!(
+            types,
+            [
+                "single on A",
+                "two-shot of B and A",
+                "OTS over A (on B)",
+                "orbit around A",
+                "orbit around A looking at B",
+                "orbit around A looking ahead",
+                "square path",
+                "helix looking at B",
+            ]
+        );
     }
 
     #[test]

@@ -6,7 +6,7 @@ use std::io;
 
 use resvg::{tiny_skia, usvg};
 
-use super::svg::FONT_FAMILY;
+use super::svg::{Anchor, Svg, FONT_FAMILY};
 
 const REGULAR: &[u8] = include_bytes!("../assets/DejaVuSans-subset.ttf");
 const BOLD: &[u8] = include_bytes!("../assets/DejaVuSans-Bold-subset.ttf");
@@ -26,6 +26,12 @@ pub struct Rasteriser {
     options: usvg::Options<'static>,
 }
 
+impl Default for Rasteriser {
+    fn default() -> Rasteriser {
+        Rasteriser::new()
+    }
+}
+
 impl Rasteriser {
     pub fn new() -> Rasteriser {
         let mut options = usvg::Options {
@@ -41,10 +47,41 @@ impl Rasteriser {
         Rasteriser { options }
     }
 
+    /// An SVG document parsed with the embedded fonts: its text laid out as the PNG sets it.
+    pub fn parse(&self, svg: &str) -> io::Result<usvg::Tree> {
+        usvg::Tree::from_str(svg, &self.options)
+            .map_err(|e| io::Error::other(format!("preview: SVG not rasterised: {e}")))
+    }
+
+    /// The box `[left, top, right, bottom]` `text` takes set at `size` px about its anchor
+    /// (the middle of its baseline), as [`Svg::text_styled`] sets it (bold or not, with a
+    /// white halo or none): its glyphs (and halo) as the PNG draws them. `None` for text with
+    /// no glyph.
+    pub fn text_box(&self, text: &str, size: f64, bold: bool, halo: bool) -> Option<[f64; 4]> {
+        // Far enough from the page's edges for any line to fit.
+        let (x, y) = (4000.0, 400.0);
+        let mut svg = Svg::new(2.0 * x, 2.0 * y);
+        let halo = halo.then_some("#ffffff");
+        svg.text_styled(x, y, size, Anchor::Middle, "#000000", bold, 0.0, halo, text);
+        let tree = self.parse(&svg.finish()).ok()?;
+        tree.root().children().iter().find_map(|n| match n {
+            usvg::Node::Text(t) => {
+                let b = t.abs_stroke_bounding_box();
+                let f = |v: f32| f64::from(v);
+                Some([
+                    f(b.left()) - x,
+                    f(b.top()) - y,
+                    f(b.right()) - x,
+                    f(b.bottom()) - y,
+                ])
+            }
+            _ => None,
+        })
+    }
+
     /// The PNG of an SVG document, at one pixel per SVG unit, on white.
     pub fn png(&self, svg: &str) -> io::Result<Vec<u8>> {
-        let tree = usvg::Tree::from_str(svg, &self.options)
-            .map_err(|e| io::Error::other(format!("preview: SVG not rasterised: {e}")))?;
+        let tree = self.parse(svg)?;
         let size = tree.size();
         let (w, h) = (size.width() as f64, size.height() as f64);
         let scale = (MAX_SIDE_PX / w.max(h)).min(1.0);

@@ -3,14 +3,24 @@
 //!
 //! Each frame has the lens aspect and shows the horizon, the stage floor (outline and a 1 m
 //! grid) and the stage's corner posts, the actors as figures ([`super::figure`]) drawn far to
-//! near, each named, and faint thirds lines. An actor out of frame is named at the frame edge
-//! with an arrow toward it.
+//! near, each named, and faint thirds lines. A name goes at the free place nearest the top of
+//! its actor's head, clear of every figure and every other name ([`super::labels`]); an actor
+//! out of frame is named at the frame edge with an arrow toward it. Each frame's caption
+//! names the shot type ([`super::shot_type`]), the camera's height, heading, pitch and
+//! distances, and the actors behind the camera or with no room in the frame for their name.
+//!
+//! The SVG names what a reader checks: each frame's border `frame-R-F`, each figure
+//! `figure-R-F-K` and each name `label-R-F-K` (row R, frame F of the row, actor K).
+
+use std::collections::HashMap;
 
 use dronecine_math as math;
 use dronecine_math::wrap_angle_rad;
 
-use super::figure::{figure, project_segment, Figure};
-use super::svg::{num, truncate, Anchor, Style, Svg};
+use super::figure::{figure, project_segment, Figure, Hair};
+use super::labels::{bounds, grown, Placer, Rect};
+use super::raster::Rasteriser;
+use super::svg::{num, text_width, truncate, Anchor, Style, Svg};
 use super::{actor_color, shot_color, shot_names, PreviewInput, ShotInfo, ShotKind};
 use dronecine_compiler::camera::{CameraPose, Vec3};
 use dronecine_compiler::reference::Sample;
@@ -21,12 +31,15 @@ const SKY: &str = "#e3eaf1";
 const FLOOR: &str = "#ebe5d8";
 const FLOOR_LINE: &str = "#b9ae98";
 const SKIN: &str = "#f2d6b8";
+const HAIR: &str = "#4a3426";
+/// The actors' names, px.
+const LABEL_SIZE: f64 = 13.0;
 
 const MARGIN: f64 = 24.0;
 const FRAME_W: f64 = 384.0;
 const GAP: f64 = 18.0;
 const HEADER_H: f64 = 50.0;
-const CAPTION_H: f64 = 44.0;
+const CAPTION_H: f64 = 60.0;
 const ROW_GAP: f64 = 18.0;
 const TITLE_H: f64 = 64.0;
 
@@ -113,43 +126,77 @@ fn darker(color: &str) -> String {
     out
 }
 
-fn draw_figure(svg: &mut Svg, slot: &Slot, fig: &Figure, color: &str) {
+/// Draws `fig` as the group `id` and returns the boxes of its shapes (px, strokes included).
+fn draw_figure(svg: &mut Svg, slot: &Slot, fig: &Figure, color: &str, id: &str) -> Vec<Rect> {
     let outline = darker(color);
-    let px = |pts: &Vec<[f64; 2]>| pts.iter().map(|p| slot.px(*p)).collect::<Vec<_>>();
-    if let Some(legs) = &fig.legs {
-        svg.polygon(&px(legs), &Style::stroke(&outline, 1.2).with_fill(&outline));
-    }
-    if let Some(neck) = &fig.neck {
-        svg.polygon(&px(neck), &Style::stroke(&outline, 1.0).with_fill(SKIN));
-    }
-    if let Some(torso) = &fig.torso {
-        svg.polygon(&px(torso), &Style::stroke(&outline, 1.2).with_fill(color));
+    let px = |pts: &[[f64; 2]]| pts.iter().map(|p| slot.px(*p)).collect::<Vec<_>>();
+    let mut boxes = Vec::new();
+    let shape = |boxes: &mut Vec<Rect>, pts: &[[f64; 2]], stroke: f64| {
+        boxes.extend(bounds(pts).map(|b| grown(&b, stroke / 2.0)));
+    };
+    svg.begin_named_group(id, None);
+    for (part, fill, width) in [
+        (&fig.legs, outline.as_str(), 1.2),
+        (&fig.neck, SKIN, 1.0),
+        (&fig.torso, color, 1.2),
+    ] {
+        if let Some(p) = part {
+            let p = px(p);
+            svg.polygon(&p, &Style::stroke(&outline, width).with_fill(fill));
+            shape(&mut boxes, &p, width);
+        }
     }
     let head = slot.px(fig.head_centre);
     let r = slot.len(fig.head_radius);
-    let nose = fig.nose.map(|[a, b]| (slot.px(a), slot.px(b)));
+    let nose = fig.nose.map(|[a, b]| [slot.px(a), slot.px(b)]);
     let nose_w = (r * 0.35).max(1.0);
-    if let (Some((a, b)), false) = (nose, fig.nose_in_front) {
-        svg.line(a[0], a[1], b[0], b[1], &Style::stroke(TEXT, nose_w));
-    }
-    svg.circle(
-        head[0],
-        head[1],
-        r,
-        &Style::stroke(&outline, (r * 0.12).clamp(0.8, 2.0)).with_fill(SKIN),
-    );
+    // Behind the head (only a tip sticking out shows) or over it.
+    let draw_nose = |svg: &mut Svg, boxes: &mut Vec<Rect>, in_front: bool| {
+        if let Some(n) = nose.filter(|_| fig.nose_in_front == in_front) {
+            let style = Style::stroke(TEXT, nose_w);
+            svg.line(n[0][0], n[0][1], n[1][0], n[1][1], &style);
+            shape(boxes, &n, nose_w);
+        }
+    };
+    draw_nose(svg, &mut boxes, false);
+    draw_head(svg, slot, head, r, &fig.hair, &mut boxes);
     for e in &fig.eyes {
         let p = slot.px(*e);
-        svg.circle(
-            p[0],
-            p[1],
-            slot.len(fig.eye_radius).max(0.8),
-            &Style::fill(TEXT),
-        );
+        let er = slot.len(fig.eye_radius).max(0.8);
+        svg.circle(p[0], p[1], er, &Style::fill(TEXT));
     }
-    if let (Some((a, b)), true) = (nose, fig.nose_in_front) {
-        svg.line(a[0], a[1], b[0], b[1], &Style::stroke(TEXT, nose_w));
+    draw_nose(svg, &mut boxes, true);
+    let ring = (r * 0.12).clamp(0.8, 2.0);
+    svg.circle(head[0], head[1], r, &Style::stroke(&outline, ring));
+    shape(
+        &mut boxes,
+        &[[head[0] - r, head[1] - r], [head[0] + r, head[1] + r]],
+        ring,
+    );
+    svg.end_group();
+    boxes
+}
+
+/// The head's disk: skin, and the hair over it, cut to the disk.
+fn draw_head(svg: &mut Svg, slot: &Slot, c: [f64; 2], r: f64, hair: &Hair, boxes: &mut Vec<Rect>) {
+    let px = |pts: &[[f64; 2]]| pts.iter().map(|p| slot.px(*p)).collect::<Vec<_>>();
+    svg.circle(c[0], c[1], r, &Style::fill(SKIN));
+    let clip = svg.clip_circle(c[0], c[1], r);
+    svg.begin_group(Some(&clip));
+    match hair {
+        Hair::None => {}
+        Hair::Inside(p) => {
+            let p = px(p);
+            svg.polygon(&p, &Style::fill(HAIR));
+            boxes.extend(bounds(&p));
+        }
+        Hair::AllBut(p) => {
+            svg.circle(c[0], c[1], r, &Style::fill(HAIR));
+            svg.polygon(&px(p), &Style::fill(SKIN));
+        }
+        Hair::All => svg.circle(c[0], c[1], r, &Style::fill(HAIR)),
     }
+    svg.end_group();
 }
 
 /// The floor, grid, stage posts and horizon of one frame.
@@ -219,8 +266,85 @@ fn draw_scene(svg: &mut Svg, slot: &Slot, input: &PreviewInput, pose: &CameraPos
     }
 }
 
-/// One frame: the view from sample `i`.
-fn draw_frame(svg: &mut Svg, slot: &Slot, input: &PreviewInput, i: usize) {
+/// Names the actors of the frames: where each name goes, its box measured in the font the
+/// PNG sets it in.
+struct Labeller<'a> {
+    placer: Placer,
+    raster: &'a Rasteriser,
+    measured: HashMap<String, Rect>,
+}
+
+impl Labeller<'_> {
+    /// The box of `label` about its anchor (the middle of its baseline).
+    fn label_box(&mut self, label: &str) -> Rect {
+        if let Some(b) = self.measured.get(label) {
+            return *b;
+        }
+        // Without a glyph to measure, a generous estimate (the halo and the widest glyphs).
+        let b = self
+            .raster
+            .text_box(label, LABEL_SIZE, true, true)
+            .unwrap_or_else(|| {
+                let half = text_width(label, LABEL_SIZE) * 0.65 + 2.0;
+                [-half, -LABEL_SIZE, half, 0.4 * LABEL_SIZE]
+            });
+        self.measured.insert(label.to_string(), b);
+        b
+    }
+
+    /// `text` cut (with an ellipsis) to the longest start that, set at `size` px, is at
+    /// most `width` px wide.
+    fn fit(&self, text: &str, size: f64, bold: bool, width: f64) -> String {
+        let wide = |t: &str| {
+            (self.raster.text_box(t, size, bold, false))
+                .map_or(text_width(t, size), |b| b[2] - b[0])
+        };
+        if wide(text) <= width {
+            return text.to_string();
+        }
+        let chars: Vec<char> = text.chars().collect();
+        let cut = |n: usize| chars[..n].iter().collect::<String>() + "…";
+        let (mut lo, mut hi) = (0, chars.len());
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            match wide(&cut(mid)) <= width {
+                true => lo = mid,
+                false => hi = mid - 1,
+            }
+        }
+        cut(lo)
+    }
+}
+
+/// The name of an actor and where it is wanted: above the head, or, for an actor out of the
+/// frame, at its edge with an arrow toward them.
+fn wanted(slot: &Slot, name: &str, fig: &Figure) -> (String, [f64; 2]) {
+    let p = slot.px(fig.crown.unwrap_or(fig.head_centre));
+    let c = fig.head_centre;
+    let label = if c[0] < -1.0 {
+        format!("◀ {name}")
+    } else if c[0] > 1.0 {
+        format!("{name} ▶")
+    } else if c[1] > 1.0 {
+        format!("▲ {name}")
+    } else if c[1] < -1.0 {
+        format!("▼ {name}")
+    } else {
+        name.to_string()
+    };
+    (label, [p[0], p[1] - 6.0])
+}
+
+/// One frame: the view from sample `i`, its groups named `R-F` by `id`. Returns the actors
+/// in the frame with no room for their name.
+fn draw_frame(
+    svg: &mut Svg,
+    slot: &Slot,
+    input: &PreviewInput,
+    i: usize,
+    id: &str,
+    labeller: &mut Labeller,
+) -> Vec<String> {
     let sample = &input.samples[i];
     let pose = camera_pose(sample);
     let clip = svg.clip_rect(slot.x, slot.y, slot.w, slot.h);
@@ -233,8 +357,10 @@ fn draw_frame(svg: &mut Svg, slot: &Slot, input: &PreviewInput, i: usize) {
         })
         .collect();
     figures.sort_by(|a, b| b.1.depth_m.total_cmp(&a.1.depth_m).then(a.0.cmp(&b.0)));
+    let mut taken: Vec<Rect> = Vec::new();
     for (k, fig) in &figures {
-        draw_figure(svg, slot, fig, actor_color(*k));
+        let boxes = draw_figure(svg, slot, fig, actor_color(*k), &format!("figure-{id}-{k}"));
+        taken.extend(boxes);
     }
     // Thirds.
     let thirds = Style::stroke("#ffffff", 1.0).opacity(0.9);
@@ -247,44 +373,34 @@ fn draw_frame(svg: &mut Svg, slot: &Slot, input: &PreviewInput, i: usize) {
             svg.line(slot.x, y, slot.x + slot.w, y, st);
         }
     }
-    // Names: above the head, kept inside the frame, with an arrow when the actor is out of it.
-    for (k, fig) in &figures {
+    // Names, in the actors' order, each clear of the figures and of the names before it.
+    let frame = [slot.x, slot.y, slot.x + slot.w, slot.y + slot.h];
+    let mut unnamed = Vec::new();
+    let mut by_actor: Vec<&(usize, Figure)> = figures.iter().collect();
+    by_actor.sort_by_key(|(k, _)| *k);
+    for (k, fig) in by_actor {
         let name = &input.actor_names[*k];
-        let top = fig.crown.unwrap_or(fig.head_centre);
-        let p = slot.px(top);
-        let (mut x, mut y) = (p[0], p[1] - 6.0);
-        let mut label = name.clone();
-        let c = fig.head_centre;
-        if c[0] < -1.0 {
-            label = format!("◀ {name}");
-        } else if c[0] > 1.0 {
-            label = format!("{name} ▶");
-        } else if c[1] > 1.0 {
-            label = format!("▲ {name}");
-        } else if c[1] < -1.0 {
-            label = format!("▼ {name}");
+        let (label, want) = wanted(slot, name, fig);
+        let b = labeller.label_box(&label);
+        match labeller.placer.place(&frame, want, &b, &taken) {
+            Some(at) => {
+                svg.begin_named_group(&format!("label-{id}-{k}"), None);
+                svg.text_halo(
+                    at[0],
+                    at[1],
+                    LABEL_SIZE,
+                    Anchor::Middle,
+                    actor_color(*k),
+                    &label,
+                );
+                svg.end_group();
+                taken.push([b[0] + at[0], b[1] + at[1], b[2] + at[0], b[3] + at[1]]);
+            }
+            None => unnamed.push(name.clone()),
         }
-        let half = super::svg::text_width(&label, 13.0) / 2.0 + 3.0;
-        x = x.clamp(slot.x + half, slot.x + slot.w - half);
-        y = y.clamp(slot.y + 16.0, slot.y + slot.h - 6.0);
-        svg.text_halo(x, y, 13.0, Anchor::Middle, actor_color(*k), &label);
-    }
-    // Actors behind the camera, listed at the bottom.
-    let behind: Vec<&str> = (0..input.actor_names.len())
-        .filter(|k| input.actor(i, *k).is_some() && !figures.iter().any(|(j, _)| j == k))
-        .map(|k| input.actor_names[k].as_str())
-        .collect();
-    if !behind.is_empty() {
-        svg.text(
-            slot.x + 6.0,
-            slot.y + slot.h - 6.0,
-            11.0,
-            Anchor::Start,
-            MUTED,
-            &format!("behind the camera: {}", behind.join(", ")),
-        );
     }
     svg.end_group();
+    svg.begin_named_group(&format!("frame-{id}"), None);
     svg.rect(
         slot.x,
         slot.y,
@@ -292,6 +408,33 @@ fn draw_frame(svg: &mut Svg, slot: &Slot, input: &PreviewInput, i: usize) {
         slot.h,
         &Style::stroke("#333333", 1.5),
     );
+    svg.end_group();
+    unnamed
+}
+
+/// The actors behind the camera at sample `i`.
+fn behind_camera<'a>(input: &'a PreviewInput, i: usize) -> Vec<&'a str> {
+    let pose = camera_pose(&input.samples[i]);
+    (0..input.actor_names.len())
+        .filter(|&k| {
+            input
+                .actor(i, k)
+                .is_some_and(|a| figure(&pose, &input.lens, a).is_none())
+        })
+        .map(|k| input.actor_names[k].as_str())
+        .collect()
+}
+
+/// What a frame of `shot` shows, by shot type: `which` is 0, 1, 2 for its start, middle, end.
+fn framing_caption(shot: &ShotInfo, which: usize) -> String {
+    let [from, to] = &shot.framing;
+    match (shot.kind, which) {
+        (ShotKind::Reposition, _) => format!("flying to {to}"),
+        (_, 0) => from.clone(),
+        (_, 2) => to.clone(),
+        _ if from == to => from.clone(),
+        _ => format!("{from} → {to}"),
+    }
 }
 
 /// A caption line about the camera: height, heading, pitch and distance to each actor.
@@ -325,8 +468,8 @@ fn fmt0(v: f64) -> String {
     format!("{r:.0}").replace('-', "−")
 }
 
-/// The contact sheet.
-pub fn storyboard(input: &PreviewInput) -> Svg {
+/// The contact sheet; `raster` measures the names as the PNG sets them.
+pub fn storyboard(input: &PreviewInput, raster: &Rasteriser) -> Svg {
     let aspect = input.lens.aspect().clamp(0.5, 3.0);
     let frame_h = (FRAME_W / aspect).round();
     let row_h = HEADER_H + frame_h + CAPTION_H + ROW_GAP;
@@ -362,10 +505,19 @@ pub fn storyboard(input: &PreviewInput) -> Svg {
             end_s: input.samples[input.samples.len() - 1].t_s,
             label: "(no shots given: the whole reference)".to_string(),
             kind: ShotKind::Path,
+            framing: [
+                "the whole reference".to_string(),
+                "the whole reference".to_string(),
+            ],
         }];
         &fallback
     } else {
         input.shots
+    };
+    let mut labeller = Labeller {
+        placer: Placer::new(FRAME_W, frame_h),
+        raster,
+        measured: HashMap::new(),
     };
     for (r, shot) in shots.iter().enumerate() {
         let y0 = TITLE_H + r as f64 * row_h;
@@ -375,31 +527,7 @@ pub fn storyboard(input: &PreviewInput) -> Svg {
             shot_color(input.shots, r)
         };
         let name = names.get(r).cloned().unwrap_or_else(|| "1".to_string());
-        svg.rect(MARGIN, y0 + 6.0, 8.0, 40.0, &Style::fill(color));
-        let head = if shot.kind == ShotKind::Reposition {
-            format!(
-                "{name} · repositioning flight · {:.2}–{:.2} s",
-                shot.start_s, shot.end_s
-            )
-        } else {
-            format!(
-                "Shot {name} · {} · {:.2}–{:.2} s ({:.2} s)",
-                shot.kind.as_str(),
-                shot.start_s,
-                shot.end_s,
-                shot.end_s - shot.start_s
-            )
-        };
-        svg.text_bold(MARGIN + 16.0, y0 + 22.0, 15.0, Anchor::Start, TEXT, &head);
-        let psl = truncate(&shot.label, 14.0, width - 2.0 * MARGIN - 16.0);
-        svg.text(
-            MARGIN + 16.0,
-            y0 + 42.0,
-            14.0,
-            Anchor::Start,
-            "#0b4f8a",
-            &psl,
-        );
+        draw_row_header(&mut svg, shot, &name, color, y0, width);
         let idx = frame_sample_indices(input.samples, shot);
         for (j, (&i, which)) in idx.iter().zip(["start", "middle", "end"]).enumerate() {
             let slot = Slot {
@@ -408,21 +536,82 @@ pub fn storyboard(input: &PreviewInput) -> Svg {
                 w: FRAME_W,
                 h: frame_h,
             };
-            draw_frame(&mut svg, &slot, input, i);
-            let cy = slot.y + slot.h + 17.0;
-            svg.text_bold(
-                slot.x,
-                cy,
-                12.0,
-                Anchor::Start,
-                TEXT,
-                &format!("{which} · t {:.2} s", input.samples[i].t_s),
+            let unnamed = draw_frame(
+                &mut svg,
+                &slot,
+                input,
+                i,
+                &format!("{r}-{j}"),
+                &mut labeller,
             );
-            let cap = truncate(&camera_caption(input, i), 11.0, FRAME_W);
-            svg.text(slot.x, cy + 16.0, 11.0, Anchor::Start, MUTED, &cap);
+            let t = input.samples[i].t_s;
+            let first = format!("{which} · t {t:.2} s · {}", framing_caption(shot, j));
+            let mut third = Vec::new();
+            let behind = behind_camera(input, i);
+            if !behind.is_empty() {
+                third.push(format!("behind the camera: {}", behind.join(", ")));
+            }
+            if !unnamed.is_empty() {
+                third.push(format!(
+                    "no room in the frame to name {}",
+                    unnamed.join(", ")
+                ));
+            }
+            let cy = slot.y + slot.h + 17.0;
+            for (k, (text, size, bold)) in [
+                (first, 12.0, true),
+                (camera_caption(input, i), 11.0, false),
+                (third.join(" · "), 11.0, false),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let (dy, color) = ([0.0, 16.0, 31.0][k], if bold { TEXT } else { MUTED });
+                let text = labeller.fit(&text, size, bold, FRAME_W);
+                svg.text_styled(
+                    slot.x,
+                    cy + dy,
+                    size,
+                    Anchor::Start,
+                    color,
+                    bold,
+                    0.0,
+                    None,
+                    &text,
+                );
+            }
         }
     }
     svg
+}
+
+/// A row's heading: its colour mark, the shot's number, kind and times, and its PSL text.
+fn draw_row_header(svg: &mut Svg, shot: &ShotInfo, name: &str, color: &str, y0: f64, width: f64) {
+    svg.rect(MARGIN, y0 + 6.0, 8.0, 40.0, &Style::fill(color));
+    let head = if shot.kind == ShotKind::Reposition {
+        format!(
+            "{name} · repositioning flight · {:.2}–{:.2} s",
+            shot.start_s, shot.end_s
+        )
+    } else {
+        format!(
+            "Shot {name} · {} · {:.2}–{:.2} s ({:.2} s)",
+            shot.kind.as_str(),
+            shot.start_s,
+            shot.end_s,
+            shot.end_s - shot.start_s
+        )
+    };
+    svg.text_bold(MARGIN + 16.0, y0 + 22.0, 15.0, Anchor::Start, TEXT, &head);
+    let psl = truncate(&shot.label, 14.0, width - 2.0 * MARGIN - 16.0);
+    svg.text(
+        MARGIN + 16.0,
+        y0 + 42.0,
+        14.0,
+        Anchor::Start,
+        "#0b4f8a",
+        &psl,
+    );
 }
 
 #[cfg(test)]
@@ -445,6 +634,7 @@ mod tests {
             end_s: 6.9,
             label: String::new(),
             kind: ShotKind::Hold,
+            framing: Default::default(),
         };
         let [a, m, b] = frame_sample_indices(&samples, &shot);
         assert_eq!(samples[a].t_s, 2.25);

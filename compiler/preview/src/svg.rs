@@ -349,17 +349,34 @@ impl Svg {
 
     /// Defines a rectangular clip path and returns its id (for [`Svg::begin_group`]).
     pub fn clip_rect(&mut self, x: f64, y: f64, w: f64, h: f64) -> String {
+        let (x, y, w, h) = (num(x), num(y), num(w.max(0.0)), num(h.max(0.0)));
+        self.clip(&format!(
+            "<rect x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\"/>"
+        ))
+    }
+
+    /// Defines a circular clip path and returns its id (for [`Svg::begin_group`]).
+    pub fn clip_circle(&mut self, cx: f64, cy: f64, r: f64) -> String {
+        let (cx, cy, r) = (num(cx), num(cy), num(r.max(0.0)));
+        self.clip(&format!("<circle cx=\"{cx}\" cy=\"{cy}\" r=\"{r}\"/>"))
+    }
+
+    /// Defines a clip path of `shape` (an SVG element) and returns its id.
+    fn clip(&mut self, shape: &str) -> String {
         let id = format!("clip{}", self.next_id);
         self.next_id += 1;
-        let _ = writeln!(
-            self.defs,
-            "<clipPath id=\"{id}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath>",
-            num(x),
-            num(y),
-            num(w.max(0.0)),
-            num(h.max(0.0))
-        );
+        let _ = writeln!(self.defs, "<clipPath id=\"{id}\">{shape}</clipPath>");
         id
+    }
+
+    /// Opens a group named `id` (an id a reader of the SVG finds it by), clipped when `clip`
+    /// names a clip path.
+    pub fn begin_named_group(&mut self, id: &str, clip: Option<&str>) {
+        let _ = write!(self.body, "<g id=\"{}\"", escape(id));
+        if let Some(c) = clip {
+            let _ = write!(self.body, " clip-path=\"url(#{c})\"");
+        }
+        self.body.push_str(">\n");
     }
 
     /// Opens a group, clipped when `clip` names a clip path.

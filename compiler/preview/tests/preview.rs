@@ -33,6 +33,7 @@ fn shot(start_s: f64, end_s: f64, label: &str, kind: ShotKind) -> ShotInfo {
         end_s,
         label: label.to_string(),
         kind,
+        framing: Default::default(),
     }
 }
 
@@ -480,4 +481,60 @@ fn the_profile_reads_from_eyes_nose_and_width() {
         width(&left)
     );
     assert!((width(&front) - width(&back)).abs() < 1e-9);
+}
+
+/// The hair's share of the head's disk, seen from azimuth `theta` (as [`seen_from`]).
+fn hair_seen_from(theta: f64) -> (f64, Figure) {
+    let f = seen_from(theta);
+    (f.hair.share(f.head_centre, f.head_radius, 16.0 / 9.0), f)
+}
+
+#[test]
+fn a_head_seen_from_behind_is_hair_and_from_the_front_a_face() {
+    let deg = f64::to_radians;
+    let (back, b) = hair_seen_from(deg(180.0));
+    assert!(back > 0.9, "from behind, hair over {back:.2} of the head");
+    assert!(b.eyes.is_empty() && !b.nose_in_front);
+    let (back34, b34) = hair_seen_from(deg(135.0));
+    assert!(
+        back34 > 0.8 && b34.eyes.is_empty(),
+        "34backleft: {back34:.2}"
+    );
+    let (side, s) = hair_seen_from(deg(90.0));
+    assert!(
+        (0.4..0.8).contains(&side) && s.eyes.len() == 1,
+        "left: {side:.2}"
+    );
+    let (front, f) = hair_seen_from(0.0);
+    assert!(
+        front < 0.3 && f.eyes.len() == 2,
+        "front: {front:.2} of the head is hair"
+    );
+    let (front34, _) = hair_seen_from(deg(-45.0));
+    assert!(front34 < 0.45, "34right: {front34:.2}");
+    // From behind and above: all hair; from in front and below: no hair at all.
+    let h = 1.8;
+    let lens = lens_84();
+    let above = CameraPose {
+        position_m: Vec3::new(-1.0, 0.0, 3.0),
+        heading_rad: 0.0,
+        pitch_rad: -0.9,
+    };
+    let f = figure(&above, &lens, &actor(0.0, 0.0, 0.0, h)).unwrap();
+    assert!(
+        f.hair.share(f.head_centre, f.head_radius, 16.0 / 9.0) > 0.97,
+        "{:?}",
+        f.hair
+    );
+    let below = CameraPose {
+        position_m: Vec3::new(0.8, 0.0, 0.8),
+        heading_rad: PI,
+        pitch_rad: 0.8,
+    };
+    let f = figure(&below, &lens, &actor(0.0, 0.0, 0.0, h)).unwrap();
+    assert!(
+        f.hair.share(f.head_centre, f.head_radius, 16.0 / 9.0) < 0.05,
+        "{:?}",
+        f.hair
+    );
 }

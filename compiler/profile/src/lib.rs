@@ -39,7 +39,12 @@ dronecine_diag::codes! {
 }
 
 /// Names accepted by `drone NAME` in a script.
-pub const BUILTIN_NAMES: &[&str] = &["ardrone2", "ardrone2-outdoor", "arducopter-quad"];
+pub const BUILTIN_NAMES: &[&str] = &[
+    "ardrone2",
+    "ardrone2-outdoor",
+    "arducopter-quad",
+    "crazyflie21",
+];
 
 /// The profile used when a script names none.
 pub const DEFAULT_NAME: &str = "ardrone2";
@@ -90,6 +95,12 @@ pub struct Limits {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Camera {
+    /// Whether the drone carries a camera. Without one (`mounted = false`) the shots are
+    /// framed for the lens below, a nominal camera looking along the heading: the path is
+    /// the one a camera there would need, and nothing is filmed. A flight log's profile
+    /// without the field (its format predates it) had a camera.
+    #[serde(default = "mounted_default")]
+    pub mounted: bool,
     /// Horizontal field of view.
     pub fov_x_rad: f64,
     /// Frame width over height.
@@ -112,6 +123,10 @@ pub enum Gimbal {
         #[serde(default = "unlimited_rate")]
         rate_radps: f64,
     },
+}
+
+fn mounted_default() -> bool {
+    true
 }
 
 fn unlimited_rate() -> f64 {
@@ -171,6 +186,7 @@ pub const DEFAULT_TRACKING_MARGIN_M: f64 = 0.15;
 const ARDRONE2_TOML: &str = include_str!("../profiles/ardrone2.toml");
 const ARDRONE2_OUTDOOR_TOML: &str = include_str!("../profiles/ardrone2-outdoor.toml");
 const ARDUCOPTER_QUAD_TOML: &str = include_str!("../profiles/arducopter-quad.toml");
+const CRAZYFLIE21_TOML: &str = include_str!("../profiles/crazyflie21.toml");
 
 /// The TOML text of a built-in profile (what `Profile::builtin` parses).
 pub fn builtin_source(name: &str) -> Option<&'static str> {
@@ -178,6 +194,7 @@ pub fn builtin_source(name: &str) -> Option<&'static str> {
         "ardrone2" => Some(ARDRONE2_TOML),
         "ardrone2-outdoor" => Some(ARDRONE2_OUTDOOR_TOML),
         "arducopter-quad" => Some(ARDUCOPTER_QUAD_TOML),
+        "crazyflie21" => Some(CRAZYFLIE21_TOML),
         _ => None,
     }
 }
@@ -328,6 +345,9 @@ impl Profile {
         line("accel_max_mps2", num(l.accel_max_mps2));
         line("jerk_max_mps3", num(l.jerk_max_mps3));
         line("\n[camera]\nfov_x_deg", num(c.fov_x_rad.to_degrees()));
+        if !c.mounted {
+            line("mounted", "false".into());
+        }
         line("aspect", num(c.aspect));
         line(
             "gimbal",
@@ -702,6 +722,13 @@ const FOV: Range = Range::new(POSITIVE, Hi::Lt(180.0));
 const CAMERA: SectionSpec = SectionSpec {
     name: "camera",
     keys: &[
+        optional(key(
+            "mounted",
+            Kind::Special,
+            "",
+            "false",
+            "whether the drone carries a camera (`false`: none, the shots are framed for the nominal lens below)",
+        )),
         optional(key(
             "fov_x_deg",
             Kind::Num(FOV),
@@ -1705,6 +1732,7 @@ impl<'s> Reader<'s> {
         let fov_diag = s.opt_num(self, "fov_diagonal_deg");
         let aspect = self.aspect(&mut s);
         let gimbal = self.gimbal(&mut s);
+        let mounted = self.mounted(&s);
         let fov = match (fov_x, fov_diag) {
             (Got::Ok(_, a), Got::Ok(_, b)) => {
                 let (first, second, second_key) = if a.start < b.start {
@@ -1746,10 +1774,30 @@ impl<'s> Reader<'s> {
             fov_deg.to_radians()
         };
         Some(Camera {
+            mounted: mounted?,
             fov_x_rad,
             aspect,
             gimbal: gimbal?,
         })
+    }
+
+    /// `mounted`: `true` when absent.
+    fn mounted(&mut self, s: &Section<'_, '_>) -> Option<bool> {
+        let Some((_, v)) = s.entry("mounted") else {
+            return Some(true);
+        };
+        match v.get_ref() {
+            DeValue::Boolean(b) => Some(*b),
+            other => {
+                self.bad(
+                    sp(v.span()),
+                    format!("`mounted` must be true or false, found {}", kind_of(other)),
+                    "expected true or false".into(),
+                    CAMERA.spec("mounted"),
+                );
+                None
+            }
+        }
     }
 
     fn aspect(&mut self, s: &mut Section<'_, '_>) -> Option<f64> {

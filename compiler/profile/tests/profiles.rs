@@ -334,3 +334,27 @@ fn the_arducopter_quad_frames_a_medium_long_shot_outside_its_safety_distance() {
         dronecine_profile::Gimbal::Pitch { .. }
     ));
 }
+
+/// The Crazyflie carries no camera, and says so explicitly; the others carry one. A profile
+/// written out keeps it.
+#[test]
+fn a_drone_without_a_camera_says_so_and_keeps_saying_so() {
+    for name in BUILTIN_NAMES {
+        let p = Profile::builtin(name).unwrap();
+        assert_eq!(p.camera.mounted, *name != "crazyflie21", "{name}");
+    }
+    let p = Profile::builtin("crazyflie21").unwrap();
+    let path = scratch("no-camera.toml");
+    std::fs::write(&path, p.to_toml()).unwrap();
+    let (back, _, warnings) = Profile::load(&path).expect("loads");
+    assert!(warnings.is_empty());
+    assert!(!back.camera.mounted);
+    // A profile that predates the key reads as carrying a camera.
+    let old: Profile = serde_json::from_str(
+        &serde_json::to_string(&p)
+            .unwrap()
+            .replace("\"mounted\":false,", ""),
+    )
+    .unwrap();
+    assert!(old.camera.mounted);
+}

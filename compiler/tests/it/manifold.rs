@@ -6,7 +6,7 @@
 use dronecine_compiler::camera::{CameraPose, Lens, Vec3};
 use dronecine_compiler::framing::{
     self, body_axis_distance_m, interpolate, place, screen_targets, solve, FramingError, Placement,
-    Visual, OVER_SHOULDER_REACH,
+    Visual,
 };
 use dronecine_compiler::reference::ActorPose;
 use dronecine_compiler::toric::{self, Toric};
@@ -205,8 +205,10 @@ proptest! {
         }
     }
 
-    /// Two equal-height actors, eye level, in one framing: both land exactly at their screen
-    /// positions, and the nearer one is framed at its size.
+    /// Two equal-height actors, eye level, in one framing with written screen positions: both
+    /// land exactly there (the positions outrank the size), the camera stands as far from
+    /// both (a two-shot), and the band each shows is the size's scaled by how far the
+    /// camera stands from the size's distance (the ratio the size warning reads).
     #[test]
     fn two_actors_eye_level_are_exact(
         ax in -3.0..3.0f64, ay in -3.0..3.0f64, dist in 0.5..4.0f64, dir in -180.0..180.0f64,
@@ -221,27 +223,23 @@ proptest! {
         let (xa, xb) = if swap { (xb, xa) } else { (xa, xb) };
         let c = comp(CameraAngle::EyeLevel, vec![(size_, vec![
             subject("A", None, Some(xa), None), subject("B", None, Some(xb), None)])]);
-        let v = match solve(&c, &NAMES[..2], &actors, &l, &g) {
-            Ok(v) => v,
-            // Rejected (counted by proptest, which fails when too many are).
-            Err(FramingError::SizeUnreachable { .. }) => {
-                prop_assume!(false);
-                unreachable!()
-            }
-            Err(e) => panic!("{e}"),
-        };
+        let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
         let p = place(&v, &actors, &l, &g);
         prop_assert!(!p.flags.any(), "{:?}", p.flags);
-        prop_assert!(screen_error(&v, &actors, &l, &g, &p) < 0.02);
         prop_assert!(screen_error(&v, &actors, &l, &g, &p) < 1e-6);
-        // The nearer actor's band spans the frame height.
+        let Visual::Two(t) = &v else { panic!("{v:?}") };
+        let m = |a: &ActorPose| head(a, 0.5 * (size::band(size_, height).0 + size::band(size_, height).1));
+        let (da, db) = ((p.position_m - m(&actors[0])).norm(), (p.position_m - m(&actors[1])).norm());
+        prop_assert!((da - db).abs() < 1e-6 * da, "{da} {db}");
+        // Each band shows the size at the distance its screen point asks; the camera, as far
+        // from both, frames their mean at the ratio.
         let cam = pose(&p);
         let (bottom, top) = size::band(size_, height);
-        let near = if body_axis_distance_m(&p.position_m, &actors[0])
-            < body_axis_distance_m(&p.position_m, &actors[1]) { 0 } else { 1 };
-        let t = cam.project(&l, &head(&actors[near], top)).unwrap();
-        let b = cam.project(&l, &head(&actors[near], bottom)).unwrap();
-        prop_assert!((t[1] - b[1] - 2.0).abs() < 1e-6, "{t:?} {b:?}");
+        let shown: Vec<f64> = actors.iter().map(|a| {
+            cam.project(&l, &head(a, top)).unwrap()[1] - cam.project(&l, &head(a, bottom)).unwrap()[1]
+        }).collect();
+        let mean = (shown[0] + shown[1]) / 2.0;
+        prop_assert!((mean * t.distance_ratio - 2.0).abs() < 1e-3, "{shown:?} ratio {}", t.distance_ratio);
     }
 
     /// Toric position: the law of sines holds, ∠ACB = α, and the inverse returns (α, θ, φ).
@@ -381,77 +379,6 @@ fn feed_forward_velocity_matches_placement_derivative() {
     }
 }
 
-/// A two-shot held by a level camera while both actors walk: `two_shot_theta_rate` is the
-/// derivative of the θ that `solve` finds (central difference of re-solves), whichever actor
-/// has the size and whichever root; it declines a gimbal and a profile's vantage.
-#[test]
-fn two_shot_theta_rate_is_the_derivative_of_the_solved_theta() {
-    let l = lens(92.0);
-    let mut checked = 0;
-    for (size, (xa, xb), (hb, vb)) in [
-        (Size::MS, (None, None), (1.65, [-0.3, 0.5, 0.0])),
-        (Size::MCU, (Some(-0.5), Some(0.2)), (1.9, [0.6, -0.1, 0.0])),
-        (Size::FS, (None, Some(0.4)), (1.8, [0.0, 0.0, 0.0])),
-        (Size::MLS, (Some(0.3), Some(-0.3)), (1.5, [-0.7, -0.4, 0.0])),
-    ] {
-        let at = |t: f64| {
-            let mut a = actor(-0.8 + 0.4 * t, 0.2 - 0.3 * t, 20.0, 1.8);
-            a.velocity_mps = [0.4, -0.3, 0.0];
-            let mut b = actor(1.2 + vb[0] * t, 0.5 + vb[1] * t, 200.0, hb);
-            b.velocity_mps = vb;
-            [a, b]
-        };
-        let c = comp(
-            CameraAngle::EyeLevel,
-            vec![(
-                size,
-                vec![subject("A", None, xa, None), subject("B", None, xb, None)],
-            )],
-        );
-        let theta = |t: f64| match solve(&c, &NAMES[..2], &at(t), &l, &Gimbal::None) {
-            Ok(Visual::Two(v)) => v.toric.theta_rad,
-            other => panic!("{other:?}"),
-        };
-        let v = solve(&c, &NAMES[..2], &at(0.0), &l, &Gimbal::None).unwrap();
-        let rate = framing::two_shot_theta_rate(&v, &at(0.0), &l, &Gimbal::None)
-            .unwrap_or_else(|| panic!("{size:?} {v:?}"));
-        let dt = 1e-5;
-        let numeric = (theta(dt) - theta(-dt)) / (2.0 * dt);
-        assert!(
-            (rate - numeric).abs() < 1e-6,
-            "{size:?}: {rate} vs {numeric}"
-        );
-        if vb == [0.0; 3] {
-            assert!(rate.abs() > 1e-3, "A walks: θ turns");
-        }
-        // Not for a gimbal (θ is refined against the elevation).
-        let vg = solve(&c, &NAMES[..2], &at(0.0), &l, &gimbal()).unwrap();
-        assert_eq!(
-            framing::two_shot_theta_rate(&vg, &at(0.0), &l, &gimbal()),
-            None
-        );
-        checked += 1;
-    }
-    assert_eq!(checked, 4);
-    // Not for a profile's vantage: its θ is not a root of the distance constraint.
-    let c = comp(
-        CameraAngle::EyeLevel,
-        vec![(
-            Size::MS,
-            vec![
-                subject("A", Some(Profile::ThreeQuarterLeft), None, None),
-                subject("B", None, None, None),
-            ],
-        )],
-    );
-    let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(2.0, 0.5, 180.0, 1.7)];
-    let v = solve(&c, &NAMES[..2], &actors, &l, &Gimbal::None).unwrap();
-    assert_eq!(
-        framing::two_shot_theta_rate(&v, &actors, &l, &Gimbal::None),
-        None
-    );
-}
-
 fn two_shot_scene() -> [ActorPose; 3] {
     [
         actor(0.0, 0.0, 0.0, 1.8),
@@ -460,36 +387,143 @@ fn two_shot_scene() -> [ActorPose; 3] {
     ]
 }
 
-/// `MS on A and B` puts A on the left third and B on the right third.
+/// `SIZE on A and B`: the camera as far from both (within a tenth), A screen-left of B,
+/// both in frame; the size holds while the actors fit in one frame at it, and beyond that
+/// they sit at the widest spread and the size gives way (the ratio the warning reads).
 #[test]
-fn two_shot_defaults_to_thirds() {
+fn a_two_shot_is_symmetric_and_sized_alike() {
     let l = lens(84.0);
-    let g = gimbal();
-    let actors = two_shot_scene();
-    let c = comp(
+    let g = Gimbal::None;
+    for (apart_m, size_, holds) in [
+        (2.5, Size::LS, true),
+        (1.0, Size::MS, true),
+        (2.5, Size::MS, false),
+    ] {
+        let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(apart_m, 0.0, 180.0, 1.65)];
+        let c = comp(
+            CameraAngle::EyeLevel,
+            vec![(
+                size_,
+                vec![
+                    subject("A", None, None, None),
+                    subject("B", None, None, None),
+                ],
+            )],
+        );
+        let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
+        let Visual::Two(t) = &v else { panic!("{v:?}") };
+        let p = place(&v, &actors, &l, &g);
+        let cam = pose(&p);
+        let band = |a: &ActorPose| size::band(size_, a.height_m);
+        let centre = |a: &ActorPose| head(a, (band(a).0 + band(a).1) / 2.0);
+        let (da, db) = (
+            (p.position_m - centre(&actors[0])).norm(),
+            (p.position_m - centre(&actors[1])).norm(),
+        );
+        assert!(
+            (da - db).abs() <= 0.1 * (da + db) / 2.0,
+            "{apart_m} m {size_:?}: {da} {db}"
+        );
+        let (sa, sb) = (
+            cam.project(&l, &centre(&actors[0])).unwrap(),
+            cam.project(&l, &centre(&actors[1])).unwrap(),
+        );
+        assert!(sa[0] < 0.0 && 0.0 < sb[0], "{sa:?} {sb:?}");
+        for s in [sa, sb] {
+            assert!(
+                s[0].abs() <= framing::TWO_SHOT_SCREEN_MAX + 1e-9 && s[1].abs() < 1.0,
+                "{s:?}"
+            );
+        }
+        assert_eq!(
+            size::holds_at_ratio(t.distance_ratio),
+            holds,
+            "{apart_m} m {size_:?}: {t:?}"
+        );
+        if holds {
+            // The band of each fills the frame's height within the size's slack.
+            for a in &actors {
+                let top = cam.project(&l, &head(a, band(a).1)).unwrap();
+                let bottom = cam.project(&l, &head(a, band(a).0)).unwrap();
+                let shown = top[1] - bottom[1];
+                assert!((shown / 2.0).ln().abs() < size::SIZE_SLACK.ln(), "{shown}");
+            }
+        } else {
+            // At the widest spread (within the blend of the two distances).
+            assert!(
+                (sb[0] - framing::TWO_SHOT_SCREEN_MAX).abs() < 0.02,
+                "{sb:?}"
+            );
+            assert!(t.distance_ratio > 1.4, "{t:?}");
+        }
+    }
+}
+
+/// `SIZE on A and B PROFILE`: the profile is honoured, seen from the actor it is written on
+/// (`MS on A and B right` is not the plain two-shot), the size kept on that actor while both
+/// fit in frame.
+#[test]
+fn a_profile_on_a_two_shot_is_honoured_on_either_actor() {
+    let l = lens(84.0);
+    let g = Gimbal::None;
+    let actors = [actor(-1.0, 0.0, 0.0, 1.8), actor(1.0, 0.0, 180.0, 1.65)];
+    let plain = comp(
         CameraAngle::EyeLevel,
         vec![(
-            Size::MS,
+            Size::MLS,
             vec![
                 subject("A", None, None, None),
                 subject("B", None, None, None),
             ],
         )],
     );
-    let v = solve(&c, &NAMES, &actors, &l, &g).unwrap();
-    let p = place(&v, &actors, &l, &g);
-    let cam = pose(&p);
-    let ta = cam
-        .project(&l, &head(&actors[0], 0.825 * 1.8))
-        .expect("A in front");
-    let tb = cam
-        .project(&l, &head(&actors[1], 0.825 * 1.65))
-        .expect("B in front");
-    assert!((ta[0] + 1.0 / 3.0).abs() < 1e-6, "{ta:?}");
-    // Different heights (A is aimed exactly, B's aim point is 0.12 m lower): a small error
-    // on B, mostly in y.
-    assert!((tb[0] - 1.0 / 3.0).abs() < 0.002, "{tb:?}");
-    assert!(ta[1].abs() < 1e-9 && tb[1].abs() < 0.05, "{ta:?} {tb:?}");
+    let p0 = place(
+        &solve(&plain, &NAMES[..2], &actors, &l, &g).unwrap(),
+        &actors,
+        &l,
+        &g,
+    );
+    for (who, profile) in [
+        (0usize, Profile::ThreeQuarterLeft),
+        (1, Profile::Right),
+        (1, Profile::ThreeQuarterRight),
+    ] {
+        let subjects = if who == 0 {
+            vec![
+                subject("A", Some(profile), None, None),
+                subject("B", None, None, None),
+            ]
+        } else {
+            vec![
+                subject("A", None, None, None),
+                subject("B", Some(profile), None, None),
+            ]
+        };
+        let c = comp(CameraAngle::EyeLevel, vec![(Size::MLS, subjects)]);
+        let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
+        let p = place(&v, &actors, &l, &g);
+        assert!(
+            (p.position_m - p0.position_m).norm() > 0.3,
+            "{profile:?} on {who}: the plain two-shot"
+        );
+        let x = &actors[who];
+        let bearing = (p.position_m.y - x.position_m[1]).atan2(p.position_m.x - x.position_m[0]);
+        let off = wrap_angle_rad(bearing - x.facing_rad - profile.azimuth_rad()).abs();
+        assert!(
+            off < 1e-6,
+            "{profile:?} on {who}: {}° off",
+            off.to_degrees()
+        );
+        // Both in frame.
+        let cam = pose(&p);
+        for a in &actors {
+            let s = cam.project(&l, &head(a, 0.6 * a.height_m)).unwrap();
+            assert!(
+                s[0].abs() <= framing::TWO_SHOT_SCREEN_MAX + 1e-6,
+                "{profile:?}: {s:?}"
+            );
+        }
+    }
 }
 
 /// `MS B 34backright <background> A 34left screen right`: B in the foreground, A in the
@@ -520,120 +554,105 @@ fn over_b_shoulder(background: Size) -> Composition {
     )
 }
 
-/// Over the shoulder: the background actor's size and screen position
-/// are exact, the foreground actor lands close to its third, the profile is near.
+/// The camera's bearing from an actor, from their facing, against a profile's angle.
+fn profile_off_rad(camera_m: &Vec3, a: &ActorPose, p: Profile) -> f64 {
+    let bearing = (camera_m.y - a.position_m[1]).atan2(camera_m.x - a.position_m[0]);
+    wrap_angle_rad(bearing - a.facing_rad - p.azimuth_rad()).abs()
+}
+
+/// Over the shoulder, as film grammar checks it: the camera within 22.5° of each written
+/// profile's side (B's, the foreground; A's, the background), A (background) exactly at its
+/// screen point, B on the other half of the frame, and A at its size where the camera can
+/// stand at its distance — else from as near as the profiles allow, the ratio telling how
+/// far.
 #[test]
 fn over_the_shoulder() {
     let l = lens(84.0);
-    let g = gimbal();
-    // Actors in conversation, 1.2 m apart (at 2.5 m, an MLS of A is closer to A than B is).
-    let mut actors = two_shot_scene();
-    actors[1].position_m = [1.2, 0.0, 0.0];
-    // `MS B 34backright MLS A 34left screen right`: B foreground, A background.
-    let c = over_b_shoulder(Size::MLS);
-    let v = solve(&c, &NAMES, &actors, &l, &g).unwrap();
-    let Visual::Two(t) = &v else { panic!("{v:?}") };
-    assert!(t.over_shoulder && t.a == 1 && t.b == 0);
-    assert!(
-        (t.screen_a[0] + 1.0 / 3.0).abs() < 1e-12,
-        "B defaults to the other third"
-    );
-    let p = place(&v, &actors, &l, &g);
-    let cam = pose(&p);
-    let (bottom, top) = size::band(Size::MLS, 1.8);
-    let tt = cam.project(&l, &head(&actors[0], top)).unwrap();
-    let bb = cam.project(&l, &head(&actors[0], bottom)).unwrap();
-    // Aimed at its band centre from above or below, the band is not exactly symmetric.
-    assert!(
-        (tt[1] - bb[1] - 2.0).abs() < 0.02,
-        "A framed MLS: {tt:?} {bb:?}"
-    );
-    assert!(tt[1] > 0.9 && bb[1] < -0.9, "{tt:?} {bb:?}");
-    let targets = screen_targets(&v, &actors, &l, &g, &p.position_m);
-    for target in &targets {
-        let s = cam.project(&l, &target.point_m).unwrap();
-        let err = (s[0] - target.screen[0]).hypot(s[1] - target.screen[1]);
-        // The foreground actor, 0.3 m from the camera and 0.08 m lower than A's aim point,
-        // carries the roll-free error (about 0.19 in screen y).
-        let bound = if target.actor == 0 { 1e-6 } else { 0.25 };
-        assert!(
-            err < bound,
-            "actor {} {s:?} vs {:?}",
-            target.actor,
-            target.screen
-        );
-    }
-    // The camera is behind B's right shoulder: the foreground profile roughly holds.
-    let fb = actors[1].facing_rad;
-    let u = sphere::direction(fb, Profile::ThreeQuarterBackRight.azimuth_rad(), 0.0);
-    let mb = head(&actors[1], 0.825 * 1.65);
-    let off = (p.position_m - mb).angle(&u).to_degrees();
-    assert!(off < 30.0, "profile off by {off}°");
-}
-
-/// Over the shoulder with the actors brought closer, step by step, until the background
-/// actor's size is out of the toric circle's reach: up to `OVER_SHOULDER_REACH` beyond it the
-/// camera frames from the circle's farthest point, both actors still on their screen points
-/// and the background actor a little larger than written (never by more than the reach);
-/// beyond that, the composition is refused. Refused at the edge of reach, a shot whose live
-/// actors stand a few centimetres closer than blocked would fail and hold the camera.
-#[test]
-fn over_the_shoulder_just_out_of_reach_frames_from_the_farthest_point() {
-    let l = lens(84.0);
-    let g = gimbal();
-    // `MS B 34backright LS A 34left screen right`: B foreground, A background.
-    let c = over_b_shoulder(Size::LS);
-    let (bottom, top) = size::band(Size::LS, 1.8);
-    let mut exact = 0;
-    let mut larger: Vec<f64> = Vec::new();
-    let mut refused = None;
-    for k in 0..300 {
-        let spacing = 4.0 - 0.01 * f64::from(k);
-        let mut actors = two_shot_scene();
-        actors[1].position_m = [spacing, 0.0, 0.0];
-        let v = match solve(&c, &NAMES, &actors, &l, &g) {
-            Ok(v) => v,
-            Err(e) => {
-                assert!(matches!(e, FramingError::SizeUnreachable { .. }), "{e:?}");
-                refused = Some(spacing);
-                break;
-            }
-        };
-        let p = place(&v, &actors, &l, &g);
-        let cam = pose(&p);
-        // A (background) stays exactly on its screen point…
-        for target in screen_targets(&v, &actors, &l, &g, &p.position_m) {
-            if target.actor == 0 {
-                let s = cam.project(&l, &target.point_m).unwrap();
-                let err = (s[0] - target.screen[0]).hypot(s[1] - target.screen[1]);
+    for g in [gimbal(), Gimbal::None] {
+        for apart_m in [1.2, 2.0, 3.0] {
+            let mut actors = two_shot_scene();
+            actors[1].position_m = [apart_m, 0.0, 0.0];
+            for background in [Size::MS, Size::MLS, Size::LS] {
+                let c = over_b_shoulder(background);
+                let v = solve(&c, &NAMES, &actors, &l, &g).unwrap();
+                let Visual::Two(t) = &v else { panic!("{v:?}") };
+                assert!(t.over_shoulder && t.a == 1 && t.b == 0);
+                let p = place(&v, &actors, &l, &g);
+                let off_fg =
+                    profile_off_rad(&p.position_m, &actors[1], Profile::ThreeQuarterBackRight);
+                let off_bg = profile_off_rad(&p.position_m, &actors[0], Profile::ThreeQuarterLeft);
                 assert!(
-                    err < 1e-6,
-                    "at {spacing:.2} m: {s:?} vs {:?}",
-                    target.screen
+                    off_fg.to_degrees() <= 22.5 && off_bg.to_degrees() <= 22.5,
+                    "{apart_m} m {background:?}: {:.1}° {:.1}°",
+                    off_fg.to_degrees(),
+                    off_bg.to_degrees()
+                );
+                let cam = pose(&p);
+                let (bottom, top) = size::band(background, 1.8);
+                let a_centre = head(&actors[0], (bottom + top) / 2.0);
+                let sa = cam.project(&l, &a_centre).unwrap();
+                assert!(
+                    (sa[0] - 1.0 / 3.0).abs() < 1e-6 && sa[1].abs() < 1e-6,
+                    "{sa:?}"
+                );
+                let (b_bottom, b_top) = size::band(Size::MS, 1.65);
+                let sb = cam
+                    .project(&l, &head(&actors[1], (b_bottom + b_top) / 2.0))
+                    .unwrap();
+                assert!(
+                    sb[0] < 0.0 && sb[0] >= -1.0,
+                    "{apart_m} m {background:?}: B at {sb:?}"
+                );
+                assert!(t.distance_ratio >= 1.0 - 1e-9, "{t:?}");
+                // The band shows the size at the ratio's distance.
+                let shown = cam.project(&l, &head(&actors[0], top)).unwrap()[1]
+                    - cam.project(&l, &head(&actors[0], bottom)).unwrap()[1];
+                assert!(
+                    (shown * t.distance_ratio - 2.0).abs() < 0.03,
+                    "{shown} at {}",
+                    t.distance_ratio
                 );
             }
         }
-        // …framed LS (its band fills the frame's height), or larger once out of reach.
-        let tt = cam.project(&l, &head(&actors[0], top)).unwrap();
-        let bb = cam.project(&l, &head(&actors[0], bottom)).unwrap();
-        let band = tt[1] - bb[1];
-        if (band - 2.0).abs() < 0.02 {
-            assert!(
-                larger.is_empty(),
-                "exact again at {spacing:.2} m after {larger:?}"
-            );
-            exact += 1;
-        } else {
-            assert!(band > 2.0, "at {spacing:.2} m: band {band}");
-            larger.push(band / 2.0);
-        }
     }
-    assert!(exact > 50, "{exact}");
-    assert!(refused.is_some(), "never refused");
-    let most = larger.iter().copied().fold(0.0, f64::max);
+}
+
+/// Over the shoulder with profiles on opposite sides of the line between the actors: no
+/// camera stands in both sectors, and the error names both profiles.
+#[test]
+fn over_the_shoulder_profiles_on_opposite_sides_are_refused() {
+    let l = lens(84.0);
+    let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(2.0, 0.0, 180.0, 1.65)];
+    let c = comp(
+        CameraAngle::EyeLevel,
+        vec![
+            (
+                Size::MS,
+                vec![subject(
+                    "B",
+                    Some(Profile::ThreeQuarterBackLeft),
+                    None,
+                    None,
+                )],
+            ),
+            (
+                Size::MS,
+                vec![subject("A", Some(Profile::ThreeQuarterLeft), None, None)],
+            ),
+        ],
+    );
+    let e = solve(&c, &NAMES[..2], &actors, &l, &Gimbal::None).unwrap_err();
+    assert_eq!(
+        e,
+        FramingError::ProfilesConflict {
+            foreground: Some(Profile::ThreeQuarterBackLeft),
+            background: Some(Profile::ThreeQuarterLeft)
+        }
+    );
+    let text = e.to_string();
     assert!(
-        larger.len() >= 5 && most > 1.1 && most <= OVER_SHOULDER_REACH + 0.02,
-        "{larger:?}"
+        text.contains("34backleft") && text.contains("34left"),
+        "{text}"
     );
 }
 
@@ -720,7 +739,7 @@ fn solve_reports_bad_compositions() {
         )),
         FramingError::ScreensCoincide
     );
-    // Profile behind A when A faces B: no camera sees both.
+    // Profile behind A when A faces B: the camera would look along the line through them.
     assert_eq!(
         err(comp(
             CameraAngle::EyeLevel,
@@ -729,7 +748,23 @@ fn solve_reports_bad_compositions() {
                 vec![subject("A", Some(Profile::Back), None, None), one("B")]
             )]
         )),
-        FramingError::ProfileUnreachable
+        FramingError::ProfileBlocked {
+            profile: Profile::Back
+        }
+    );
+    // A profile on both actors of one framing: a two-shot has one vantage.
+    assert_eq!(
+        err(comp(
+            CameraAngle::EyeLevel,
+            vec![(
+                Size::MS,
+                vec![
+                    subject("A", Some(Profile::ThreeQuarterLeft), None, None),
+                    subject("B", Some(Profile::ThreeQuarterRight), None, None)
+                ]
+            )]
+        )),
+        FramingError::TwoProfiles
     );
 }
 
@@ -884,8 +919,13 @@ fn interpolation_endpoints_and_continuity() {
                 // actors 2.5 m apart passes over them).
                 let df = (pose(&p).forward() - pose(&prev).forward()).norm();
                 let flagged = p.flags.orientation_clamped || prev.flags.orientation_clamped;
+                // Passing an actor at arm's length, the view turns fast by construction (the
+                // director's steering keeps the drone clear of them).
+                let grazing = actors
+                    .iter()
+                    .any(|x| body_axis_distance_m(&p.position_m, x) < 0.3);
                 assert!(
-                    df < 0.2 || flagged,
+                    df < 0.2 || flagged || grazing,
                     "{a:?} → {b:?} at {k}: view step {df} {p:?}"
                 );
                 prev = p;
@@ -894,8 +934,8 @@ fn interpolation_endpoints_and_continuity() {
     }
 }
 
-/// The toric blend keeps both actors framed through a two-shot → over-the-shoulder move: the
-/// primary lands exactly, the other stays close to its interpolated screen point.
+/// The toric blend keeps both actors framed through a two-shot → over-the-shoulder move: each
+/// stays close to its interpolated screen point.
 #[test]
 fn toric_blend_keeps_both_actors_on_screen() {
     let l = lens(84.0);
@@ -912,7 +952,9 @@ fn toric_blend_keeps_both_actors_on_screen() {
             worst = worst.max((s[0] - t.screen[0]).hypot(s[1] - t.screen[1]));
         }
     }
-    assert!(worst < 0.1, "worst screen error {worst}");
+    // The two-shot end is symmetric: its actors of different heights (1.80 and 1.65 m) share
+    // its roll-free error (0.07 in screen y at the start), and the move carries it over.
+    assert!(worst < 0.2, "worst screen error {worst}");
 }
 
 /// Body axis distance: to the segment feet → head.
@@ -989,16 +1031,13 @@ fn plain_and_held_steps_m(
     (plain_m, held_m)
 }
 
-/// An over-the-shoulder has up to two cameras that frame the background actor at its size;
-/// the solve keeps the one nearer the profile. With B walking toward A, the two come to miss
-/// the profile equally, and a fresh solve flips from one to the other: the camera target
-/// crosses more than a metre of stage in one 10 ms tick. Held tick after tick (`solve_near`,
-/// as the director does), the framing keeps its camera.
+/// An over-the-shoulder held tick after tick while the foreground actor walks toward the
+/// other, 1 cm a tick: its camera moves a few centimetres a tick at most, fresh or held
+/// (`solve_near`, as the director does), within each profile's sector throughout.
 #[test]
-fn a_held_over_the_shoulder_keeps_its_camera_when_both_frame_alike() {
+fn a_held_over_the_shoulder_moves_smoothly_as_an_actor_walks() {
     let (l, g, c, prepared) = ots_written_across_prepared();
     let at = |k: usize| {
-        // B walks from (0.5, −0.3) toward A, 1 cm a tick.
         let s = k as f64 * 0.01;
         [
             actor(-1.04, 0.21, 19.0, 1.82),
@@ -1006,62 +1045,26 @@ fn a_held_over_the_shoulder_keeps_its_camera_when_both_frame_alike() {
         ]
     };
     let (plain_jump_m, held_jump_m) =
-        plain_and_held_steps_m(&prepared, &c, (&l, &g), 80, at, |_, _, _, _| {});
-    assert!(
-        plain_jump_m > 1.0,
-        "the case flips unheld: {plain_jump_m:.3} m"
-    );
+        plain_and_held_steps_m(&prepared, &c, (&l, &g), 80, at, |k, actors, _, held| {
+            let p = framing::position_m(held, actors, &l, &g);
+            let (fg, bg) = (&actors[1], &actors[0]);
+            let (o_fg, o_bg) = (
+                profile_off_rad(&p, fg, Profile::ThreeQuarterLeft),
+                profile_off_rad(&p, bg, Profile::ThreeQuarterBackRight),
+            );
+            assert!(
+                o_fg.to_degrees() <= 22.5 && o_bg.to_degrees() <= 22.5,
+                "{k}: {o_fg} {o_bg}"
+            );
+        });
+    assert!(plain_jump_m < 0.05, "fresh: {plain_jump_m:.3} m in a tick");
     assert!(held_jump_m < 0.05, "held: {held_jump_m:.3} m in a tick");
 }
 
-/// Keeping its camera is not sticking to it: an actor who turns round moves the profile's
-/// side, and when the other camera frames it clearly better (by `BRANCH_KEEP_RAD`), the held
-/// framing goes there too, as the unheld solve does.
+/// An over-the-shoulder's camera keeps `clear_m` from both actors' body axes, the
+/// foreground actor walked up close to the other.
 #[test]
-fn a_held_over_the_shoulder_changes_camera_when_the_other_is_clearly_better() {
-    let (l, g, c, prepared) = ots_written_across_prepared();
-    let at = |facing_deg: f64| {
-        [
-            actor(-1.04, 0.21, 19.0, 1.82),
-            actor(0.2, -0.35, facing_deg, 1.82),
-        ]
-    };
-    let mut held: Option<Visual> = None;
-    let mut changes = 0;
-    let mut prev_theta: Option<f64> = None;
-    // B turns round twice, 2° a tick.
-    for k in 0..=360 {
-        let actors = at(-168.0 + 2.0 * k as f64);
-        let Ok(v) = prepared.solve_near(&c, &actors, &l, &g, held.as_ref(), 0.0) else {
-            held = None;
-            continue;
-        };
-        let Visual::Two(t) = &v else { panic!("{v:?}") };
-        if let Some(th) = prev_theta {
-            if (t.toric.theta_rad - th).abs() > 1.0 {
-                changes += 1;
-                // It changed to the camera the unheld solve picks.
-                let Visual::Two(best) = prepared.solve(&c, &actors, &l, &g).unwrap() else {
-                    unreachable!()
-                };
-                assert!(
-                    (best.toric.theta_rad - t.toric.theta_rad).abs() < 1e-9,
-                    "{best:?} against {t:?}"
-                );
-            }
-        }
-        prev_theta = Some(t.toric.theta_rad);
-        held = Some(v);
-    }
-    assert!(changes >= 2, "{changes} changes of camera in two turns");
-}
-
-/// Of an over-the-shoulder's two cameras, one standing inside an actor's distance gives way
-/// to one that does not: with the foreground actor walked up toward the other, the camera
-/// nearer the profile stands on their shoulder, while the other, 2 m away, frames it as
-/// well.
-#[test]
-fn an_over_the_shoulder_camera_inside_an_actor_gives_way_to_one_clear_of_both() {
+fn an_over_the_shoulder_camera_keeps_clear_of_both_actors() {
     let (l, g, c, prepared) = ots_written_across_prepared();
     let actors = [
         actor(-1.06, 0.32, 19.0, 1.82),
@@ -1074,26 +1077,16 @@ fn an_over_the_shoulder_camera_inside_an_actor_gives_way_to_one_clear_of_both() 
             .map(|a| body_axis_distance_m(&p, a))
             .fold(f64::INFINITY, f64::min)
     };
-    let unkept = prepared.solve_near(&c, &actors, &l, &g, None, 0.0).unwrap();
-    assert!(nearest_m(&unkept) < 0.5, "{}", nearest_m(&unkept));
-    let kept = prepared.solve_near(&c, &actors, &l, &g, None, 0.5).unwrap();
-    assert!(nearest_m(&kept) >= 0.5, "{}", nearest_m(&kept));
-    // The background actor's size is kept all the same (the same toric distance to A).
-    let (Visual::Two(u), Visual::Two(k)) = (&unkept, &kept) else {
-        panic!()
-    };
-    let to_a = |t: &framing::TwoVisual| {
-        assert_eq!(t.b, 0, "A is the background actor");
-        let [x, y, _] = actors[t.b].position_m;
-        let aim = Vec3::new(x, y, (t.band_b_m[0] + t.band_b_m[1]) / 2.0);
-        (framing::position_m(&Visual::Two(*t), &actors, &l, &g) - aim).norm()
-    };
-    assert!(
-        (to_a(u) - to_a(k)).abs() < 1e-6,
-        "{} against {}",
-        to_a(u),
-        to_a(k)
-    );
+    for clear_m in [0.5, 0.8, 1.0] {
+        let kept = prepared
+            .solve_near(&c, &actors, &l, &g, None, clear_m)
+            .unwrap();
+        assert!(
+            nearest_m(&kept) >= clear_m - 1e-6,
+            "{clear_m}: {}",
+            nearest_m(&kept)
+        );
+    }
 }
 
 /// A move between two framings while an actor turns round, one tick at a time: the largest
@@ -1214,13 +1207,10 @@ fn the_toric_blend_keeps_its_way_round_while_one_end_circles() {
     );
 }
 
-/// A two-shot of two actors walking apart: of its roots (θ where the nearer actor is at the
-/// size), the one nearest the symmetric θ changes sides of the arc as they walk, and the
-/// camera unheld crosses more than 5 m in one 10 ms tick. Held tick after tick
-/// (`solve_near` with the last solve, as the director does), the camera follows its root,
-/// 2 mm a tick, both actors on their screen points throughout.
+/// A two-shot of two actors walking apart: the camera follows them on their bisector, a few
+/// millimetres a tick, fresh or held, both actors on their screen points throughout.
 #[test]
-fn a_held_two_shot_follows_its_root_as_the_actors_walk() {
+fn a_two_shot_follows_walking_actors_smoothly() {
     let l = lens(84.0);
     let g = Gimbal::None;
     let c = comp(
@@ -1249,10 +1239,8 @@ fn a_held_two_shot_follows_its_root_as_the_actors_walk() {
         at,
         |k, actors, plain, held| {
             if k == 0 {
-                // The first solve is the unheld one.
                 assert_eq!(held, plain);
             }
-            // Both actors framed where the two-shot puts them, at every tick.
             let placed = place(held, actors, &l, &g);
             let cam = pose(&placed);
             for t in screen_targets(held, actors, &l, &g, &placed.position_m) {
@@ -1264,65 +1252,66 @@ fn a_held_two_shot_follows_its_root_as_the_actors_walk() {
             }
         },
     );
-    assert!(
-        plain_jump_m > 5.0,
-        "the case jumps unheld: {plain_jump_m:.3} m"
-    );
+    assert!(plain_jump_m < 0.05, "fresh: {plain_jump_m:.3} m in a tick");
     assert!(held_jump_m < 0.05, "held: {held_jump_m:.3} m in a tick");
 }
 
-/// Two actors of different heights in one framing, eye level, a pitch gimbal: the camera
-/// turns about the actors' line until the plane through it and both aim points holds its
-/// (horizontal) right axis, so both land exactly on their screen points (written or
-/// default), the sized actor keeps its size, and the pitch lies inside the gimbal's range.
-/// A gimbal whose range cannot hold that pitch frames as the level case does: the primary
-/// exactly, the other off its line.
+/// Two actors of different heights in one two-shot, eye level: from equal distances no
+/// roll-free camera puts their band centres on one screen line, so the two-shot frames them
+/// where a camera aimed between them sees them, the taller higher in the frame: exactly, with
+/// a level camera as with a gimbal. Screen points written on one line split the error
+/// evenly between the two (equal and opposite in y).
 #[test]
-fn a_gimbal_frames_two_heights_exactly() {
+fn a_two_shot_of_two_heights_frames_them_as_they_stand() {
     let l = lens(84.0);
-    let g = gimbal();
-    for (xb, yb, hb, screens) in [
-        (2.0, 0.0, 1.65, [None, None, None]),
-        (1.5, 1.0, 1.50, [None, None, None]),
-        (2.5, -0.5, 1.95, [Some(-0.5), Some(0.1), Some(0.2)]),
-    ] {
-        let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(xb, yb, 180.0, hb)];
+    for g in [gimbal(), Gimbal::None] {
+        for (xb, yb, hb) in [(2.0, 0.0, 1.65), (1.5, 1.0, 1.50), (2.5, -0.5, 1.95)] {
+            let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(xb, yb, 180.0, hb)];
+            let c = comp(
+                CameraAngle::EyeLevel,
+                vec![(
+                    Size::FS,
+                    vec![
+                        subject("A", None, None, None),
+                        subject("B", None, None, None),
+                    ],
+                )],
+            );
+            let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
+            let p = place(&v, &actors, &l, &g);
+            let e = screen_error(&v, &actors, &l, &g, &p);
+            assert!(e < 1e-6, "B at ({xb}, {yb}), {hb} m: screen error {e}");
+            let Visual::Two(t) = &v else { panic!("{v:?}") };
+            let taller_higher = (t.screen_a[1] > t.screen_b[1]) == (1.8 > hb);
+            assert!(taller_higher, "{t:?}");
+        }
+        let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(1.2, 0.0, 180.0, 1.65)];
+        let third = 1.0 / 3.0;
         let c = comp(
             CameraAngle::EyeLevel,
             vec![(
-                Size::MS,
+                Size::MLS,
                 vec![
-                    subject("A", None, screens[0], screens[1]),
-                    subject("B", None, None, screens[2]),
+                    subject("A", None, Some(-third), Some(0.0)),
+                    subject("B", None, Some(third), Some(0.0)),
                 ],
             )],
         );
         let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
         let p = place(&v, &actors, &l, &g);
-        let e = screen_error(&v, &actors, &l, &g, &p);
-        assert!(e < 1e-6, "B at ({xb}, {yb}), {hb} m: screen error {e}");
-        assert!(!p.flags.any(), "{:?}", p.flags);
-        // The level camera's error on the same composition, for contrast.
-        let v0 = solve(&c, &NAMES[..2], &actors, &l, &Gimbal::None).unwrap();
-        let p0 = place(&v0, &actors, &l, &Gimbal::None);
-        let e0 = screen_error(&v0, &actors, &l, &Gimbal::None, &p0);
-        assert!(e0 > 0.01, "level: {e0}");
-        // The sized actor keeps its size: its band spans two frame heights.
-        let Visual::Two(t) = &v else { panic!("{v:?}") };
-        let (sized, band) = match t.primary {
-            framing::Primary::A => (&actors[0], t.band_a_m),
-            framing::Primary::B => (&actors[1], t.band_b_m),
-        };
         let cam = pose(&p);
-        let top = cam.project(&l, &head(sized, band[1])).unwrap();
-        let bottom = cam.project(&l, &head(sized, band[0])).unwrap();
-        assert!(
-            (top[1] - bottom[1] - 2.0).abs() < 0.02,
-            "{top:?} {bottom:?}"
-        );
+        let ys: Vec<f64> = screen_targets(&v, &actors, &l, &g, &p.position_m)
+            .iter()
+            .map(|t| cam.project(&l, &t.point_m).unwrap()[1] - t.screen[1])
+            .collect();
+        assert!((ys[0] + ys[1]).abs() < 1e-6 && ys[0].abs() > 1e-3, "{ys:?}");
     }
+}
 
-    // A gimbal that barely tilts: the pitch is out of its reach, the primary still exact.
+/// A pitch gimbal that barely tilts: a high angle's pitch is out of its reach and flagged.
+#[test]
+fn a_narrow_gimbal_flags_the_pitch_it_cannot_hold() {
+    let l = lens(84.0);
     let narrow = Gimbal::Pitch {
         min_rad: -1e-4,
         max_rad: 1e-4,
@@ -1330,9 +1319,9 @@ fn a_gimbal_frames_two_heights_exactly() {
     };
     let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(2.0, 0.0, 180.0, 1.65)];
     let c = comp(
-        CameraAngle::EyeLevel,
+        CameraAngle::High,
         vec![(
-            Size::MS,
+            Size::FS,
             vec![
                 subject("A", None, None, None),
                 subject("B", None, None, None),
@@ -1341,5 +1330,6 @@ fn a_gimbal_frames_two_heights_exactly() {
     );
     let v = solve(&c, &NAMES[..2], &actors, &l, &narrow).unwrap();
     let p = place(&v, &actors, &l, &narrow);
+    assert!(p.flags.pitch_clamped, "{p:?}");
     assert!(screen_error(&v, &actors, &l, &narrow, &p) > 0.01);
 }

@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
+pub mod docs;
 pub mod span;
 pub mod suggest;
 #[cfg(feature = "toml")]
@@ -146,6 +147,12 @@ macro_rules! codes {
             }
         }
     };
+}
+
+/// The command that prints what `code` means, with an example and the fix (its entry in
+/// `docs/diagnostics.md`): `dronecine explain psl::unknown_actor`.
+pub fn explain_command(code: Code) -> String {
+    format!("dronecine explain {code}")
 }
 
 impl fmt::Display for Code {
@@ -289,6 +296,8 @@ pub struct JsonDiagnostic {
     pub end_line: usize,
     pub end_column: usize,
     pub help: Option<String>,
+    /// The command that explains the code ([`explain_command`]).
+    pub explain: String,
 }
 
 pub fn to_json(file: &str, src: &str, diagnostics: &[Diagnostic]) -> Vec<JsonDiagnostic> {
@@ -312,6 +321,7 @@ pub fn to_json(file: &str, src: &str, diagnostics: &[Diagnostic]) -> Vec<JsonDia
                 end_line,
                 end_column,
                 help: d.help.clone(),
+                explain: explain_command(d.code),
             }
         })
         .collect()
@@ -326,7 +336,8 @@ const MAX_SHOWN_LINE: usize = 400;
 pub const MAX_RENDERED: usize = 100;
 
 /// Render diagnostics the way a person reads them: message, code, the quoted source with the
-/// span underlined, and the help line. Plain text (no colour) unless `color` is set. The first
+/// span underlined, the help line, and the command that explains the code
+/// ([`explain_command`]). Plain text (no colour) unless `color` is set. The first
 /// [`MAX_RENDERED`] are rendered, in the order given; a last line counts the others.
 pub fn render(
     file: &str,
@@ -355,6 +366,7 @@ pub fn render_listed(
     };
     let handler = miette::GraphicalReportHandler::new_themed(theme)
         .with_width(width)
+        .with_word_splitter(textwrap::WordSplitter::NoHyphenation)
         .with_context_lines(1);
     let shown = Lines::new(Arc::new(display_safe(src)));
     let index = LineIndex::new(src);
@@ -365,6 +377,7 @@ pub fn render_listed(
         if handler.render_report(&mut out, &report).is_err() {
             out.push_str(&format!("{}: {} [{}]\n", file, d.message, d.code));
         }
+        out.push_str(&format!("  more: `{}`\n", explain_command(d.code)));
     }
     if !rest.is_empty() {
         out.push_str(&not_shown(file, rest, lister));
@@ -634,9 +647,14 @@ mod tests {
             out.contains("the battery is flat") && out.contains("charge it"),
             "{out}"
         );
+        assert!(
+            out.ends_with("\n  more: `dronecine explain test::second`\n"),
+            "{out}"
+        );
         assert!(!out.contains("stage"), "{out}");
         let json = to_json("x.psl", "stage 8m x 6m x 3m\n", &[d]);
         assert_eq!((json[0].line, json[0].column), (0, 0));
+        assert_eq!(json[0].explain, "dronecine explain test::second");
     }
 
     #[test]
@@ -746,6 +764,7 @@ mod tests {
        ·            ╰── error 49990
  49992 │ MS on Nobody49991 for 4s
        ╰────
+  more: `dronecine explain test::first`
 ";
         assert_eq!(out, expected);
     }

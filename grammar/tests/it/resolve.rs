@@ -336,3 +336,99 @@ fn waypoint_numbers_too_close_to_zero_are_refused() {
     assert!(!zero.has_errors(), "{:?}", zero.diagnostics);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_coverage_resolves_to_one_shot_of_its_pair() {
+    let s = ok(
+        "MS on A for 4s\nat 6s cut to coverage FS on A and B for 24s\ncoverage B and A for 20s\n",
+    );
+    assert_eq!(s.timeline.len(), 3);
+    let ShotContent::Coverage(c) = &s.timeline[1].content else {
+        panic!("{:?}", s.timeline[1].content);
+    };
+    assert_eq!(
+        (c.a.as_str(), c.b.as_str(), c.size),
+        ("A", "B", Some(dronecine_grammar::vocab::Size::FS))
+    );
+    let shot = &s.timeline[1];
+    assert_eq!((shot.start_s, shot.end_s, shot.pinned), (6.0, 30.0, true));
+    assert_eq!(shot.transition, Transition::Cut);
+    assert_eq!(shot.coverage, None);
+    let ShotContent::Coverage(c) = &s.timeline[2].content else {
+        panic!("{:?}", s.timeline[2].content);
+    };
+    assert_eq!((c.a.as_str(), c.b.as_str(), c.size), ("B", "A", None));
+    assert_eq!((s.timeline[2].start_s, s.timeline[2].end_s), (30.0, 50.0));
+    let d = ok("MS on A for 4s\ndissolve to coverage A and B for 20s\n");
+    assert_eq!(d.timeline[1].transition, Transition::Dissolve);
+}
+
+#[test]
+fn a_coverage_is_checked() {
+    use PslCode as P;
+    assert_eq!(codes("coverage A and C for 20s\n"), [P::UnknownActor]);
+    assert_eq!(codes("coverage A and A for 20s\n"), [P::TwoShotSameActor]);
+    assert_eq!(codes("coverage A and B for 10s\n"), [P::CoverageTooShort]);
+    assert!(COVERAGE_MIN_S > COVERAGE_PARTS as f64 * COVERAGE_MIN_HOLD_S);
+    let at_least = format!("coverage A and B for {COVERAGE_MIN_S}s\n");
+    assert!(codes(&at_least).is_empty());
+    assert_eq!(codes("coverage A and B\n"), [P::MissingDuration]);
+    assert_eq!(codes("coverage A and B over 20s\n"), [P::DurationKeyword]);
+    assert_eq!(
+        codes("MS on A for 4s\nthen dolly to coverage A and B for 20s\n"),
+        [P::ThenToCoverage]
+    );
+    assert_eq!(
+        codes("coverage A and B for 20s\nthen hold for 2s\n"),
+        [P::ThenAfterCoverage]
+    );
+    assert_eq!(
+        codes("coverage A and B for 20s\nthen dolly to MS on A over 2s\n"),
+        [P::ThenAfterCoverage]
+    );
+    // `coverage` is reserved: it names no actor.
+    assert_eq!(
+        codes("actor coverage height 1.7m at (1, 1)\nMS on A for 2s\n"),
+        [P::KeywordAsName]
+    );
+}
+
+/// A composition printed as PSL text reads back as the same composition.
+#[test]
+fn a_composition_prints_as_the_psl_it_resolves_from() {
+    let lines = [
+        "MS on Rick 34backright MS on Ilsa 34left screen right",
+        "MS on A",
+        "high angle MLS on A and B",
+        "low angle CU on B front screen (0.2, 0.1)",
+        "MS on A screen left and B screen (0.4, -0.25)",
+        "FS on A 34right screen center",
+        "ECU on B back screen (-0.3333333333333333, 0)",
+    ];
+    let head =
+        "stage 8m x 6m x 3m\nactor A height 1.80m at (0, 0)\nactor B height 1.65m at (2, 0)\n\
+                actor Rick height 1.8m at (-1, 1)\nactor Ilsa height 1.6m at (1, 1)\n";
+    for line in lines {
+        let src = format!("{head}{line} for 4s\n");
+        let c = check(&src, &Options::default());
+        assert!(!c.has_errors(), "{line}: {:?}", c.diagnostics);
+        let s = c.script.unwrap();
+        let ShotContent::Composition(comp) = &s.timeline[0].content else {
+            panic!("{line}");
+        };
+        let printed = comp.to_string();
+        let again = check(&format!("{head}{printed} for 4s\n"), &Options::default());
+        assert!(!again.has_errors(), "{printed}: {:?}", again.diagnostics);
+        let s2 = again.script.unwrap();
+        assert_eq!(
+            &s2.timeline[0].content, &s.timeline[0].content,
+            "{line} → {printed}"
+        );
+    }
+    // The thirds are written as thirds.
+    let s = ok("MS on A screen right and B screen left for 2s\n");
+    assert_eq!(
+        composition(&s, 0).to_string(),
+        "MS on A screen right and B screen left"
+    );
+}

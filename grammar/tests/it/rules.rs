@@ -253,6 +253,38 @@ fn shots() {
 }
 
 #[test]
+fn coverage_shot() {
+    accepts(
+        Rule::coverage_shot,
+        &[
+            "coverage A and B for 24s",
+            "coverage FS on Rick and Ilsa for 24s",
+            "coverage MLS A and B for 20s",
+            "coverage on A and B for 20s",
+            "cut to coverage A and B for 24s",
+            "dissolve to coverage A and B for 24s",
+            // Parsed, to be refused with its fix (`psl::then_to_coverage`).
+            "then dolly to coverage A and B for 24s",
+            "coverage A and B",
+        ],
+    );
+    rejects(
+        Rule::coverage_shot,
+        &[
+            "coverage A for 24s",
+            "coverage A and B and C for 24s",
+            "coverage A B for 24s",
+            "coverage A and coverage for 24s",
+            "coverage front and B for 24s",
+            "coverage FS on A 34left and B for 24s",
+            "coveragea A and B for 24s",
+        ],
+    );
+    accepts(Rule::shot, &["at 12s cut to coverage A and B for 24s"]);
+    rejects(Rule::name, &["coverage"]);
+}
+
+#[test]
 fn path_shot() {
     accepts(
         Rule::path_shot,

@@ -71,6 +71,11 @@ impl<C: Clock> Clock for Paced<C> {
         self.wall.sleep_until(t_s);
         self.inner.sleep_until(t_s);
     }
+
+    /// On the wall clock: the simulator's clock is where it was told to be, whenever that is.
+    fn lateness_s(&mut self, t_s: f64) -> f64 {
+        self.wall.now_s() - t_s
+    }
 }
 
 #[cfg(test)]
@@ -94,6 +99,18 @@ mod tests {
         c.sleep_until(0.03);
         assert!(t0.elapsed() >= Duration::from_millis(29));
         assert_eq!(c.now_s(), 0.03);
+    }
+
+    /// The paced clock's lateness is the wall's: a tick that returns late on the wall is late
+    /// by that much, though the simulator's clock reads the tick's time.
+    #[test]
+    fn paced_lateness_is_on_the_wall_clock() {
+        let mut c = Paced::new(Manual(0.0));
+        c.sleep_until(0.01);
+        std::thread::sleep(Duration::from_millis(20));
+        assert_eq!(c.now_s(), 0.01);
+        assert!(c.lateness_s(0.01) >= 0.019, "{}", c.lateness_s(0.01));
+        assert_eq!(Manual(0.5).lateness_s(0.25), 0.25);
     }
 
     #[test]

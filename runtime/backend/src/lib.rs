@@ -148,6 +148,11 @@ pub trait Clock {
     /// Returns at `t_s` or as soon after as the backend can (the simulator advances its
     /// world to `t_s`; a wall clock sleeps).
     fn sleep_until(&mut self, t_s: f64);
+    /// How late, in seconds of wall time when the flight keeps to it, the clock returned
+    /// from `sleep_until(t_s)`: what the report's timing and the live view's cost measure.
+    fn lateness_s(&mut self, t_s: f64) -> f64 {
+        self.now_s() - t_s
+    }
 }
 
 /// What a backend reports when it cannot do what was asked.

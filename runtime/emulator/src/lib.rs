@@ -1,6 +1,8 @@
-//! The AR.Drone 2.0 + OptiTrack emulator behind `dronecine emulate ardrone`: the embedded
-//! simulator (`sim`) run in real time behind the real wire protocols (AR.Drone and NatNet),
-//! so the AR.Drone and NatNet backends (and any AR.Drone client) can fly it over UDP.
+//! The emulators behind `dronecine emulate`: the embedded simulator (`sim`) run in real
+//! time behind the real wire protocols, so the backends (and the drones' own clients) fly it
+//! over UDP. This module is the AR.Drone 2.0 + OptiTrack one (`dronecine emulate ardrone`:
+//! AT commands, navdata, NatNet); [`crazyflie_emulator`] is the Crazyflie + OptiTrack one
+//! (`dronecine emulate crazyflie`: CRTP over UDP, NatNet), its firmware in [`crazyflie`].
 //!
 //! [`Emulator::start`] binds the sockets (errors come back at once), then one thread owns the
 //! simulator (which is single-threaded) and the sockets, non-blocking, and loops every
@@ -28,8 +30,11 @@
 //! Nothing on the network can panic the loop: every datagram is parsed by the codecs'
 //! error-returning decoders and a bad one is counted.
 
+pub mod crazyflie;
+pub mod crazyflie_emulator;
 pub mod firmware;
 pub mod motive;
+mod natnet_io;
 
 use std::fmt;
 use std::io;
@@ -48,8 +53,12 @@ use dronecine_natnet::frame::{
 };
 use dronecine_sim::{SimClock, SimConfig, SimDrone, SimError, SimMocap, Simulator, Truth};
 
+pub use crazyflie_emulator::{
+    CrazyflieEmulator, CrazyflieEmulatorConfig, CrazyflieHandle, CrazyflieStatus,
+};
 pub use firmware::{AtCounters, Firmware, Limits, NavdataMode};
 pub use motive::{Motive, ACTOR_ID_BASE, DRONE_ID};
+use natnet_io::{NatNetCounts, NatNetIo};
 
 /// The AR.Drone's AT command port.
 pub const AT_PORT: u16 = 5556;
@@ -320,18 +329,11 @@ impl Drop for EmulatorHandle {
     }
 }
 
-fn bind(what: &'static str, addr: SocketAddr) -> Result<UdpSocket, EmulatorError> {
+pub(crate) fn bind(what: &'static str, addr: SocketAddr) -> Result<UdpSocket, EmulatorError> {
     let err = |error| EmulatorError::Socket { what, addr, error };
     let s = UdpSocket::bind(addr).map_err(err)?;
     s.set_nonblocking(true).map_err(err)?;
     Ok(s)
-}
-
-struct NatNetIo {
-    command: UdpSocket,
-    data: UdpSocket,
-    dest: SocketAddr,
-    motive: Motive,
 }
 
 impl Emulator {
@@ -364,83 +366,22 @@ impl Emulator {
         let navdata_addr = local(&nav, "navdata")?;
         let natnet = match &config.natnet {
             None => None,
-            Some(n) => {
-                let command = bind(
-                    "NatNet command",
-                    SocketAddr::new(config.host, n.command_port),
-                )?;
-                let dest = n.data.addr();
-                if dest.port() == 0 || dest.ip().is_unspecified() {
-                    return Err(EmulatorError::Config(format!(
-                        "NatNet frames cannot be sent to {dest}: give an address and a port"
-                    )));
-                }
-                let data_bind = match dest {
-                    SocketAddr::V4(_) => SocketAddr::new(
-                        if config.host.is_ipv4() {
-                            config.host
-                        } else {
-                            IpAddr::V4(Ipv4Addr::UNSPECIFIED)
-                        },
-                        0,
-                    ),
-                    SocketAddr::V6(_) => SocketAddr::new(
-                        if config.host.is_ipv6() {
-                            config.host
-                        } else {
-                            IpAddr::V6(std::net::Ipv6Addr::UNSPECIFIED)
-                        },
-                        0,
-                    ),
-                };
-                let data = bind("NatNet data", data_bind)?;
-                if let NatNetData::Multicast(_) = n.data {
-                    let _ = data.set_multicast_loop_v4(true);
-                }
-                let (multicast, group) = match n.data {
-                    NatNetData::Multicast(a) => (true, a.ip().octets()),
-                    NatNetData::Unicast(_) => (false, [0; 4]),
-                };
-                let motive = Motive::new(n.version, n.up_axis, dest.port(), multicast, group)
-                    .map_err(EmulatorError::NatNet)?;
-                Some(NatNetIo {
-                    command,
-                    data,
-                    dest,
-                    motive,
-                })
-            }
+            Some(n) => Some(NatNetIo::bind(config.host, n)?),
         };
         let natnet_command_addr = match &natnet {
-            Some(n) => Some(local(&n.command, "NatNet command")?),
+            Some(n) => Some(n.command_addr()?),
             None => None,
         };
         let natnet_data = config.natnet.map(|n| n.data);
 
         let status = Arc::new(Mutex::new(Status::default()));
         let stop = Arc::new(AtomicBool::new(false));
-        let (ready_tx, ready_rx) = mpsc::channel();
         let (st, sp) = (Arc::clone(&status), Arc::clone(&stop));
-        let thread = std::thread::Builder::new()
-            .name("dronecine-emulator".into())
-            .spawn(move || {
-                let mut lp = match Loop::new(config, at, nav, natnet, st, sp) {
-                    Ok(mut lp) => {
-                        lp.publish(0.0);
-                        let _ = ready_tx.send(Ok(()));
-                        lp
-                    }
-                    Err(e) => {
-                        let _ = ready_tx.send(Err(e));
-                        return;
-                    }
-                };
-                lp.run();
-            })
-            .map_err(|e| EmulatorError::Thread(e.to_string()))?;
-        let ready = ready_rx
-            .recv()
-            .unwrap_or_else(|_| Err(EmulatorError::Thread("it ended before starting".into())));
+        let (thread, ready) = spawn_loop(move || {
+            let mut lp = Loop::new(config, at, nav, natnet, st, sp)?;
+            lp.publish(0.0);
+            Ok(lp)
+        })?;
         let handle = EmulatorHandle {
             at_addr,
             navdata_addr,
@@ -455,7 +396,7 @@ impl Emulator {
 }
 
 /// The simulator and its handles (rebuilt when an emergency is cleared).
-struct World {
+pub(crate) struct World {
     sim: Simulator,
     drone: SimDrone,
     mocap: SimMocap,
@@ -472,12 +413,89 @@ impl World {
             sim,
         })
     }
+
+    /// A world whose drone stands landed where this one's is, with its heading and battery
+    /// (the simulator cannot leave its emergency state itself); its clock starts again.
+    fn landed_here(
+        &self,
+        cfg: &SimConfig,
+        profile: &Profile,
+        scene: &Scene,
+    ) -> Result<World, SimError> {
+        let t = self.sim.truth();
+        let mut cfg = cfg.clone();
+        cfg.start_position_m = t.position_m;
+        cfg.start_heading_rad = t.heading_rad;
+        cfg.battery_start_percent = t.battery_percent.clamp(0.0, 100.0);
+        World::new(&cfg, profile, scene)
+    }
+
+    /// The newest motion-capture frame, if the simulator made one since the last call: its
+    /// number, counted on from `frame_offset`.
+    fn next_frame(&mut self, frame: &mut MocapFrame, frame_offset: u64) -> Option<u64> {
+        matches!(self.mocap.poll(frame), Ok(true)).then(|| frame_offset + frame.frame)
+    }
+}
+
+/// An emulator's loop, run every [`Paced::step_s`] of wall time on a thread of its own.
+pub(crate) trait Paced {
+    /// One step: drain the sockets, advance the world, send what is due.
+    fn step(&mut self);
+    fn step_s(&self) -> f64;
+    fn stopped(&self) -> bool;
+    /// Wall seconds since the loop started.
+    fn now_s(&self) -> f64;
+}
+
+/// Runs `lp` until it is stopped, step k at k·step_s; far behind (the process was
+/// suspended), it skips ahead rather than spin.
+fn run_paced(lp: &mut impl Paced) {
+    let step = lp.step_s();
+    let mut k: u64 = 0;
+    while !lp.stopped() {
+        lp.step();
+        k += 1;
+        let now = lp.now_s();
+        let mut next = k as f64 * step;
+        if next < now - 0.1 {
+            k = (now / step).ceil() as u64;
+            next = k as f64 * step;
+        }
+        let wait = next - now;
+        if wait > 0.0 {
+            std::thread::sleep(Duration::from_secs_f64(wait));
+        }
+    }
+}
+
+/// Starts an emulator's thread: `make` builds the loop there (the simulator is not `Send`),
+/// which then runs until stopped; its thread and whether it started (its error if not).
+pub(crate) fn spawn_loop<L: Paced>(
+    make: impl FnOnce() -> Result<L, EmulatorError> + Send + 'static,
+) -> Result<(JoinHandle<()>, Result<(), EmulatorError>), EmulatorError> {
+    let (ready_tx, ready_rx) = mpsc::channel();
+    let thread = std::thread::Builder::new()
+        .name("dronecine-emulator".into())
+        .spawn(move || match make() {
+            Ok(mut lp) => {
+                let _ = ready_tx.send(Ok(()));
+                run_paced(&mut lp);
+            }
+            Err(e) => {
+                let _ = ready_tx.send(Err(e));
+            }
+        })
+        .map_err(|e| EmulatorError::Thread(e.to_string()))?;
+    let ready = ready_rx
+        .recv()
+        .unwrap_or_else(|_| Err(EmulatorError::Thread("it ended before starting".into())));
+    Ok((thread, ready))
 }
 
 /// Largest datagram read.
 const RECV_BUF: usize = 65_536;
 /// At most this many datagrams per socket per step (the others wait for the next step).
-const MAX_DATAGRAMS_PER_STEP: usize = 512;
+pub(crate) const MAX_DATAGRAMS_PER_STEP: usize = 512;
 
 struct Loop {
     cfg: EmulatorConfig,
@@ -501,6 +519,24 @@ struct Loop {
     start: Instant,
     rx: Vec<u8>,
     tx: Vec<u8>,
+}
+
+impl Paced for Loop {
+    fn step(&mut self) {
+        Loop::step(self);
+    }
+
+    fn step_s(&self) -> f64 {
+        self.cfg.step_s
+    }
+
+    fn stopped(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+
+    fn now_s(&self) -> f64 {
+        Loop::now_s(self)
+    }
 }
 
 impl Loop {
@@ -539,26 +575,6 @@ impl Loop {
 
     fn now_s(&self) -> f64 {
         self.start.elapsed().as_secs_f64()
-    }
-
-    fn run(&mut self) {
-        let step = self.cfg.step_s;
-        let mut k: u64 = 0;
-        while !self.stop.load(Ordering::SeqCst) {
-            self.step();
-            k += 1;
-            let now = self.now_s();
-            let mut next = k as f64 * step;
-            if next < now - 0.1 {
-                // Far behind (the process was suspended): skip ahead rather than spin.
-                k = (now / step).ceil() as u64;
-                next = k as f64 * step;
-            }
-            let wait = next - now;
-            if wait > 0.0 {
-                std::thread::sleep(Duration::from_secs_f64(wait));
-            }
-        }
     }
 
     fn step(&mut self) {
@@ -610,12 +626,8 @@ impl Loop {
     }
 
     fn clear_emergency(&mut self, now: f64) {
-        let t = self.world.sim.truth();
-        let mut cfg = self.cfg.sim.clone();
-        cfg.start_position_m = t.position_m;
-        cfg.start_heading_rad = t.heading_rad;
-        cfg.battery_start_percent = t.battery_percent.clamp(0.0, 100.0);
-        if let Ok(w) = World::new(&cfg, &self.cfg.profile, &self.cfg.scene) {
+        let cfg = &self.cfg;
+        if let Ok(w) = self.world.landed_here(&cfg.sim, &cfg.profile, &cfg.scene) {
             self.world = w;
             self.sim_offset_s = now;
             self.frame_offset = self.last_frame_number.map_or(0, |n| n + 1);
@@ -644,44 +656,28 @@ impl Loop {
 
     fn drain_natnet(&mut self) {
         let Some(io) = &mut self.natnet else { return };
-        for _ in 0..MAX_DATAGRAMS_PER_STEP {
-            let (n, from) = match io.command.recv_from(&mut self.rx) {
-                Ok(r) => r,
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
-                Err(_) => continue,
-            };
-            match io.motive.command(&self.rx[..n], &mut self.tx) {
-                Ok(reply) => {
-                    self.counters.natnet_requests += 1;
-                    if let motive::Reply::Send(len) = reply {
-                        if io.command.send_to(&self.tx[..len], from).is_err() {
-                            self.counters.send_errors += 1;
-                        }
-                    }
-                }
-                Err(_) => self.counters.natnet_rejected += 1,
-            }
-        }
+        let mut counts = NatNetCounts::default();
+        io.drain(&mut self.rx, &mut self.tx, &mut counts);
+        self.count(counts);
+    }
+
+    fn count(&mut self, c: NatNetCounts) {
+        self.counters.natnet_requests += c.requests;
+        self.counters.natnet_rejected += c.rejected;
+        self.counters.frames_sent += c.frames;
+        self.counters.send_errors += c.send_errors;
     }
 
     fn send_frame(&mut self, now: f64) {
-        if !matches!(self.world.mocap.poll(&mut self.frame), Ok(true)) {
+        let Some(number) = self.world.next_frame(&mut self.frame, self.frame_offset) else {
             return;
-        }
-        let number = self.frame_offset + self.frame.frame;
+        };
         self.last_frame_number = Some(number);
         let Some(io) = &mut self.natnet else { return };
         let capture = self.sim_offset_s + self.frame.t_s / self.cfg.time_scale;
-        match io
-            .motive
-            .frame(&self.frame, number, capture, now, &mut self.tx)
-        {
-            Ok(len) => match io.data.send_to(&self.tx[..len], io.dest) {
-                Ok(_) => self.counters.frames_sent += 1,
-                Err(_) => self.counters.send_errors += 1,
-            },
-            Err(_) => self.counters.send_errors += 1,
-        }
+        let mut counts = NatNetCounts::default();
+        io.send_frame(&self.frame, number, capture, now, &mut self.tx, &mut counts);
+        self.count(counts);
     }
 
     fn send_navdata(&mut self, now: f64) {

@@ -240,7 +240,9 @@ impl<'s, 'b> Flight<'s, 'b> {
     ) -> Result<(f64, bool), FlightError> {
         self.clock.sleep_until(t_next_s);
         let now = self.clock.now_s();
-        self.lateness.add(now - t_next_s);
+        let late_s = self.clock.lateness_s(t_next_s);
+        self.lateness.add(late_s);
+        self.sink.tick_lateness(late_s);
         if now > t_next_s + 0.5 * self.period_s {
             self.deadline_misses += 1;
             self.event(

@@ -57,7 +57,9 @@ impl Flight<'_, '_> {
             return self.finish(t, take_off_s, false);
         }
         let mut leg = self.approach(t, &ground)?;
-        let mut director = Director::new(self.setup.script, self.setup.scene, self.setup.profile);
+        let (script, scene, profile) = (self.setup.script, self.setup.scene, self.setup.profile);
+        let mut director = Director::new(script, scene, profile)
+            .watched(dronecine_film::watch(script, scene, profile));
         director.actors_measured();
         director.start_from(
             Vec3::from(leg.last.position_m),

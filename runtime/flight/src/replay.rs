@@ -19,15 +19,17 @@ use dronecine_mcap::log::FlightLog;
 use dronecine_servo::control::{Controller, TickFault, TickOutput};
 use dronecine_servo::setup::controller_for;
 
-/// The shots' PSL text, from the script recorded in the log (a script that no longer
-/// resolves, for example a profile file that moved, gives numbered shots instead).
-fn labels(script_text: &str) -> Vec<String> {
+/// The shots' PSL text, from the script recorded in the log, its coverages expanded for the
+/// profile the log records as the flight expanded them (a script that no longer resolves,
+/// for example a profile file that moved, gives numbered shots instead).
+fn labels(script_text: &str, profile: &dronecine_profile::Profile) -> Vec<String> {
     let opts = dronecine_grammar::Options {
         known_drones: &[],
         base_dir: None,
     };
     dronecine_grammar::check(script_text, &opts)
         .script
+        .map(|s| dronecine_compiler::coverage::expand(&s, profile).0)
         .map(|s| crate::report::shot_labels(&s, script_text))
         .unwrap_or_default()
 }
@@ -194,6 +196,6 @@ pub fn replay(log: &FlightLog) -> Result<Replay, String> {
         mismatches,
         first_mismatch,
         state_mismatches,
-        report: metrics.report(&labels(&log.header.script_text), counts),
+        report: metrics.report(&labels(&log.header.script_text, profile), counts),
     })
 }

@@ -77,6 +77,8 @@ pub struct FlightReport {
     /// From the take-off command to the end (landed, or the landing timed out).
     pub flight_time_s: f64,
     pub shots_time_s: f64,
+    /// The script's shots, flown or not (`shots` lists those reached).
+    pub scripted_shots: usize,
     #[serde(flatten)]
     pub figures: Figures,
     pub failsafes: u64,
@@ -336,6 +338,7 @@ impl Metrics {
                 .total
                 .first_t_s
                 .map_or(0.0, |t0| self.total.last_t_s - t0),
+            scripted_shots: labels.len(),
             figures: self.total.figures(),
             failsafes: counts.failsafes,
             director_errors: counts.director_errors,
@@ -354,13 +357,7 @@ pub fn shot_labels(script: &dronecine_grammar::Script, source: &str) -> Vec<Stri
     script
         .timeline
         .iter()
-        .map(|shot| {
-            source
-                .get(shot.span.start..shot.span.end)
-                .unwrap_or("")
-                .trim()
-                .to_string()
-        })
+        .map(|shot| shot.label(source))
         .collect()
 }
 

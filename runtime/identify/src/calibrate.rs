@@ -261,6 +261,9 @@ impl Flyer<'_, '_> {
         while self.t < end {
             self.t += self.dt;
             self.b.clock.sleep_until(self.t);
+            // Read on: a drone whose estimator the motion capture feeds (a Crazyflie, an
+            // ArduPilot's EKF) is sent each pose read, in the landing too.
+            let _ = self.b.mocap.poll(&mut self.frame);
             if self
                 .interrupts
                 .is_some_and(|i| i.load(Ordering::Relaxed) > 1)

@@ -51,7 +51,7 @@ pub const TAU_MAX_S: f64 = 20.0;
 const Z95: f64 = 1.959964;
 
 /// One tick: the pose the mocap measured at `t_s`, and the command held from `t_s` on.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sample {
     pub t_s: f64,
     pub command: Command,
@@ -146,6 +146,27 @@ pub struct AxisFit {
     pub attitude_lag_s: Option<f64>,
 }
 
+/// A delay (attitude lag and latency together) longer than this share of an axis' lag is
+/// folded into the lag the profile writes: the servo's model has one lag per axis, and
+/// designed on a lag shorter than the delay it flies with, it flies too hard (an
+/// autopilot's climb-rate loop, 0.16 s behind a 0.29 s latency, saturated and oscillated).
+pub const DELAY_FOLDED_SHARE: f64 = 0.5;
+
+impl AxisFit {
+    /// The lag the servo's model takes for this axis: τ, or τ with the delay folded in when
+    /// the delay is longer than [`DELAY_FOLDED_SHARE`] of it (a first-order lag whose time
+    /// constant is the cascade's mean delay). `None` for the heading.
+    pub fn servo_tau_s(&self) -> Option<f64> {
+        let tau = self.tau_s?.value;
+        let delay = self.attitude_lag_s.unwrap_or(0.0) + self.latency_s.unwrap_or(0.0);
+        Some(if delay > DELAY_FOLDED_SHARE * tau {
+            tau + delay
+        } else {
+            tau
+        })
+    }
+}
+
 /// The whole model, as far as it was fitted.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ModelFit {
@@ -183,15 +204,15 @@ impl ModelFit {
         let m = &mut p.model;
         if let Some(f) = &self.roll {
             m.gain_roll_mps_per_rad = f.gain.value;
-            m.tau_roll_s = f.tau_s.map_or(m.tau_roll_s, |t| t.value);
+            m.tau_roll_s = f.servo_tau_s().unwrap_or(m.tau_roll_s);
         }
         if let Some(f) = &self.pitch {
             m.gain_pitch_mps_per_rad = f.gain.value;
-            m.tau_pitch_s = f.tau_s.map_or(m.tau_pitch_s, |t| t.value);
+            m.tau_pitch_s = f.servo_tau_s().unwrap_or(m.tau_pitch_s);
         }
         if let Some(f) = &self.vz {
             m.gain_vz = f.gain.value;
-            m.tau_vz_s = f.tau_s.map_or(m.tau_vz_s, |t| t.value);
+            m.tau_vz_s = f.servo_tau_s().unwrap_or(m.tau_vz_s);
         }
         if let Some(f) = &self.yaw {
             m.gain_yaw = f.gain.value;

@@ -24,7 +24,10 @@
 //! with a unit input and no data gives `e = e₀ − Σ K_j h_j`, so for fixed (τs, latency,
 //! q/r) the gains are a weighted least squares in closed form, and the common scale σ² of
 //! every covariance too. What is left, `ℓ(τs, λ = ln q/r, latency) = ½ Σ ln det S̃ + ½ n ln
-//! σ̂²`, is minimised by a grid, then Nelder–Mead. The transition is reused while the tick's
+//! σ̂²`, is minimised by a grid, then Nelder–Mead; so is the same model without the drift
+//! (q → 0), and of the two the one whose predictions (below) explain the tests better (by
+//! [`CALM_R2_MARGIN`], the drift's otherwise) is kept: a drift free to move as it likes can take an autopilot's own response (its shaped
+//! lean) for wind, which the likelihood prefers and the predictions do not. The transition is reused while the tick's
 //! length and heading hold, and the covariance recursion stops once converged (the steady
 //! state), which keeps a fit of an eight-minute calibration to about a second. The first
 //! [`BURN_IN`] measurements of each segment only start the filter (a diffuse start).
@@ -85,8 +88,15 @@ const LATENCY_START_S: f64 = 0.03;
 /// The attitude lag's range: from nothing to this share of the faster velocity lag.
 const ATTITUDE_LAG_MIN_S: f64 = 1e-3;
 const ATTITUDE_LAG_MAX_SHARE: f64 = 0.5;
-/// Where the search for the attitude lag starts (tum_ardrone's 1/7 s).
-const ATTITUDE_LAG_START_S: f64 = 0.15;
+/// How much better the model without drift must predict the tests to be kept instead of the
+/// one with: where both predict alike (a drift that stays small), the drift's model, whose
+/// intervals allow for the wind.
+const CALM_R2_MARGIN: f64 = 0.01;
+
+/// Where the search for the attitude lag starts: tum_ardrone's 1/7 s for the AR.Drone, and
+/// either side of it (an autopilot that shapes the lean asked, as ArduCopter's input shaping
+/// and angle loop do, lags about 0.3 s).
+const ATTITUDE_LAG_STARTS_S: [f64; 3] = [0.05, 0.15, 0.35];
 
 /// One tick of a segment: the interval, the heading it flies at, the drive of each gain's
 /// column, the measurement at its start.
@@ -112,8 +122,11 @@ trait Family<const N: usize, const M: usize, const L: usize> {
     fn ln_tau_range(_j: usize, _x: &[f64]) -> (f64, f64) {
         (math::ln(TAU_MIN_S), math::ln(TAU_MAX_S))
     }
-    /// The grid's starting ln τs at a common main ln τ `lt`.
-    fn grid_taus(lt: f64) -> Vec<f64>;
+    /// The index among the time constants of the drift's own (`None`: the drift is a plain
+    /// random walk).
+    const DRIFT_TAU: Option<usize>;
+    /// The grid's starting ln τs at a common main ln τ `lt`: one start or more.
+    fn grid_taus(lt: f64) -> Vec<Vec<f64>>;
     /// The inverse and the determinant of an innovation covariance.
     fn inv_det(s: &SMatrix<f64, M, M>) -> Option<(SMatrix<f64, M, M>, f64)>;
     /// Position rows and velocity rows (for the constant-velocity baseline).
@@ -145,6 +158,8 @@ fn cascade(dt: f64, tau: f64, tau_a: f64, v0: f64, a0: f64, ku: f64) -> [f64; 3]
 /// States `[x, y, vx, vy, a_fwd, a_left, wx, wy]`: world position and velocity, the body
 /// attitudes in velocity units, the world wind. Time constants `[τ_φ, τ_θ, τ_a]`.
 impl Family<10, 2, 2> for Plane {
+    const DRIFT_TAU: Option<usize> = Some(3);
+
     fn step(t: &Tick<2, 2>, taus: &[f64]) -> (SMatrix<f64, 10, 10>, SMatrix<f64, 10, 2>) {
         let dt = t.dt;
         // Body order: forward (τ_θ), left (τ_φ).
@@ -200,8 +215,11 @@ impl Family<10, 2, 2> for Plane {
         (f, g)
     }
 
-    fn grid_taus(lt: f64) -> Vec<f64> {
-        vec![lt, lt, math::ln(ATTITUDE_LAG_START_S), lt]
+    fn grid_taus(lt: f64) -> Vec<Vec<f64>> {
+        ATTITUDE_LAG_STARTS_S
+            .iter()
+            .map(|lag| vec![lt, lt, math::ln(*lag), lt])
+            .collect()
     }
 
     /// The two lags in cascade answer the input alike whichever is which; the attitude's is
@@ -255,6 +273,8 @@ impl Family<10, 2, 2> for Plane {
 }
 
 impl Family<3, 1, 2> for Vertical {
+    const DRIFT_TAU: Option<usize> = None;
+
     fn step(t: &Tick<1, 2>, taus: &[f64]) -> (SMatrix<f64, 3, 3>, SMatrix<f64, 3, 2>) {
         let dt = t.dt;
         let a = math::exp(-dt / taus[0]);
@@ -268,8 +288,8 @@ impl Family<3, 1, 2> for Vertical {
         (f, g)
     }
 
-    fn grid_taus(lt: f64) -> Vec<f64> {
-        vec![lt]
+    fn grid_taus(lt: f64) -> Vec<Vec<f64>> {
+        vec![vec![lt]]
     }
 
     fn q(dt: f64) -> SMatrix<f64, 3, 3> {
@@ -618,11 +638,13 @@ fn nelder_mead(f: &dyn Fn(&[f64]) -> f64, x0: &[f64], step: &[f64], iters: usize
 }
 
 /// The fit of one family: `T` time constants (the search starts from a grid on a common main
-/// τ, [`Family::grid_taus`]), only those marked in `tau_free` searched.
+/// τ, [`Family::grid_taus`]), only those marked in `tau_free` searched and only those marked
+/// in `tau_measured` given intervals.
 fn fit<F, const N: usize, const M: usize, const L: usize, const T: usize>(
     segs: &[Vec<Tick<M, L>>],
     excited: [bool; L],
     tau_free: [bool; T],
+    tau_measured: [bool; T],
 ) -> Option<PemFit<L>>
 where
     F: Family<N, M, L>,
@@ -632,16 +654,44 @@ where
     }
     let r0 = rough_noise(segs);
     let objective = |x: &[f64]| objective::<F, N, M, L, T>(segs, &excited, r0, x);
-    let x = refine::<T>(
+    let drifting = refine::<T>(
         &objective,
         grid_start::<F, N, M, L, T>(&objective),
         tau_free,
     );
+    // The same model with no drift: a flexible drift can take the drone's own response for
+    // wind (the likelihood prefers it, its predictions do not). Of the two, the one that
+    // predicts the tests better.
+    let calm_objective = |y: &[f64]| {
+        let mut x = y.to_vec();
+        x[T] = LAMBDA_MIN;
+        objective(&x)
+    };
+    let mut calm = refine::<T>(
+        &calm_objective,
+        grid_start::<F, N, M, L, T>(&calm_objective),
+        tau_free,
+    );
+    calm[T] = LAMBDA_MIN;
+    let r2_of = |x: &[f64]| {
+        let (taus, lambda, delay_s, _) = unpack::<F, N, M, L, T>(x);
+        let (p, _) = pass::<F, N, M, L>(segs, &taus, lambda, delay_s, r0, None);
+        quality::<F, N, M, L>(segs, &taus, lambda, delay_s, r0, &p.gains(&excited))
+    };
+    let (x, tau_measured) = if r2_of(&calm) > r2_of(&drifting) + CALM_R2_MARGIN {
+        let mut measured = tau_measured;
+        if let Some(j) = F::DRIFT_TAU {
+            measured[j] = false;
+        }
+        (calm, measured)
+    } else {
+        (drifting, tau_measured)
+    };
     let (taus, lambda, delay_s, _) = unpack::<F, N, M, L, T>(&x);
     let (p, _) = pass::<F, N, M, L>(segs, &taus, lambda, delay_s, r0, None);
     let k = p.gains(&excited);
     let sigma2 = p.ssr(&k) / p.n as f64;
-    let sd = std_devs::<F, N, M, L, T>(segs, r0, &x, &k, &excited, tau_free);
+    let sd = std_devs::<F, N, M, L, T>(segs, r0, &x, &k, &excited, tau_measured);
     let gains = std::array::from_fn(|j| Estimate {
         value: k[j],
         ci95: if excited[j] {
@@ -730,12 +780,13 @@ where
         let lt = math::ln(0.25f64 * 2.5f64.powi(it));
         for il in 0..5 {
             let l = 2.0 * il as f64 + if T > 1 { 8.0 } else { -6.0 };
-            let mut x = F::grid_taus(lt);
-            x.push(l);
-            x.push(LATENCY_START_S);
-            let v = objective(&x);
-            if v < best.0 {
-                best = (v, x);
+            for mut x in F::grid_taus(lt) {
+                x.push(l);
+                x.push(LATENCY_START_S);
+                let v = objective(&x);
+                if v < best.0 {
+                    best = (v, x);
+                }
             }
         }
     }
@@ -819,7 +870,29 @@ where
             hess[(b, a)] = v;
         }
     }
-    let cov = hess.try_inverse();
+    // A parameter the likelihood is flat or saddled in (an attitude lag the data does not
+    // show, near its lower bound) is held at its value, as one on a bound is: the
+    // non-gain with the weakest curvature is left out until the rest is positive definite.
+    let mut kept: Vec<usize> = (0..m).collect();
+    let cov = loop {
+        let sub = nalgebra::DMatrix::<f64>::from_fn(kept.len(), kept.len(), |r, c| {
+            hess[(kept[r], kept[c])]
+        });
+        if let Some(ch) = sub.clone().cholesky() {
+            break Some(ch.inverse());
+        }
+        let weakest = (kept.iter().enumerate())
+            .filter(|(_, &a)| names[a].0 >= L)
+            .min_by(|x, y| hess[(*x.1, *x.1)].total_cmp(&hess[(*y.1, *y.1)]))
+            .map(|(r, _)| r);
+        match weakest {
+            Some(r) => {
+                kept.remove(r);
+            }
+            None => break None,
+        }
+    };
+    let names: Vec<(usize, f64)> = kept.iter().map(|&a| names[a]).collect();
     move |param: usize| -> f64 {
         let Some(cov) = &cov else {
             return f64::INFINITY;
@@ -942,8 +1015,10 @@ pub(super) fn fit_plane(data: &[PlaneData]) -> Option<(PemFit<2>, [bool; 2])> {
         segs.iter()
             .any(|s| s.iter().any(|t| t.u[j] != 0.0 && t.dt > 0.0))
     });
-    fit::<Plane, 10, 2, 2, 4>(&segs, excited, [excited[0], excited[1], true, true])
-        .map(|f| (f, excited))
+    // An axis not excited has no τ to measure, but it is searched all the same: held, it would
+    // bound the attitude lag (at most half the faster τ) by a value the data never saw.
+    let measured = [excited[0], excited[1], true, true];
+    fit::<Plane, 10, 2, 2, 4>(&segs, excited, [true; 4], measured).map(|f| (f, excited))
 }
 
 /// The vertical fit: `[K_ż climbing, K_ż descending]`, `[τ_ż]`.
@@ -966,5 +1041,5 @@ pub(super) fn fit_vertical(data: &[AxisData]) -> Option<(PemFit<2>, [bool; 2])> 
         segs.iter()
             .any(|s| s.iter().any(|t| t.u[j] != 0.0 && t.dt > 0.0))
     });
-    fit::<Vertical, 3, 1, 2, 1>(&segs, excited, [true]).map(|f| (f, excited))
+    fit::<Vertical, 3, 1, 2, 1>(&segs, excited, [true], [true]).map(|f| (f, excited))
 }

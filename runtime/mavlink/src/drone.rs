@@ -73,6 +73,11 @@ const EKF_NAV_GOOD: u16 = 1 | 2 | 8 | 16 | 32;
 /// The EKF flags that say it is not navigating (constant-position mode, never healthy).
 const EKF_NAV_BAD: u16 = 128 | 1024;
 
+/// How often [`MavlinkDrone::wait_for_origin`] sends the origin again.
+pub const ORIGIN_RESEND: Duration = Duration::from_secs(1);
+/// GPS_GLOBAL_ORIGIN's message id.
+const ORIGIN_MESSAGE_ID: u32 = 49;
+
 /// The EKF's origin (SET_GPS_GLOBAL_ORIGIN): where on Earth the stage is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GeoOrigin {
@@ -293,6 +298,42 @@ impl MavlinkDrone {
         let o = self.options.origin;
         let msg = messages::gps_origin(self.target.system, o.lat_deg, o.lon_deg, o.alt_m);
         self.link.send(&msg)
+    }
+
+    /// Waits for the autopilot to confirm the EKF's origin (GPS_GLOBAL_ORIGIN), sending
+    /// SET_GPS_GLOBAL_ORIGIN and asking for the confirmation every [`ORIGIN_RESEND`] (an EKF
+    /// not yet initialised drops an origin, and one set too early is never set: the vehicle
+    /// then flies with no position on Earth, and its landing, which needs one, fails), calling
+    /// `tick` every few milliseconds meanwhile; refused after `timeout`.
+    pub fn wait_for_origin(
+        &mut self,
+        timeout: Duration,
+        mut tick: impl FnMut(&mut Self) -> Result<(), BackendError>,
+    ) -> Result<(), BackendError> {
+        let mut last_sent: Option<Instant> = None;
+        let confirmed = self.wait_until(
+            timeout,
+            |d| d.link.state().origin.is_some(),
+            |d| {
+                if last_sent.is_none_or(|t| t.elapsed() >= ORIGIN_RESEND) {
+                    d.set_origin()?;
+                    d.link
+                        .send(&messages::request_message(d.target, ORIGIN_MESSAGE_ID))?;
+                    last_sent = Some(Instant::now());
+                }
+                tick(d)
+            },
+        )?;
+        if confirmed {
+            return Ok(());
+        }
+        Err(BackendError::Refused(format!(
+            "the autopilot at {} did not confirm its EKF origin within {:.0} s (no \
+             GPS_GLOBAL_ORIGIN after SET_GPS_GLOBAL_ORIGIN): without one it has no position on \
+             Earth, and its landing needs one",
+            self.link.url(),
+            timeout.as_secs_f64()
+        )))
     }
 
     /// Sends the drone's motion-capture pose (stage frame, captured at `t_s` on the flight's

@@ -194,6 +194,15 @@ pub fn message_interval(to: Target, id: u32, interval_us: f32) -> MavMessage {
     )
 }
 
+/// MAV_CMD_REQUEST_MESSAGE: the vehicle sends message `id` once.
+pub fn request_message(to: Target, id: u32) -> MavMessage {
+    command_long(
+        to,
+        MavCmd::MAV_CMD_REQUEST_MESSAGE,
+        [id as f32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    )
+}
+
 /// PARAM_REQUEST_READ of one parameter by name (index −1).
 pub fn param_request(to: Target, name: &str) -> MavMessage {
     MavMessage::PARAM_REQUEST_READ(PARAM_REQUEST_READ_DATA {

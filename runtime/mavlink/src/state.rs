@@ -125,6 +125,9 @@ pub struct VehicleState {
     pub sim: Option<SimState>,
     /// The EKF said it uses the external navigation ([`EXTERNAL_NAV_TEXT`]).
     pub external_nav_said: bool,
+    /// GPS_GLOBAL_ORIGIN: the EKF's origin as the autopilot holds it (latitude and
+    /// longitude in degrees, altitude above mean sea level in metres).
+    pub origin: Option<[f64; 3]>,
     /// Parameter values by name, as PARAM_VALUE gave them.
     pub params: HashMap<String, f32>,
     /// The last COMMAND_ACK of each command.
@@ -186,6 +189,13 @@ impl VehicleState {
             MavMessage::LOCAL_POSITION_NED(p) => self.local_position(p, now),
             MavMessage::GIMBAL_DEVICE_ATTITUDE_STATUS(g) => self.gimbal(g),
             MavMessage::SIM_STATE(s) => self.sim_state(s, now),
+            MavMessage::GPS_GLOBAL_ORIGIN(o) => {
+                self.origin = Some([
+                    f64::from(o.latitude) * 1e-7,
+                    f64::from(o.longitude) * 1e-7,
+                    f64::from(o.altitude) * 1e-3,
+                ])
+            }
             _ => {}
         }
     }

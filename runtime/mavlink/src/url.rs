@@ -11,6 +11,11 @@
 //!   listens on TCP 5760).
 //! - `mavlink:///dev/ttyACM0?baud=115200`: a serial port (a USB or radio link), 115200 baud
 //!   unless `baud` says otherwise.
+//!
+//! Any form takes `origin=LAT,LON[,ALT]` (`?origin=…`, or `&origin=…` after `baud`): where on
+//! Earth the stage is (degrees, and metres above mean sea level), which the EKF's origin is
+//! set to. The autopilot checks its compass against the Earth's field there, and takes its
+//! magnetic declination from it: a simulator's origin is its home.
 
 use std::fmt;
 
@@ -37,9 +42,60 @@ pub enum MavlinkLink {
 }
 
 /// A parsed `mavlink://` address (module docs).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MavlinkUrl {
     pub link: MavlinkLink,
+    /// `origin=`: latitude and longitude in degrees, altitude in metres (0 unless given).
+    pub origin: Option<[f64; 3]>,
+}
+
+/// The options an address's query holds.
+#[derive(Default)]
+struct Query {
+    baud: Option<u32>,
+    origin: Option<[f64; 3]>,
+}
+
+/// `baud=N` (serial ports only) and `origin=LAT,LON[,ALT]`, joined by `&`.
+fn parse_query(query: Option<&str>, serial: bool) -> Result<Query, UrlError> {
+    let mut q = Query::default();
+    for pair in query.into_iter().flat_map(|q| q.split('&')) {
+        match pair.split_once('=') {
+            Some(("baud", value)) if serial => q.baud = Some(parse_baud(value)?),
+            Some(("origin", value)) => q.origin = Some(parse_origin(value)?),
+            _ => {
+                return Err(UrlError(format!(
+                    "unknown option `{pair}`: expected {}origin=LAT,LON[,ALT]",
+                    if serial { "baud=N or " } else { "" }
+                )))
+            }
+        }
+    }
+    Ok(q)
+}
+
+/// `LAT,LON[,ALT]`: degrees within ±90 and ±180, metres.
+fn parse_origin(text: &str) -> Result<[f64; 3], UrlError> {
+    let bad = || {
+        UrlError(format!(
+            "origin `{text}` is not LAT,LON[,ALT] (degrees, and metres above sea level), e.g. \
+             origin=-35.363261,149.165230,584"
+        ))
+    };
+    let parts: Vec<f64> = text
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    let (lat, lon, alt) = match parts.as_slice() {
+        [lat, lon] => (*lat, *lon, 0.0),
+        [lat, lon, alt] => (*lat, *lon, *alt),
+        _ => return Err(bad()),
+    };
+    let ok = lat.abs() <= 90.0 && lon.abs() <= 180.0 && alt.is_finite() && alt.abs() < 1e5;
+    if !ok || (lat == 0.0 && lon == 0.0) {
+        return Err(bad());
+    }
+    Ok([lat, lon, alt])
 }
 
 impl MavlinkUrl {
@@ -49,6 +105,11 @@ impl MavlinkUrl {
         if rest.starts_with('/') {
             return parse_serial(rest);
         }
+        let (rest, query) = match rest.split_once('?') {
+            Some((r, q)) => (r, Some(q)),
+            None => (rest, None),
+        };
+        let origin = parse_query(query, false)?.origin;
         let Some((kind, addr)) = rest.split_once(':') else {
             return Err(UrlError(format!(
                 "`{text}` names no link: expected {MAVLINK_FORM}"
@@ -80,7 +141,7 @@ impl MavlinkUrl {
                 )))
             }
         };
-        Ok(MavlinkUrl { link })
+        Ok(MavlinkUrl { link, origin })
     }
 
     /// The address in the `mavlink` crate's own form (`udpout:HOST:PORT`, `tcpout:…`,
@@ -106,22 +167,13 @@ fn parse_serial(rest: &str) -> Result<MavlinkUrl, UrlError> {
             "`{path}` is not a serial port: expected {MAVLINK_FORM}"
         )));
     }
-    let mut baud = DEFAULT_BAUD;
-    for pair in query.into_iter().flat_map(|q| q.split('&')) {
-        match pair.split_once('=') {
-            Some(("baud", value)) => baud = parse_baud(value)?,
-            _ => {
-                return Err(UrlError(format!(
-                    "unknown option `{pair}` for a serial port: expected ?baud=N"
-                )))
-            }
-        }
-    }
+    let q = parse_query(query, true)?;
     Ok(MavlinkUrl {
         link: MavlinkLink::Serial {
             path: path.to_string(),
-            baud,
+            baud: q.baud.unwrap_or(DEFAULT_BAUD),
         },
+        origin: q.origin,
     })
 }
 
@@ -138,13 +190,22 @@ fn parse_baud(text: &str) -> Result<u32, UrlError> {
 impl fmt::Display for MavlinkUrl {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.link {
-            MavlinkLink::Udp { host, port } => write!(f, "mavlink://udp:{}:{port}", bracket(host)),
+            MavlinkLink::Udp { host, port } => write!(f, "mavlink://udp:{}:{port}", bracket(host))?,
             MavlinkLink::UdpIn { host, port } => {
-                write!(f, "mavlink://udpin:{}:{port}", bracket(host))
+                write!(f, "mavlink://udpin:{}:{port}", bracket(host))?
             }
-            MavlinkLink::Tcp { host, port } => write!(f, "mavlink://tcp:{}:{port}", bracket(host)),
-            MavlinkLink::Serial { path, baud } => write!(f, "mavlink://{path}?baud={baud}"),
+            MavlinkLink::Tcp { host, port } => write!(f, "mavlink://tcp:{}:{port}", bracket(host))?,
+            MavlinkLink::Serial { path, baud } => write!(f, "mavlink://{path}?baud={baud}")?,
         }
+        if let Some([lat, lon, alt]) = self.origin {
+            let sep = if matches!(self.link, MavlinkLink::Serial { .. }) {
+                '&'
+            } else {
+                '?'
+            };
+            write!(f, "{sep}origin={lat},{lon},{alt}")?;
+        }
+        Ok(())
     }
 }
 
@@ -191,6 +252,14 @@ mod tests {
                 "mavlink:///dev/ttyACM0?baud=115200",
                 "serial:/dev/ttyACM0:115200",
             ),
+            (
+                "mavlink://tcp:127.0.0.1:5760?origin=-35.363261,149.16523,584",
+                "tcpout:127.0.0.1:5760",
+            ),
+            (
+                "mavlink:///dev/ttyUSB0?baud=57600&origin=48.85,2.35,35",
+                "serial:/dev/ttyUSB0:57600",
+            ),
         ] {
             let u = MavlinkUrl::parse(text).unwrap();
             assert_eq!(u.to_string(), text);
@@ -215,6 +284,11 @@ mod tests {
             ("mavlink:///dev/ttyACM0?baud=0", "not a speed"),
             ("mavlink:///dev/ttyACM0?baud=fast", "not a speed"),
             ("mavlink:///dev/ttyACM0?parity=odd", "unknown option"),
+            ("mavlink://tcp:h:5760?baud=9600", "unknown option"),
+            ("mavlink://tcp:h:5760?origin=91,0", "is not LAT,LON"),
+            ("mavlink://tcp:h:5760?origin=0,0", "is not LAT,LON"),
+            ("mavlink://tcp:h:5760?origin=1", "is not LAT,LON"),
+            ("mavlink://tcp:h:5760?origin=a,b", "is not LAT,LON"),
             ("mavlink:///", "not a serial port"),
             ("mavlink:///dev/", "not a serial port"),
         ] {

@@ -8,12 +8,14 @@ every address that sent to it:
 - PARAM_REQUEST_READ from its parameter table (`right` or `wrong`, the first argument;
   `wrong` is an older firmware's, with GPS_TYPE and no GPS1_TYPE);
 - COMMAND_LONG with COMMAND_ACK: DO_SET_MODE sets the mode, COMPONENT_ARM_DISARM arms
-  (in GUIDED_NOGPS only) or disarms, SET_MESSAGE_INTERVAL is accepted, others unsupported;
+  (in GUIDED_NOGPS only) or disarms, SET_MESSAGE_INTERVAL is accepted, REQUEST_MESSAGE of
+  GPS_GLOBAL_ORIGIN answers with its origin once it has one, others unsupported;
 - SET_ATTITUDE_TARGET in GUIDED_NOGPS moves its height at the climb rate the thrust asks
   for (WPNAV_SPEED_UP 250, WPNAV_SPEED_DN 150 cm/s); LAND descends at 1 m/s and disarms on
   the ground; GIMBAL_MANAGER_SET_PITCHYAW turns its gimbal;
-- after SET_GPS_GLOBAL_ORIGIN and a VISION_POSITION_ESTIMATE: "EKF3 IMU0 is using external
-  nav data".
+- after a VISION_POSITION_ESTIMATE: "EKF3 IMU0 is using external nav data"; as
+  ArduPilot's EKF, a SET_GPS_GLOBAL_ORIGIN before the first VISION_POSITION_ESTIMATE is
+  dropped, one after it is the origin, confirmed with GPS_GLOBAL_ORIGIN.
 Each message it receives prints as {"rx": TYPE, "fields": {...}}. A line "failsafe" on its
 standard input switches it to LAND by itself; it ends when its standard input closes.
 """
@@ -104,6 +106,9 @@ class Vehicle:
                 self.text(3, "Arm: Mode not armable")
         elif msg.command == 400:
             self.armed = False
+        elif msg.command == 512 and int(msg.param1) == 49:
+            if self.origin:
+                self.send_origin()
         elif msg.command != 511:
             result = 3
         self.mav.command_ack_send(msg.command, result)
@@ -117,8 +122,16 @@ class Vehicle:
     def on_gimbal_manager_set_pitchyaw(self, msg):
         self.gimbal_pitch = msg.pitch
 
-    def on_set_gps_global_origin(self, _msg):
-        self.origin = True
+    def on_set_gps_global_origin(self, msg):
+        # As ArduPilot's EKF: an origin that comes before it is initialised (by the external
+        # navigation) is dropped.
+        if self.vision:
+            self.origin = (msg.latitude, msg.longitude, msg.altitude)
+            self.send_origin()
+
+    def send_origin(self):
+        lat, lon, alt = self.origin
+        self.mav.gps_global_origin_send(lat, lon, alt, self.ms() * 1000)
 
     def on_vision_position_estimate(self, _msg):
         self.vision = True
@@ -131,7 +144,7 @@ class Vehicle:
             if self.height <= 0.0:
                 self.height, self.armed = 0.0, False
                 self.text(6, "Disarming motors")
-        if self.origin and self.vision and not self.said_nav:
+        if self.vision and not self.said_nav:
             self.said_nav = True
             self.text(6, "EKF3 IMU0 is using external nav data")
 

@@ -83,7 +83,7 @@ fn wrong_parameters_refuse_the_take_off_naming_each() {
     let Some(python) = common::python("fake vehicle: wrong parameters") else {
         return;
     };
-    let mut peer = Peer::start(&python, "fake_vehicle.py", &["wrong"]);
+    let mut peer = common::peer(&python, "fake_vehicle.py", &["wrong"]);
     let mut drone = connect(&mut peer);
     let check = drone.check_parameters().unwrap();
     let wrong: Vec<String> = check.wrong.iter().map(|w| w.to_string()).collect();
@@ -116,7 +116,7 @@ fn the_backend_flies_the_fake_vehicle() {
     let Some(python) = common::python("fake vehicle: flight") else {
         return;
     };
-    let mut peer = Peer::start(&python, "fake_vehicle.py", &["right"]);
+    let mut peer = common::peer(&python, "fake_vehicle.py", &["right"]);
     let mut drone = connect(&mut peer);
     peer.until(WAIT, |v| v["rx"] == "HEARTBEAT" && v["fields"]["type"] == 6);
     preflight(&mut drone, &mut peer);
@@ -157,6 +157,18 @@ fn preflight(drone: &mut MavlinkDrone, peer: &mut Peer) {
     assert!(close(num(&f["yaw"]), std::f64::consts::FRAC_PI_2 - 1.0));
     let o = peer.until(WAIT, |v| v["rx"] == "SET_GPS_GLOBAL_ORIGIN");
     assert_eq!(o["fields"]["target_system"], 1);
+    // The origin sent before the first estimate was dropped (as ArduPilot's EKF drops it):
+    // the wait sends it again until the vehicle confirms it.
+    assert!(drone.vehicle_state().origin.is_none());
+    drone
+        .wait_for_origin(WAIT, |d| {
+            d.forward_pose(start.elapsed().as_secs_f64(), &pose)
+                .map(|_| ())
+        })
+        .unwrap();
+    let [lat, lon, _] = drone.vehicle_state().origin.unwrap();
+    let want = dronecine_mavlink::MavlinkOptions::default().origin;
+    assert!((lat - want.lat_deg).abs() < 1e-6 && (lon - want.lon_deg).abs() < 1e-6);
     // At most one estimate per 19.5 ms of the flight clock.
     assert!(
         !drone.forward_pose(10.0, &pose).unwrap() || !drone.forward_pose(10.01, &pose).unwrap()

@@ -115,7 +115,7 @@ fn pymavlink_decodes_what_the_backend_sends_and_the_backend_decodes_pymavlink() 
     let Some(python) = common::python("pymavlink cross-check") else {
         return;
     };
-    let mut peer = Peer::start(&python, "pymavlink_peer.py", &[]);
+    let mut peer = common::peer(&python, "pymavlink_peer.py", &[]);
     let url = MavlinkUrl::parse(&format!("mavlink://udp:127.0.0.1:{}", peer.port())).unwrap();
     let link = Link::open(&url).unwrap();
     let expected = expected();

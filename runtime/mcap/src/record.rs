@@ -46,6 +46,10 @@ pub trait FlightSink {
     fn key_frame(&mut self, _state: &ControllerState) -> io::Result<()> {
         Ok(())
     }
+    /// How late the loop's tick about to be recorded (or idle) ran past its due time: a sink
+    /// that reports what it costs the loop (the live view, with a client and without) counts
+    /// it. Told every tick, before the tick's record.
+    fn tick_lateness(&mut self, _late_s: f64) {}
 }
 
 /// Records nothing (benchmarks, tests).

@@ -7,12 +7,14 @@
 //! chunk (one a second) and its record encoder allocates now and then: a handful of
 //! allocations a second, bounded here; dronecine's own log code reuses its buffers. Written
 //! as `shoot` writes it, on its own thread (`LogThread`), the loop's thread allocates nothing;
-//! nor with the director stepped ahead of it on another thread (`SimConfig::actors_ahead`).
+//! nor with the director stepped ahead of it on another thread (`SimConfig::actors_ahead`);
+//! nor with the live view beside the log (`shoot --live`: `LiveFeed` through `Tee`).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use dronecine_flight::{Observer, Progress};
+use dronecine_live::{LiveFeed, LiveServer, Tee};
 use dronecine_mcap::log::{FlightLogWriter, LogScene, LogThread};
 use dronecine_mcap::record::FlightSink;
 use dronecine_mcap::record::{Event, FlightHeader, Phase};
@@ -53,8 +55,8 @@ const SCRIPT: &str = "stage 8m x 6m x 3m\ndrone ardrone2\n\
                       actor B height 1.75m at (1, 0) facing 180deg\n\
                       at 1s A walks to (-0.5, 1) over 5s\n\
                       at 2s B walks to (1.5, 0.5) over 5s\n\
-                      MS on A and B for 12s\n\
-                      then dolly to MS on A screen (-0.2, 0) and B screen (0.2, 0) over 4s\n";
+                      FS on A and B for 12s\n\
+                      then dolly to FS on A screen (-0.6, 0.1) and B screen (0.6, 0.1) over 4s\n";
 
 /// Counts allocations between consecutive shot ticks.
 #[derive(Default)]
@@ -94,6 +96,8 @@ enum Sink {
     Direct,
     /// `LogThread`, as `shoot` writes it.
     Thread,
+    /// `LogThread` and the live view, as `shoot --live` feeds them.
+    Live,
 }
 
 /// Flies the script; returns (shot-tick intervals, allocating intervals after warm-up as
@@ -140,13 +144,29 @@ fn fly_with(mode: Sink, ahead: bool) -> (usize, Vec<(f64, usize)>) {
     .unwrap();
     let mut log = Some(writer);
     let mut thread = None;
-    if mode == Sink::Thread {
+    if mode == Sink::Thread || mode == Sink::Live {
         thread = Some(LogThread::spawn(log.take().unwrap(), 100.0).unwrap());
     }
+    let server =
+        (mode == Sink::Live).then(|| LiveServer::bind(([127, 0, 0, 1], 0).into()).unwrap());
+    let live_scene = LogScene {
+        stage: scene.stage,
+        lens: *dronecine_compiler::director::Director::new(&script, scene, &profile).lens(),
+        actor_names: &names,
+        actor_heights_m: &[1.8, 1.75],
+    };
+    let mut feed = server
+        .as_ref()
+        .map(|s| LiveFeed::start(s, &live_scene, false).unwrap());
     let mut null = dronecine_mcap::record::NullSink;
-    let sink: &mut dyn FlightSink = match (mode, &mut log, &mut thread) {
-        (Sink::Direct, Some(log), _) => log,
-        (Sink::Thread, _, Some(thread)) => thread,
+    let mut tee;
+    let sink: &mut dyn FlightSink = match (mode, &mut log, &mut thread, &mut feed) {
+        (Sink::Direct, Some(log), _, _) => log,
+        (Sink::Thread, _, Some(thread), _) => thread,
+        (Sink::Live, _, Some(thread), Some(live)) => {
+            tee = Tee { log: thread, live };
+            &mut tee
+        }
         _ => &mut null,
     };
     let mut watch = Watch::default();
@@ -174,6 +194,13 @@ fn fly_with(mode: Sink, ahead: bool) -> (usize, Vec<(f64, usize)>) {
         (Some(log), _) => log.finish().unwrap(),
         (_, Some(thread)) => thread.finish().unwrap(),
         _ => {}
+    }
+    if let Some(feed) = feed {
+        // As fast as it goes, the flight outruns the live thread: the ticks it has no room
+        // for are dropped (both paths of the loop's side run), never waited for.
+        let live = feed.finish();
+        assert!(live.ticks_served > 0, "{live:?}");
+        assert!(live.ticks_served + live.ticks_dropped > 1500, "{live:?}");
     }
     assert!(report.completed);
     // The first second of the shots warms the buffers up.
@@ -227,4 +254,77 @@ fn with_the_log_on_its_own_thread_the_loop_allocates_nothing() {
 fn with_the_director_ahead_the_loop_allocates_nothing() {
     assert_none_late(fly_with(Sink::None, true));
     assert_none_late(fly_with(Sink::Thread, true));
+}
+
+/// `shoot --live`'s loop: each tick copied into a preallocated slot of the live view's ring
+/// besides the log's batch; the loop's thread allocates nothing.
+#[test]
+fn with_the_live_view_beside_the_log_the_loop_allocates_nothing() {
+    assert_none_late(fly(Sink::Live));
+}
+
+/// The Crazyflie backend's per-tick calls (the motion capture forwarded, a command, a hold,
+/// the telemetry) allocate nothing on the loop's thread, over UDP to the Crazyflie emulator
+/// in this process (its own thread's allocations are its own).
+#[test]
+fn the_crazyflie_backends_tick_allocates_nothing() {
+    use dronecine_backend::frames::Command;
+    use dronecine_backend::{BodyPose, Drone, FlightState};
+    use dronecine_crazyflie::{CrazyflieDrone, CrazyflieOptions, CrazyflieUrl};
+    use dronecine_emulator::{empty_scene, CrazyflieEmulator, CrazyflieEmulatorConfig};
+    use std::time::{Duration, Instant};
+
+    let profile = Profile::builtin("crazyflie21").unwrap();
+    let mut config = CrazyflieEmulatorConfig::new(profile.clone(), empty_scene(), 2);
+    config.port = 0;
+    config.natnet = None;
+    config.sim.effects = dronecine_sim::Effects::none();
+    let emulator = CrazyflieEmulator::start(config).unwrap();
+    let url = CrazyflieUrl::parse(&format!("crazyflie+udp://{}", emulator.addr())).unwrap();
+    let options = CrazyflieOptions {
+        hover_height_m: 0.3,
+        ..CrazyflieOptions::default()
+    };
+    let mut drone = CrazyflieDrone::connect(&url, &profile, options).unwrap();
+    let mut fwd = drone.forwarder();
+    let start = Instant::now();
+    let pose = |t: f64| BodyPose {
+        position_m: [0.0, 0.0, emulator.status().truth.position_m[2]],
+        heading_rad: 0.01 * t,
+    };
+    let mut tick = |drone: &mut CrazyflieDrone, command: Option<&Command>| {
+        let t = start.elapsed().as_secs_f64();
+        let p = pose(t);
+        let before = count();
+        fwd.forward(t, &p).unwrap();
+        match command {
+            Some(c) => drone.send(c).unwrap(),
+            None => drone.hover().unwrap(),
+        }
+        let state = drone.telemetry().state;
+        let allocated = count() - before;
+        std::thread::sleep(Duration::from_millis(10));
+        (state, allocated)
+    };
+    drone.take_off().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(15);
+    while tick(&mut drone, None).0 != FlightState::Flying {
+        assert!(Instant::now() < deadline, "no take-off");
+    }
+    let command = Command {
+        roll_rad: 0.01,
+        pitch_rad: -0.01,
+        yaw_rate_radps: 0.1,
+        vz_mps: 0.0,
+    };
+    // Warm-up (the hold's first set-point, the supervisor's first bits told), then counted.
+    for _ in 0..20 {
+        tick(&mut drone, Some(&command));
+    }
+    let mut allocated = 0;
+    for i in 0..200 {
+        let c = (i % 2 == 0).then_some(&command);
+        allocated += tick(&mut drone, c).1;
+    }
+    assert_eq!(allocated, 0, "allocations in 200 ticks");
 }

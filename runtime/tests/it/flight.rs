@@ -1114,13 +1114,13 @@ fn preflight_refuses_a_first_framing_outside_the_stage() {
 
 #[test]
 fn preflight_refuses_a_first_framing_that_does_not_solve() {
-    // B 1.5 m from A: the over-the-shoulder's LS of A is out of the toric circle's reach. An
+    // Profiles on opposite sides of the line between A and B: no camera stands in both. An
     // unsolved framing's sample is where the director's camera starts, the origin: never
     // flown to.
     let src = "stage 10m x 8m x 3m\ndrone ardrone2\n\
                actor A height 1.80m at (0, 0) facing 0deg\n\
                actor B height 1.65m at (1.5, 0) facing 180deg\n\
-               MS on B 34backright LS on A 34left screen right for 6s\n";
+               MS on B 34backleft LS on A 34left screen right for 6s\n";
     let (r, rec) = fly_from(src, [-3.0, 2.0, 0.0]);
     let d = refused_before_take_off(r, &rec);
     assert_eq!(
@@ -1129,7 +1129,7 @@ fn preflight_refuses_a_first_framing_that_does_not_solve() {
         "{d:?}"
     );
     assert!(
-        at(src, &d[0]).starts_with("MS on B 34backright"),
+        at(src, &d[0]).starts_with("MS on B 34backleft"),
         "at the first shot"
     );
 }

@@ -5,6 +5,7 @@ mod ahead;
 mod alloc_flight;
 mod calibrate;
 mod common;
+mod crazyflie;
 mod experiments;
 mod flight;
 mod random_flights;

@@ -1,158 +1,20 @@
-//! A Python peer on pymavlink, driven over its standard input and output (JSON lines).
-//!
-//! The Python is `DRONECINE_PYTHON` (default `python3`). Without pymavlink the tests that
-//! need it say so and pass, except under CI (`CI` set), where they fail.
+//! The Python peers of this folder, on pymavlink (`dronecine-pypeer`).
 
 #![allow(dead_code)]
 
-use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
-use std::process::{Child, ChildStdin, Command, Stdio};
-use std::sync::mpsc::{channel, Receiver, RecvTimeoutError};
-use std::time::{Duration, Instant};
 
-use serde_json::Value;
+pub use dronecine_pypeer::{close, num, Peer};
 
 /// The Python with pymavlink, or `None` (after saying why) when the test is to be skipped.
 pub fn python(test: &str) -> Option<String> {
-    let python = std::env::var("DRONECINE_PYTHON").unwrap_or_else(|_| "python3".into());
-    let probe = Command::new(&python)
-        .args(["-c", "import pymavlink"])
-        .output();
-    let why = match probe {
-        Ok(o) if o.status.success() => return Some(python),
-        Ok(o) => format!(
-            "`{python} -c 'import pymavlink'` failed: {}",
-            String::from_utf8_lossy(&o.stderr).trim()
-        ),
-        Err(e) => format!("cannot run `{python}`: {e}"),
-    };
-    if std::env::var_os("CI").is_some() {
-        panic!(
-            "{test}: pymavlink is needed under CI: {why} (set DRONECINE_PYTHON to a Python \
-             with pymavlink)"
-        );
-    }
-    eprintln!("{test}: skipped: {why} (set DRONECINE_PYTHON to a Python with pymavlink to run it)");
-    None
+    dronecine_pypeer::python(test, "pymavlink")
 }
 
-/// One of this folder's Python scripts, running, with its output lines as JSON.
-pub struct Peer {
-    child: Child,
-    stdin: Option<ChildStdin>,
-    lines: Receiver<Value>,
-    /// Every line read so far.
-    pub seen: Vec<Value>,
-}
-
-impl Peer {
-    /// Starts `script` (in this folder) with `args`.
-    pub fn start(python: &str, script: &str, args: &[&str]) -> Peer {
-        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("tests")
-            .join(script);
-        let mut child = Command::new(python)
-            .arg(&path)
-            .args(args)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .spawn()
-            .unwrap_or_else(|e| panic!("cannot start {}: {e}", path.display()));
-        let stdout = child.stdout.take().expect("a piped stdout");
-        let (tx, lines) = channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-                let value = serde_json::from_str(&line)
-                    .unwrap_or_else(|e| panic!("the peer printed `{line}`, not JSON: {e}"));
-                if tx.send(value).is_err() {
-                    break;
-                }
-            }
-        });
-        let stdin = child.stdin.take();
-        Peer {
-            child,
-            stdin,
-            lines,
-            seen: Vec::new(),
-        }
-    }
-
-    /// Reads lines until one satisfies `want` (returned), failing after `timeout`.
-    pub fn until(&mut self, timeout: Duration, mut want: impl FnMut(&Value) -> bool) -> Value {
-        let deadline = Instant::now() + timeout;
-        if let Some(v) = self.seen.iter().find(|v| want(v)) {
-            return v.clone();
-        }
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.lines.recv_timeout(left) {
-                Ok(v) => {
-                    self.seen.push(v.clone());
-                    if want(&v) {
-                        return v;
-                    }
-                }
-                Err(RecvTimeoutError::Timeout) => panic!(
-                    "the peer printed nothing wanted within {timeout:?}; the last lines: {:?}",
-                    &self.seen[self.seen.len().saturating_sub(5)..]
-                ),
-                Err(RecvTimeoutError::Disconnected) => {
-                    panic!("the peer ended; its lines: {:?}", self.seen)
-                }
-            }
-        }
-    }
-
-    /// Reads the lines printed so far without waiting.
-    pub fn drain(&mut self) {
-        while let Ok(v) = self.lines.try_recv() {
-            self.seen.push(v);
-        }
-    }
-
-    /// Writes one line to the peer's standard input.
-    pub fn tell(&mut self, line: &str) {
-        let stdin = self.stdin.as_mut().expect("the peer's stdin is open");
-        writeln!(stdin, "{line}").expect("the peer reads its stdin");
-        stdin.flush().expect("the peer reads its stdin");
-    }
-
-    /// The UDP port the peer listens on (its first line).
-    pub fn port(&mut self) -> u16 {
-        let v = self.until(Duration::from_secs(20), |v| v.get("port").is_some());
-        v["port"].as_u64().expect("a port number") as u16
-    }
-}
-
-impl Drop for Peer {
-    fn drop(&mut self) {
-        // Closing its stdin ends the peer; kill it if it does not end by itself.
-        drop(self.stdin.take());
-        let deadline = Instant::now() + Duration::from_secs(3);
-        while Instant::now() < deadline {
-            if let Ok(Some(_)) = self.child.try_wait() {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// A JSON number as f64 ("NaN" for a float that is not a number).
-pub fn num(v: &Value) -> f64 {
-    match v {
-        Value::String(s) if s == "NaN" => f64::NAN,
-        _ => v
-            .as_f64()
-            .unwrap_or_else(|| panic!("`{v}` is not a number")),
-    }
-}
-
-/// `a` equals `b` to f32 precision (both NaN counts as equal).
-pub fn close(a: f64, b: f64) -> bool {
-    (a.is_nan() && b.is_nan()) || (a - b).abs() <= 1e-6 * (1.0 + a.abs().max(b.abs()))
+/// Starts this folder's `script` with `args`.
+pub fn peer(python: &str, script: &str, args: &[&str]) -> Peer {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests")
+        .join(script);
+    Peer::start(python, &path, args)
 }

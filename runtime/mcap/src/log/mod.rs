@@ -85,6 +85,7 @@ pub mod plots;
 mod reader;
 mod schema;
 mod thread;
+mod topics;
 mod writer;
 
 use std::fmt;
@@ -95,7 +96,8 @@ use dronecine_compiler::camera::Lens;
 use dronecine_grammar::script::Stage;
 
 pub use self::reader::{Damage, FlightLog, KeyFrame, LoggedTick};
-pub use self::thread::{LogThread, BATCH_PERIOD_S, POLL_MAX_S};
+pub use self::thread::{lower_priority, LogThread, OwnedTick, BATCH_PERIOD_S, POLL_MAX_S};
+pub use self::topics::{FlightTopics, MessageOut, TopicSpec};
 pub use self::writer::{FlightLogWriter, LogCompression, LogOptions};
 
 /// The static scene the log draws in Foxglove: the stage, the lens and the actors (their
@@ -138,6 +140,19 @@ pub mod topic {
     pub const SCENE_DRONE: &str = "/scene/drone";
     pub const SCENE_ACTORS: &str = "/scene/actors";
     pub const CAMERA_CALIBRATION: &str = "/camera_calibration";
+
+    /// Whether a topic is written once (or again only when it changes: the actors' figures):
+    /// a reader that comes late, a live view's client, wants its last message.
+    pub fn is_latched(topic: &str) -> bool {
+        [
+            CAMERA,
+            SCENE_STAGE,
+            SCENE_DRONE,
+            SCENE_ACTORS,
+            CAMERA_CALIBRATION,
+        ]
+        .contains(&topic)
+    }
 }
 
 /// Why a flight log could not be read.

@@ -110,7 +110,8 @@ const LOG_NICE: i32 = 10;
 /// batches (eight seconds).
 const WAIT_FOR_BATCH: Duration = Duration::from_micros(200);
 
-/// A [`TickRecord`] with its borrowed parts copied, kept from batch to batch.
+/// A [`TickRecord`] with its borrowed parts copied, kept from batch to batch (and in the
+/// live view's ring): filled again, it reuses its vectors' room.
 #[derive(Clone, Debug)]
 pub struct OwnedTick {
     phase: Phase,
@@ -132,8 +133,8 @@ pub struct OwnedTick {
 const ACTORS: usize = 8;
 
 impl OwnedTick {
-    /// A blank tick with room for [`ACTORS`] actors.
-    fn empty() -> OwnedTick {
+    /// A blank tick with room for eight actors (more grow its vectors once).
+    pub fn empty() -> OwnedTick {
         OwnedTick {
             phase: Phase::TakeOff,
             shot: None,
@@ -155,7 +156,7 @@ impl OwnedTick {
     }
 
     /// Copies `r` in, reusing the vectors' room.
-    fn fill(&mut self, r: &TickRecord) {
+    pub fn fill(&mut self, r: &TickRecord) {
         self.phase = r.phase;
         self.shot = r.shot;
         self.sample = *r.sample;
@@ -199,7 +200,8 @@ impl OwnedTick {
         );
     }
 
-    fn record(&self) -> TickRecord<'_> {
+    /// The tick as a record, borrowing its parts.
+    pub fn record(&self) -> TickRecord<'_> {
         TickRecord {
             phase: self.phase,
             shot: self.shot,
@@ -364,7 +366,7 @@ impl LogThread {
             std::thread::Builder::new()
                 .name("flight-log-sync".into())
                 .spawn(move || {
-                    yield_to_the_loop();
+                    lower_priority();
                     while rx.recv().is_ok() {
                         let _ = file.sync_data();
                     }
@@ -386,7 +388,7 @@ impl LogThread {
         let handle = std::thread::Builder::new()
             .name("flight-log".into())
             .spawn(move || {
-                yield_to_the_loop();
+                lower_priority();
                 write_batches(writer, full_rx, empty_tx, errors, sync)
             })?;
         Ok(LogThread {
@@ -610,12 +612,12 @@ struct Errors {
     failed: Arc<AtomicBool>,
 }
 
-/// Lowers the calling thread's scheduling priority by [`LOG_NICE`], so that when the loop,
-/// the writer, the syncer and the kernel's writeback want more cores than there are, the
-/// loop keeps its own. Best effort (a failure leaves the priority as it was), on Linux only,
+/// Lowers the calling thread's scheduling priority by 10 (the log's threads, the live
+/// view's), so that when the loop, the writer, the syncer and the kernel's writeback want more
+/// cores than there are, the loop keeps its own. Best effort (a failure leaves the priority as it was), on Linux only,
 /// where the nice value belongs to the thread (elsewhere it is the whole process's, the
 /// loop's included).
-fn yield_to_the_loop() {
+pub fn lower_priority() {
     #[cfg(target_os = "linux")]
     // SAFETY: `nice` only changes the calling thread's scheduling weight (a thread attribute
     // on Linux); it touches no memory of the program. Raising it needs no privilege.

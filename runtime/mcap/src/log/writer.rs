@@ -1,14 +1,12 @@
 //! [`FlightLogWriter`]: streams the flight's ticks and events into the MCAP log (contents and
 //! crash behaviour in the module doc of `log`).
 //!
-//! Per tick the writer encodes `/servo/tick` (`cdr.rs`) and, at the plot and `/tf` rates,
-//! the plot topics (`plots.rs`, and the compiler's writers for `/reference`, `/actors` and
-//! `/tf`), all CDR, each straight into the MCAP writer's in-memory chunk (`/tf` through one
-//! reused buffer: a frame's message exists only once it is known to have moved), which is
-//! reused from chunk to chunk ([`McapFile`],
-//! written for this path: each chunk hashed once and written with one system call); chunks
-//! carry no message indexes (readers scan the ≤ 1 s chunks). Nothing on the per-tick path
-//! allocates. Only `/events` is JSON.
+//! Per tick the writer has [`FlightTopics`] encode the tick's messages (`/servo/tick`, and at
+//! the plot and `/tf` rates the plot topics, all CDR) straight into the MCAP writer's
+//! in-memory chunk, which is reused from chunk to chunk ([`McapFile`], written for this path:
+//! each chunk hashed once and written with one system call); chunks carry no message indexes
+//! (readers scan the ≤ 1 s chunks). Nothing on the per-tick path allocates. Only `/events` is
+//! JSON.
 //!
 //! Chunks close by the flight's clock ([`ChunkClock`]), on ticks and on the ticks that record
 //! nothing alike. After a tick that closes one, the writer asks for the controller's state
@@ -22,23 +20,13 @@ use std::fs::{File, OpenOptions};
 use std::io;
 use std::path::{Path, PathBuf};
 
-use crate::output::foxglove::{self, FrameTopic};
-use crate::output::mcap::{
-    actors_schema, advance, camera_message, camera_schema, frame_topics_with, reference_schema,
-    write_actors, write_reference, Channel, Encoding, ACTORS_SCHEMA, CAMERA_SCHEMA,
-    REFERENCE_SCHEMA,
-};
-use crate::output::{json, ns_from_s};
-use dronecine_compiler::camera::Lens;
+use crate::output::mcap::Channel;
 
 use super::mcap_file::{ChunkCompression, McapFile};
-use super::plots::{self, same_command};
-use super::{cdr, exact, key_frame, schema, topic, LogScene, HEADER_ATTACHMENT, HEADER_METADATA};
+use super::topics::{FlightTopics, MessageOut, TopicSpec};
+use super::{LogScene, HEADER_ATTACHMENT, HEADER_METADATA};
 use crate::record::{Event, FlightHeader, TickRecord};
 use dronecine_servo::control::ControllerState;
-
-/// The frame of the reference pose on `/tf/reference`.
-const REFERENCE_FRAME: &str = "reference";
 
 /// Chunk compression of the flight log.
 ///
@@ -111,30 +99,6 @@ impl LogOptions {
     }
 }
 
-/// A channel and its message sequence counter.
-struct Channels {
-    reference: Channel,
-    actors: Channel,
-    camera: Channel,
-    estimate: Channel,
-    measurement: Channel,
-    command: Channel,
-    framing: Channel,
-    /// `/gimbal`, only for a profile with a gimbal.
-    gimbal: Option<Channel>,
-    events: Channel,
-    servo_tick: Channel,
-    /// `/servo/state`: the key frames.
-    key_frame: Channel,
-    /// `/tf/drone`, `/tf/camera`, `/tf/actor/NAME`…, `/tf/reference`: one per frame in
-    /// `FlightLogWriter::frames`' order.
-    tf: Vec<Channel>,
-    stage: Channel,
-    drone: Channel,
-    actor_scene: Channel,
-    calibration: Channel,
-}
-
 /// Writes a flight log, tick by tick (see the `log` module doc).
 ///
 /// ```no_run
@@ -149,43 +113,69 @@ struct Channels {
 /// # Ok(()) }
 /// ```
 pub struct FlightLogWriter {
-    /// `None` once finished.
-    writer: Option<McapFile>,
-    path: PathBuf,
-    channels: Channels,
+    /// The topics, written into the MCAP file.
+    topics: FlightTopics<McapOut>,
     options: LogOptions,
-    /// The transform topics, as compile's: the drone (at its estimate), the camera, each
-    /// actor, and the reference; each published when it changes, at most at `tf_hz`.
-    frames: Vec<FrameTopic>,
-    /// Time of the last `/tf` tick.
-    last_tf_ns: Option<u64>,
-    actor_names: Vec<String>,
-    /// Heights last published on `/scene/actors`.
-    heights_m: Vec<f64>,
-    /// The reused buffer of `/tf` messages ([`FrameTopic::message`] fills it).
-    buf: Vec<u8>,
-    next_tf_s: f64,
-    /// When the plot topics are next due (`plot_hz`; `/measurement` at `measurement_hz`):
-    /// `/reference` with `/actors`, `/estimate`, `/measurement`, `/command`, `/framing`.
-    next_reference_s: f64,
-    next_estimate_s: f64,
-    next_measurement_s: f64,
-    next_command_s: f64,
-    next_framing_s: f64,
-    /// The last `/command` written had its `failsafe` flag set.
-    command_failsafe: bool,
     clock: ChunkClock,
-    /// A tick was written (the first one follows the mark that the controller starts).
-    started: bool,
     /// The last tick closed a chunk: the next chunk starts with a key frame, which
     /// [`FlightLogWriter::write_key_frame`] gives.
     key_frame_due: bool,
-    /// The key frame given since the last tick, written before the next tick.
-    key_frame: Option<ControllerState>,
-    /// Where `/tf` puts the drone on ticks without an estimate.
-    last_estimate: Option<([f64; 3], f64)>,
     /// A second handle on the file, for syncing it from another thread (a durable log only).
     sync_file: Option<File>,
+}
+
+/// The MCAP file as the topics' [`MessageOut`]: each message straight into the open chunk.
+struct McapOut {
+    /// `None` once finished.
+    writer: Option<McapFile>,
+    path: PathBuf,
+    /// Each channel's sequence counter, by channel id.
+    channels: Vec<Channel>,
+}
+
+impl McapOut {
+    /// The MCAP writer and the log's path, or the error of a finished log.
+    fn mcap(&mut self) -> io::Result<(&mut McapFile, &Path)> {
+        let path = &self.path;
+        match self.writer.as_mut() {
+            Some(w) => Ok((w, path)),
+            None => Err(io::Error::other(format!(
+                "cannot write {}: log finished",
+                path.display()
+            ))),
+        }
+    }
+}
+
+impl MessageOut for McapOut {
+    fn add_channel(&mut self, t: &TopicSpec) -> io::Result<u16> {
+        let (writer, path) = self.mcap()?;
+        let err = |e| annotate(path, e);
+        let schema = writer
+            .add_schema(t.schema_name, t.encoding.schema(), t.schema.as_bytes())
+            .map_err(err)?;
+        let id = writer
+            .add_channel(schema, t.topic, t.encoding.message())
+            .map_err(err)?;
+        debug_assert_eq!(usize::from(id), self.channels.len());
+        self.channels.push(Channel::new(id));
+        Ok(id)
+    }
+
+    #[inline]
+    fn put(&mut self, channel: u16, ns: u64, encode: impl FnOnce(&mut Vec<u8>)) -> io::Result<()> {
+        let Some(channel) = self.channels.get_mut(usize::from(channel)) else {
+            return Err(io::Error::other(format!("no channel {channel} in the log")));
+        };
+        let header = channel.header(ns);
+        let (path, writer) = (&self.path, self.writer.as_mut());
+        let writer = writer.ok_or_else(|| {
+            io::Error::other(format!("cannot write {}: log finished", path.display()))
+        })?;
+        writer
+            .write_message_with(&header, encode)
+            .map_err(|e| annotate(path, e))
+    }
 }
 
 fn annotate(path: &Path, e: io::Error) -> io::Error {
@@ -203,72 +193,6 @@ fn open(path: &Path, new: bool) -> io::Result<File> {
         o.create(true).truncate(true);
     }
     o.open(path).map_err(|e| annotate(path, e))
-}
-
-/// Adds the log's schemas and channels but `/tf`'s: the per-tick topics in CDR with ros2msg
-/// schemas, events and the static ones JSON; `/servo/tick` first (its schema and channel ids
-/// are 1), `/gimbal` (for a drone with a gimbal) just before `/servo/state`, which is last.
-fn add_channels(writer: &mut McapFile, gimbal: bool) -> io::Result<Channels> {
-    let mut channel = |schema_name: &str, schema: &str, topic: &str, enc: Encoding| {
-        let schema_id = writer.add_schema(schema_name, enc.schema(), schema.as_bytes())?;
-        let id = writer.add_channel(schema_id, topic, enc.message())?;
-        Ok::<_, io::Error>(Channel::new(id))
-    };
-    let (c, j) = (Encoding::Cdr, Encoding::Json);
-    let servo_tick = channel(cdr::SCHEMA_NAME, cdr::SCHEMA, topic::SERVO_TICK, c)?;
-    let scene_schema = foxglove::scene_update_schema();
-    Ok(Channels {
-        reference: channel(REFERENCE_SCHEMA, &reference_schema(), topic::REFERENCE, c)?,
-        actors: channel(ACTORS_SCHEMA, &actors_schema(), topic::ACTORS, c)?,
-        camera: channel(CAMERA_SCHEMA, &camera_schema(), topic::CAMERA, j)?,
-        estimate: channel(
-            plots::ESTIMATE,
-            &plots::estimate_schema(),
-            topic::ESTIMATE,
-            c,
-        )?,
-        measurement: channel(
-            plots::MEASUREMENT,
-            &plots::measurement_schema(),
-            topic::MEASUREMENT,
-            c,
-        )?,
-        command: channel(plots::COMMAND, &plots::command_schema(), topic::COMMAND, c)?,
-        framing: channel(plots::FRAMING, &plots::framing_schema(), topic::FRAMING, c)?,
-        events: channel(schema::EVENT, &schema::event(), topic::EVENTS, j)?,
-        servo_tick,
-        tf: Vec::new(),
-        stage: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_STAGE, j)?,
-        drone: channel(foxglove::SCENE_UPDATE, &scene_schema, topic::SCENE_DRONE, j)?,
-        actor_scene: channel(
-            foxglove::SCENE_UPDATE,
-            &scene_schema,
-            topic::SCENE_ACTORS,
-            j,
-        )?,
-        calibration: channel(
-            foxglove::CAMERA_CALIBRATION,
-            &foxglove::camera_calibration_schema(),
-            topic::CAMERA_CALIBRATION,
-            j,
-        )?,
-        gimbal: if gimbal {
-            Some(channel(
-                plots::GIMBAL,
-                &plots::gimbal_schema(),
-                topic::GIMBAL,
-                c,
-            )?)
-        } else {
-            None
-        },
-        key_frame: channel(
-            key_frame::SCHEMA_NAME,
-            key_frame::SCHEMA,
-            topic::SERVO_STATE,
-            c,
-        )?,
-    })
 }
 
 /// When the log closes its chunks: every `period_s` of flight time, and every `every_ticks`
@@ -361,7 +285,7 @@ impl FlightLogWriter {
         // Chunks are built in memory and written whole (the file never holds a chunk whose
         // header is a placeholder), closed by the flush schedule only; a crash-cut log has no
         // data-end record to hold a data section CRC, the chunks' CRCs suffice.
-        let mut writer = McapFile::new(
+        let writer = McapFile::new(
             file,
             "dronecine.flight",
             &format!("dronecine-runtime {}", env!("CARGO_PKG_VERSION")),
@@ -370,9 +294,17 @@ impl FlightLogWriter {
         .map_err(err)?;
 
         let gimbal = header.profile.camera.gimbal != dronecine_profile::Gimbal::None;
-        let channels = add_channels(&mut writer, gimbal).map_err(err)?;
-
+        let out = McapOut {
+            writer: Some(writer),
+            path: path.to_path_buf(),
+            channels: Vec::new(),
+        };
+        let mut topics = FlightTopics::new(out, scene.actor_names, gimbal, options)?;
         let metadata = header_metadata(header).map_err(|e| annotate(path, io::Error::other(e)))?;
+        // The header again, under a CRC: a reader whose metadata record is damaged (it has no
+        // CRC) reads this one.
+        let json = serde_json::to_vec(header).map_err(|e| annotate(path, io::Error::other(e)))?;
+        let (writer, _) = topics.out_mut().mcap()?;
         writer
             .write_metadata(
                 HEADER_METADATA,
@@ -388,9 +320,6 @@ impl FlightLogWriter {
                 header.script_text.as_bytes(),
             )
             .map_err(err)?;
-        // The header again, under a CRC: a reader whose metadata record is damaged (it has no
-        // CRC) reads this one.
-        let json = serde_json::to_vec(header).map_err(|e| annotate(path, io::Error::other(e)))?;
         writer
             .attach(0, 0, HEADER_ATTACHMENT, "application/json", &json)
             .map_err(err)?;
@@ -400,102 +329,25 @@ impl FlightLogWriter {
         } else {
             100.0
         };
-        let mut channels = channels;
         // The transform topics, as compile's.
-        let tf_schema = writer
-            .add_schema(
-                foxglove::FRAME_TRANSFORMS,
-                Encoding::Cdr.schema(),
-                foxglove::frame_transforms_schema().as_bytes(),
-            )
-            .map_err(err)?;
-        let (frames, tf) = frame_topics_with(
-            scene.actor_names,
-            &[(foxglove::WORLD, REFERENCE_FRAME)],
-            |topic| writer.add_channel(tf_schema, topic, Encoding::Cdr.message()),
-        )
-        .map_err(err)?;
-        channels.tf = tf;
+        topics.add_frames()?;
         // Every schema and channel again, in the first chunk, under its CRC.
-        writer.repeat_schemas_and_channels();
+        topics.out_mut().mcap()?.0.repeat_schemas_and_channels();
+        topics.write_static(scene)?;
         let mut log = FlightLogWriter {
-            writer: Some(writer),
-            path: path.to_path_buf(),
-            channels,
+            topics,
             options,
-            frames,
-            last_tf_ns: None,
-            actor_names: scene.actor_names.to_vec(),
-            heights_m: Vec::new(),
-            buf: Vec::with_capacity(4096),
-            next_tf_s: f64::NEG_INFINITY,
-            next_reference_s: f64::NEG_INFINITY,
-            next_estimate_s: f64::NEG_INFINITY,
-            next_measurement_s: f64::NEG_INFINITY,
-            next_command_s: f64::NEG_INFINITY,
-            next_framing_s: f64::NEG_INFINITY,
-            command_failsafe: false,
             clock: ChunkClock::new(options.flush_period_s, rate_hz),
-            started: false,
             key_frame_due: false,
-            key_frame: None,
-            last_estimate: None,
             sync_file,
         };
-        log.write_static(&scene.lens, &scene.stage, scene.actor_heights_m)?;
         log.flush()?;
         Ok(log)
     }
 
-    /// Puts a message already encoded on a channel.
-    fn put(
-        &mut self,
-        channel: fn(&mut Channels) -> &mut Channel,
-        ns: u64,
-        data: &[u8],
-    ) -> io::Result<()> {
-        let channel = channel(&mut self.channels);
-        put_with(&mut self.writer, &self.path, channel, ns, |b| {
-            b.extend_from_slice(data)
-        })
-    }
-
-    /// The topics published once, at time 0.
-    fn write_static(
-        &mut self,
-        lens: &Lens,
-        stage: &dronecine_grammar::script::Stage,
-        heights_m: &[f64],
-    ) -> io::Result<()> {
-        self.put(|c| &mut c.camera, 0, &camera_message(lens))?;
-        self.put(|c| &mut c.stage, 0, &foxglove::stage_scene(0, stage))?;
-        self.put(|c| &mut c.drone, 0, &foxglove::drone_scene(0))?;
-        self.put(
-            |c| &mut c.calibration,
-            0,
-            &foxglove::camera_calibration(0, lens),
-        )?;
-        let mut heights = heights_m.to_vec();
-        heights.resize(self.actor_names.len(), 1.7);
-        self.write_actor_scene(0, heights)
-    }
-
-    fn write_actor_scene(&mut self, ns: u64, heights_m: Vec<f64>) -> io::Result<()> {
-        let scene = foxglove::actors_scene(ns, &self.actor_names, &heights_m);
-        self.heights_m = heights_m;
-        self.put(|c| &mut c.actor_scene, ns, &scene)
-    }
-
     /// The MCAP writer and the log's path, or the error of a finished log.
     fn mcap(&mut self) -> io::Result<(&mut McapFile, &Path)> {
-        let path = &self.path;
-        match self.writer.as_mut() {
-            Some(w) => Ok((w, path)),
-            None => Err(io::Error::other(format!(
-                "cannot write {}: log finished",
-                path.display()
-            ))),
-        }
+        self.topics.out_mut().mcap()
     }
 
     /// Closes the current chunk and flushes the file to the OS.
@@ -535,94 +387,9 @@ impl FlightLogWriter {
     /// first tick, the mark that the controller starts there; before any other, the key frame
     /// given since the last tick, if any.
     pub fn write_tick(&mut self, tick: &TickRecord) -> io::Result<()> {
-        let t_s = tick.input.t_s;
-        let ns = ns_from_s(t_s);
-        let output = tick.output.as_ref().ok();
-        if !self.started {
-            self.started = true;
-            // No state before the first tick: the controller starts there.
-            self.key_frame = None;
-            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.key_frame);
-            put_with(w, path, channel, ns, |b| key_frame::encode(b, t_s, None))?;
-        } else if let Some(state) = self.key_frame.take() {
-            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.key_frame);
-            put_with(w, path, channel, ns, |b| {
-                key_frame::encode(b, t_s, Some(&state))
-            })?;
-        }
         self.key_frame_due = false;
-
-        // The plot topics at `plot_hz` (each on the first tick that has one when due); every
-        // tick's exact values are on /servo/tick.
-        let hz = self.options.plot_hz;
-        let due = |next_s: f64| t_s >= next_s || !t_s.is_finite();
-
-        // /reference and /actors, exactly as compile writes them.
-        if due(self.next_reference_s) {
-            self.next_reference_s = advance(self.next_reference_s, t_s, hz);
-            let (w, path, channels) = (&mut self.writer, &self.path, &mut self.channels);
-            put_with(w, path, &mut channels.reference, ns, |b| {
-                write_reference(b, tick.sample)
-            })?;
-            put_with(w, path, &mut channels.actors, ns, |b| {
-                write_actors(b, t_s, &self.actor_names, tick.actors)
-            })?;
-        }
-        if let Some(out) = output {
-            if due(self.next_estimate_s) {
-                self.next_estimate_s = advance(self.next_estimate_s, t_s, hz);
-                let (w, path, channel) =
-                    (&mut self.writer, &self.path, &mut self.channels.estimate);
-                put_with(w, path, channel, ns, |b| {
-                    plots::estimate(b, t_s, &out.estimate)
-                })?;
-            }
-            self.last_estimate = Some((out.estimate.position_m, out.estimate.heading_rad));
-        }
-
-        if let Some(frame) = tick.mocap {
-            if due(self.next_measurement_s) {
-                self.next_measurement_s =
-                    advance(self.next_measurement_s, t_s, self.options.measurement_hz);
-                let (w, path) = (&mut self.writer, &self.path);
-                let channel = &mut self.channels.measurement;
-                put_with(w, path, channel, ns, |b| plots::measurement(b, frame))?;
-            }
-        }
-
-        let failsafe = output.is_none_or(|o| !same_command(&o.command, &tick.command_sent));
-        if due(self.next_command_s) || failsafe || self.command_failsafe {
-            self.next_command_s = advance(self.next_command_s, t_s, hz);
-            self.command_failsafe = failsafe;
-            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.command);
-            put_with(w, path, channel, ns, |b| {
-                plots::command(b, t_s, output, &tick.command_sent, failsafe)
-            })?;
-        }
-
-        if !tick.framing.is_empty() && due(self.next_framing_s) {
-            self.next_framing_s = advance(self.next_framing_s, t_s, hz);
-            let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.framing);
-            put_with(w, path, channel, ns, |b| {
-                plots::framing(b, t_s, tick.shot, &self.actor_names, tick.framing)
-            })?;
-        }
-
-        if let (Some(g), Some(channel)) = (&tick.gimbal, &mut self.channels.gimbal) {
-            put_with(&mut self.writer, &self.path, channel, ns, |b| {
-                plots::gimbal(b, t_s, g)
-            })?;
-        }
-
-        let (w, path, channel) = (&mut self.writer, &self.path, &mut self.channels.servo_tick);
-        put_with(w, path, channel, ns, |b| cdr::encode(b, tick))?;
-
-        if t_s >= self.next_tf_s || !t_s.is_finite() {
-            self.next_tf_s = advance(self.next_tf_s, t_s, self.options.tf_hz);
-            self.write_tf(ns, tick)?;
-        }
-
-        if self.clock.step(t_s) {
+        self.topics.write_tick(tick)?;
+        if self.clock.step(tick.input.t_s) {
             self.close_chunk()?;
             self.key_frame_due = true;
         }
@@ -648,7 +415,7 @@ impl FlightLogWriter {
     /// The controller's state after the last tick written (a key frame): written before the
     /// next tick, in the chunk that tick goes in, so that replay can resume there after a gap.
     pub fn write_key_frame(&mut self, state: &ControllerState) {
-        self.key_frame = Some(*state);
+        self.topics.set_key_frame(state);
         self.key_frame_due = false;
     }
 
@@ -657,84 +424,16 @@ impl FlightLogWriter {
         self.clock
     }
 
-    /// `/tf`: the drone at its estimate, the camera, the actors and the reference; and
-    /// `/scene/actors` again when an actor's height changed.
-    fn write_tf(&mut self, ns: u64, tick: &TickRecord) -> io::Result<()> {
-        if tick.actors.len() == self.heights_m.len()
-            && tick
-                .actors
-                .iter()
-                .zip(&self.heights_m)
-                .any(|(a, &h)| (a.height_m - h).abs() > 1e-3)
-        {
-            let heights = tick.actors.iter().map(|a| a.height_m).collect();
-            self.write_actor_scene(ns, heights)?;
-        }
-        let s = tick.sample;
-        let (position_m, heading_rad) = self.last_estimate.unwrap_or((s.position_m, s.heading_rad));
-        let prev_ns = self.last_tf_ns.replace(ns);
-        let n_actors = tick.actors.len().min(self.frames.len().saturating_sub(3));
-        let poses = [
-            (position_m, foxglove::yaw(heading_rad)),
-            ([0.0; 3], foxglove::camera_in_drone(s.camera_pitch_rad)),
-        ]
-        .into_iter()
-        .chain(
-            tick.actors[..n_actors]
-                .iter()
-                .map(|a| (a.position_m, foxglove::yaw(a.facing_rad))),
-        )
-        .enumerate()
-        .chain(std::iter::once((
-            self.frames.len() - 1,
-            (s.position_m, foxglove::yaw(s.heading_rad)),
-        )));
-        for (i, (t, q)) in poses {
-            if self.frames[i].message(&mut self.buf, prev_ns, ns, t, q) {
-                let (w, path, buf) = (&mut self.writer, &self.path, &self.buf);
-                put_with(w, path, &mut self.channels.tf[i], ns, |b| {
-                    b.extend_from_slice(buf)
-                })?;
-            }
-        }
-        Ok(())
-    }
-
     /// Writes an event on `/events` (its time exact, as on `/servo/tick`).
     pub fn write_event(&mut self, event: &Event) -> io::Result<()> {
-        let channel = &mut self.channels.events;
-        put_with(
-            &mut self.writer,
-            &self.path,
-            channel,
-            ns_from_s(event.t_s),
-            |buf| {
-                buf.extend_from_slice(b"{\"t_s\":");
-                exact::f64(buf, event.t_s);
-                buf.extend_from_slice(b",\"level\":");
-                json::string(buf, &event.level);
-                buf.extend_from_slice(b",\"kind\":");
-                json::string(buf, &event.kind);
-                buf.extend_from_slice(b",\"message\":");
-                json::string(buf, &event.message);
-                if let Some(line) = event.line {
-                    buf.extend_from_slice(b",\"line\":");
-                    json::u64(buf, line as u64);
-                }
-                if let Some(help) = &event.help {
-                    buf.extend_from_slice(b",\"help\":");
-                    json::string(buf, help);
-                }
-                buf.push(b'}');
-            },
-        )
+        self.topics.write_event(event)
     }
 
     /// Closes the last chunk, writes the summary and the closing magic, and (a
     /// [`LogOptions::durable`] log) `fsync`s the file.
     pub fn finish(mut self) -> io::Result<()> {
-        let path = self.path.clone();
-        let mut writer = self.writer.take().ok_or_else(|| {
+        let path = self.topics.out().path.clone();
+        let mut writer = self.topics.out_mut().writer.take().ok_or_else(|| {
             io::Error::other(format!("cannot write {}: log finished", path.display()))
         })?;
         writer.finish().map_err(|e| annotate(&path, e))?;
@@ -756,7 +455,7 @@ impl FlightLogWriter {
 
     /// The log's path.
     pub fn path(&self) -> &Path {
-        &self.path
+        &self.topics.out().path
     }
 }
 
@@ -764,28 +463,10 @@ impl Drop for FlightLogWriter {
     fn drop(&mut self) {
         // Dropped without `finish()` (an error path): close the last chunk and the summary
         // so the file is whole; errors have nowhere to go.
-        if let Some(mut writer) = self.writer.take() {
+        if let Some(mut writer) = self.topics.out_mut().writer.take() {
             let _ = writer.finish();
         }
     }
-}
-
-/// Puts a message on a channel, encoded by `encode` straight into the open chunk (a free
-/// function, so that `encode` may borrow the writer's other fields).
-fn put_with(
-    writer: &mut Option<McapFile>,
-    path: &Path,
-    channel: &mut Channel,
-    ns: u64,
-    encode: impl FnOnce(&mut Vec<u8>),
-) -> io::Result<()> {
-    let header = channel.header(ns);
-    let writer = writer.as_mut().ok_or_else(|| {
-        io::Error::other(format!("cannot write {}: log finished", path.display()))
-    })?;
-    writer
-        .write_message_with(&header, encode)
-        .map_err(|e| annotate(path, e))
 }
 
 /// The metadata map: each field of the header under its name, its value the field's JSON.

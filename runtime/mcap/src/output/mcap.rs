@@ -208,6 +208,10 @@ impl Channel {
         Channel { id, sequence: 0 }
     }
 
+    pub fn id(&self) -> u16 {
+        self.id
+    }
+
     /// The header of the channel's next message, logged and published at `ns`.
     pub fn header(&mut self, ns: u64) -> MessageHeader {
         self.sequence = self.sequence.wrapping_add(1);

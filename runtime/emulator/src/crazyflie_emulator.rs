@@ -1,0 +1,398 @@
+//! The Crazyflie + OptiTrack emulator behind `dronecine emulate crazyflie`: the embedded
+//! simulator in real time behind CRTP over UDP (one packet per datagram, as cflib's UDP
+//! driver and the Crazyflie simulators speak it) and NatNet, so the Crazyflie backend (or a
+//! cflib client) flies it over loopback with the motion capture from the same world.
+//!
+//! The simulator is flown with the script's drone profile (its model and limits), its
+//! take-off height set to 0.1 m (the lift-off of a Crazyflie whose motors start: the climb
+//! above is the client's) and its watchdog to the firmware's 0.5 s. Every
+//! [`CrazyflieEmulatorConfig::step_s`] of wall time its loop:
+//!
+//! 1. drains the CRTP port: each datagram goes to the emulated firmware ([`crate::crazyflie`]),
+//!    whose answers go back to the sender, which becomes the client;
+//! 2. answers the NatNet command port;
+//! 3. advances the simulator to the wall time since its start;
+//! 4. lets the firmware's time pass (estimate, watchdog) and sends the log samples due to the
+//!    client; a drone whose motors were cut in the air is rebuilt, landed, where it rests;
+//! 5. sends the newest motion-capture frame (rigid body 1 the drone, 2, 3, … the actors);
+//! 6. publishes its status ([`CrazyflieHandle::status`]): the counters, the truth, and the
+//!    set-points received while flying, for the rate a client commands at.
+
+use std::io;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr, UdpSocket};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use dronecine_backend::{Clock, FlightState, MocapFrame};
+use dronecine_crazyflie::crtp::Packet;
+use dronecine_grammar::script::Scene;
+use dronecine_profile::Profile;
+use dronecine_sim::{SimConfig, Truth};
+
+use crate::crazyflie::{CrazyflieCounters, CrazyflieFirmware};
+use crate::natnet_io::{NatNetCounts, NatNetIo};
+use crate::{bind, spawn_loop, EmulatorError, NatNetConfig, NatNetData, Paced, World};
+
+/// cflib's first UDP port.
+pub const CRTP_PORT: u16 = 19850;
+/// The simulated lift-off's height: the motors' start lifts the drone this high.
+pub const LIFT_OFF_M: f64 = 0.1;
+/// The firmware's watchdog: no set-point for this long, and it levels out.
+pub const LEVEL_OUT_S: f64 = 0.5;
+
+/// Everything [`CrazyflieEmulator::start`] needs.
+#[derive(Clone, Debug)]
+pub struct CrazyflieEmulatorConfig {
+    /// The address the CRTP and NatNet command sockets bind to.
+    pub host: IpAddr,
+    /// 0 binds an ephemeral port ([`CrazyflieHandle::addr`] tells which).
+    pub port: u16,
+    pub natnet: Option<NatNetConfig>,
+    pub sim: SimConfig,
+    pub profile: Profile,
+    pub scene: Scene,
+    /// The CRTP protocol version the firmware announces (12 by default).
+    pub protocol: u8,
+    /// The loop's period (wall clock). Default 5 ms.
+    pub step_s: f64,
+}
+
+impl CrazyflieEmulatorConfig {
+    /// 127.0.0.1:19850, NatNet on Motive's defaults, protocol 12, all the simulator's
+    /// effects seeded by `seed`, with the lift-off height and the watchdog above.
+    pub fn new(profile: Profile, scene: Scene, seed: u64) -> Self {
+        CrazyflieEmulatorConfig {
+            host: IpAddr::V4(Ipv4Addr::LOCALHOST),
+            port: CRTP_PORT,
+            natnet: Some(NatNetConfig::default()),
+            sim: crazyflie_sim(SimConfig::new(seed)),
+            profile,
+            scene,
+            protocol: 12,
+            step_s: 0.005,
+        }
+    }
+}
+
+/// `sim` with the emulated Crazyflie's lift-off height and watchdog.
+pub fn crazyflie_sim(sim: SimConfig) -> SimConfig {
+    SimConfig {
+        takeoff_height_m: LIFT_OFF_M,
+        watchdog_s: LEVEL_OUT_S,
+        ..sim
+    }
+}
+
+/// A snapshot of the emulator, refreshed every step.
+#[derive(Clone, Debug, Default)]
+pub struct CrazyflieStatus {
+    pub firmware: CrazyflieCounters,
+    pub natnet_requests: u64,
+    pub natnet_rejected: u64,
+    pub frames_sent: u64,
+    pub send_errors: u64,
+    /// Simulators rebuilt after a fall.
+    pub rests: u64,
+    pub truth: Truth,
+    /// Where the answers and samples go (the last sender).
+    pub client: Option<SocketAddr>,
+    /// Wall seconds the drone spent flying (its state `Flying`), and the set-points
+    /// (altHold and position) received meanwhile.
+    pub flying_s: f64,
+    pub setpoints_flying: u64,
+    pub locked: bool,
+    pub estimator: u8,
+    pub uptime_s: f64,
+}
+
+impl CrazyflieStatus {
+    /// The set-points a second received while flying.
+    pub fn setpoint_rate_hz(&self) -> Option<f64> {
+        (self.flying_s > 0.0).then(|| self.setpoints_flying as f64 / self.flying_s)
+    }
+}
+
+/// The emulator: see the module docs.
+pub struct CrazyflieEmulator;
+
+/// The running emulator. Dropping it stops it.
+pub struct CrazyflieHandle {
+    addr: SocketAddr,
+    natnet_command_addr: Option<SocketAddr>,
+    natnet_data: Option<NatNetData>,
+    status: Arc<Mutex<CrazyflieStatus>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl CrazyflieHandle {
+    /// The bound CRTP address.
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    pub fn natnet_command_addr(&self) -> Option<SocketAddr> {
+        self.natnet_command_addr
+    }
+
+    pub fn natnet_data(&self) -> Option<NatNetData> {
+        self.natnet_data
+    }
+
+    pub fn status(&self) -> CrazyflieStatus {
+        self.status.lock().map(|s| s.clone()).unwrap_or_default()
+    }
+
+    /// Whether the loop still runs.
+    pub fn is_running(&self) -> bool {
+        self.thread.as_ref().is_some_and(|t| !t.is_finished())
+    }
+
+    /// Waits until the loop ends (it runs until dropped or the process ends).
+    pub fn wait(mut self) -> Result<(), EmulatorError> {
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| EmulatorError::Thread("it panicked".into())),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for CrazyflieHandle {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl CrazyflieEmulator {
+    /// Binds the sockets, builds the simulator and starts the loop.
+    pub fn start(config: CrazyflieEmulatorConfig) -> Result<CrazyflieHandle, EmulatorError> {
+        if !(config.step_s.is_finite() && (1e-4..=0.05).contains(&config.step_s)) {
+            return Err(EmulatorError::Config(format!(
+                "the emulator's step {} s is outside 0.1–50 ms",
+                config.step_s
+            )));
+        }
+        config.sim.validate().map_err(EmulatorError::Sim)?;
+        let at = SocketAddr::new(config.host, config.port);
+        let crtp = bind("CRTP", at)?;
+        let addr = crtp.local_addr().map_err(|error| EmulatorError::Socket {
+            what: "CRTP",
+            addr: at,
+            error,
+        })?;
+        let natnet = match &config.natnet {
+            None => None,
+            Some(n) => Some(NatNetIo::bind(config.host, n)?),
+        };
+        let natnet_command_addr = match &natnet {
+            Some(n) => Some(n.command_addr()?),
+            None => None,
+        };
+        let natnet_data = config.natnet.map(|n| n.data);
+        let status = Arc::new(Mutex::new(CrazyflieStatus::default()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (st, sp) = (Arc::clone(&status), Arc::clone(&stop));
+        let (thread, ready) = spawn_loop(move || CfLoop::new(config, crtp, natnet, st, sp))?;
+        let handle = CrazyflieHandle {
+            addr,
+            natnet_command_addr,
+            natnet_data,
+            status,
+            stop,
+            thread: Some(thread),
+        };
+        ready.map(|()| handle)
+    }
+}
+
+/// Largest datagram read (a CRTP packet is at most 31 bytes; more is read to reject it).
+const RECV_BUF: usize = 2048;
+/// At most this many datagrams per step (the others wait for the next step).
+const MAX_DATAGRAMS_PER_STEP: usize = 512;
+
+struct CfLoop {
+    cfg: CrazyflieEmulatorConfig,
+    crtp: UdpSocket,
+    natnet: Option<NatNetIo>,
+    fw: CrazyflieFirmware,
+    world: World,
+    sim_offset_s: f64,
+    frame_offset: u64,
+    last_frame_number: Option<u64>,
+    client: Option<SocketAddr>,
+    truth: Truth,
+    frame: MocapFrame,
+    out: Vec<Packet>,
+    status: CrazyflieStatus,
+    shared: Arc<Mutex<CrazyflieStatus>>,
+    stop: Arc<AtomicBool>,
+    start: Instant,
+    last_step_s: f64,
+    rx: Vec<u8>,
+    tx: Vec<u8>,
+}
+
+impl Paced for CfLoop {
+    fn step(&mut self) {
+        CfLoop::step(self);
+    }
+
+    fn step_s(&self) -> f64 {
+        self.cfg.step_s
+    }
+
+    fn stopped(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+
+    fn now_s(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
+impl CfLoop {
+    fn new(
+        cfg: CrazyflieEmulatorConfig,
+        crtp: UdpSocket,
+        natnet: Option<NatNetIo>,
+        shared: Arc<Mutex<CrazyflieStatus>>,
+        stop: Arc<AtomicBool>,
+    ) -> Result<CfLoop, EmulatorError> {
+        let world = World::new(&cfg.sim, &cfg.profile, &cfg.scene).map_err(EmulatorError::Sim)?;
+        Ok(CfLoop {
+            fw: CrazyflieFirmware::new(cfg.protocol),
+            cfg,
+            crtp,
+            natnet,
+            world,
+            sim_offset_s: 0.0,
+            frame_offset: 0,
+            last_frame_number: None,
+            client: None,
+            truth: Truth::default(),
+            frame: MocapFrame::default(),
+            out: Vec::with_capacity(64),
+            status: CrazyflieStatus::default(),
+            shared,
+            stop,
+            start: Instant::now(),
+            last_step_s: 0.0,
+            rx: vec![0; RECV_BUF],
+            tx: vec![0; 65_536],
+        })
+    }
+
+    fn step(&mut self) {
+        let setpoints_before = self.setpoints();
+        self.drain_crtp();
+        if let Some(io) = &mut self.natnet {
+            let mut counts = NatNetCounts::default();
+            io.drain(&mut self.rx, &mut self.tx, &mut counts);
+            self.count(counts);
+        }
+        let now = Paced::now_s(self);
+        self.world.clock.sleep_until(now - self.sim_offset_s);
+        self.world.sim.truth_into(&mut self.truth);
+        let outcome = self
+            .fw
+            .tick(now, &mut self.world.drone, &self.truth, &mut self.out);
+        self.send_out();
+        if outcome.rest {
+            self.rest(now);
+        }
+        self.send_frame(now);
+        if self.truth.state == FlightState::Flying {
+            self.status.flying_s += now - self.last_step_s;
+            self.status.setpoints_flying += self.setpoints() - setpoints_before;
+        }
+        self.last_step_s = now;
+        self.publish(now);
+    }
+
+    fn setpoints(&self) -> u64 {
+        let c = self.fw.counters();
+        c.alt_holds + c.positions
+    }
+
+    fn drain_crtp(&mut self) {
+        for _ in 0..MAX_DATAGRAMS_PER_STEP {
+            let (n, from) = match self.crtp.recv_from(&mut self.rx) {
+                Ok(r) => r,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                Err(_) => continue,
+            };
+            self.client = Some(from);
+            let now = Paced::now_s(self);
+            self.fw.datagram(
+                &self.rx[..n],
+                now,
+                &mut self.world.drone,
+                &self.truth,
+                &mut self.out,
+            );
+            self.send_out();
+        }
+    }
+
+    /// Sends the firmware's packets to the client.
+    fn send_out(&mut self) {
+        let Some(client) = self.client else {
+            self.out.clear();
+            return;
+        };
+        for p in self.out.drain(..) {
+            if self.crtp.send_to(p.as_bytes(), client).is_err() {
+                self.status.send_errors += 1;
+            }
+        }
+    }
+
+    /// The drone whose motors were cut rests on the floor: landed there, a new world.
+    fn rest(&mut self, now: f64) {
+        let cfg = &self.cfg;
+        if let Ok(w) = self.world.landed_here(&cfg.sim, &cfg.profile, &cfg.scene) {
+            self.world = w;
+            self.sim_offset_s = now;
+            self.frame_offset = self.last_frame_number.map_or(0, |n| n + 1);
+            self.status.rests += 1;
+        }
+    }
+
+    fn send_frame(&mut self, now: f64) {
+        let Some(number) = self.world.next_frame(&mut self.frame, self.frame_offset) else {
+            return;
+        };
+        self.last_frame_number = Some(number);
+        let Some(io) = &mut self.natnet else { return };
+        let capture = self.sim_offset_s + self.frame.t_s;
+        let mut counts = NatNetCounts::default();
+        io.send_frame(&self.frame, number, capture, now, &mut self.tx, &mut counts);
+        self.count(counts);
+    }
+
+    fn count(&mut self, c: NatNetCounts) {
+        self.status.natnet_requests += c.requests;
+        self.status.natnet_rejected += c.rejected;
+        self.status.frames_sent += c.frames;
+        self.status.send_errors += c.send_errors;
+    }
+
+    fn publish(&mut self, now: f64) {
+        self.status.firmware = self.fw.counters();
+        self.status.truth.clone_from(&self.truth);
+        self.status.client = self.client;
+        self.status.locked = self.fw.locked();
+        self.status.estimator = self.fw.estimator();
+        self.status.uptime_s = now;
+        if let Ok(mut s) = self.shared.lock() {
+            s.clone_from(&self.status);
+        }
+    }
+}
