@@ -362,6 +362,8 @@ impl CfLoop {
             self.sim_offset_s = now;
             self.frame_offset = self.last_frame_number.map_or(0, |n| n + 1);
             self.status.rests += 1;
+            // The status published this step pairs the rest with the rebuilt world's state.
+            self.world.sim.truth_into(&mut self.truth);
         }
     }
 
