@@ -86,14 +86,11 @@ fn for_arducopter(name: &str, dir: &Path) -> PathBuf {
     path
 }
 
-/// The JSON report of `script` flown through SITL (fresh parameters and `more_params`, a new
-/// namespace).
-fn fly_sitl(
-    sitl: &(PathBuf, PathBuf),
-    script: &Path,
-    dir: &Path,
-    more_params: &str,
-) -> serde_json::Value {
+/// Runs `dronecine ARGS` beside a fresh SITL (the test vehicle's defaults, the external
+/// navigation's parameters and `more_params`) in a network namespace of its own, in `dir`:
+/// its standard output goes to `dir/out`, its errors to `dir/err`. Fails the test, quoting
+/// those errors, when it exits unsuccessfully.
+fn in_sitl(sitl: &(PathBuf, PathBuf), dir: &Path, more_params: &str, args: &str) {
     let params = dir.join("external-nav.parm");
     std::fs::write(&params, format!("{EXTERNAL_NAV_PARAMS}{more_params}")).unwrap();
     let (binary, defaults) = sitl;
@@ -101,16 +98,13 @@ fn fly_sitl(
         "ip link set lo up || exit 1; cd '{dir}' || exit 1; \
          '{binary}' --model quad --speedup 1 --wipe --defaults '{defaults},{params}' -I0 \
            --home {SITL_HOME},0 > sitl.log 2>&1 & sitl=$!; sleep 2; \
-         '{dronecine}' shoot '{script}' --drone 'mavlink://tcp:127.0.0.1:5760?origin={SITL_HOME}' \
-           --mocap sitl \
-           --report json -q --log '{dir}/flight.mcap' > report.json 2> shoot.err; rc=$?; \
+         '{dronecine}' {args} > out 2> err; rc=$?; \
          kill $sitl; wait $sitl 2>/dev/null; exit $rc",
         dir = dir.display(),
         binary = binary.display(),
         defaults = defaults.display(),
         params = params.display(),
         dronecine = env!("CARGO_BIN_EXE_dronecine"),
-        script = script.display(),
     );
     // Root makes the network namespace itself (and the flight gets the real-time scheduling
     // it asks for); anyone else makes it inside a user namespace of their own.
@@ -127,10 +121,35 @@ fn fly_sitl(
         .env("NO_COLOR", "1")
         .status()
         .expect("unshare runs (util-linux)");
-    let err = std::fs::read_to_string(dir.join("shoot.err")).unwrap_or_default();
-    assert!(status.success(), "the flight through SITL failed: {err}");
-    let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
-    serde_json::from_str(&report).unwrap_or_else(|e| panic!("{e}: {report}\n{err}"))
+    let err = std::fs::read_to_string(dir.join("err")).unwrap_or_default();
+    assert!(
+        status.success(),
+        "dronecine {args} beside SITL failed: {err}"
+    );
+}
+
+/// The vehicle's address inside the namespace, with the EKF origin the flight sets.
+fn sitl_drone() -> String {
+    format!("'mavlink://tcp:127.0.0.1:5760?origin={SITL_HOME}' --mocap sitl")
+}
+
+/// The JSON report of `script` flown through SITL (fresh parameters and `more_params`, a new
+/// namespace).
+fn fly_sitl(
+    sitl: &(PathBuf, PathBuf),
+    script: &Path,
+    dir: &Path,
+    more_params: &str,
+) -> serde_json::Value {
+    let args = format!(
+        "shoot '{script}' --drone {drone} --report json -q --log '{dir}/flight.mcap'",
+        script = script.display(),
+        drone = sitl_drone(),
+        dir = dir.display(),
+    );
+    in_sitl(sitl, dir, more_params, &args);
+    let report = std::fs::read_to_string(dir.join("out")).unwrap();
+    serde_json::from_str(&report).unwrap_or_else(|e| panic!("{e}: {report}"))
 }
 
 /// The JSON report of `script` flown on the embedded simulator (seed 1).
@@ -259,4 +278,71 @@ fn a_high_angle_points_sitls_camera_mount() {
         flown["rms_position_error_m"].as_f64().unwrap() * 100.0
     );
     assert!(rms_deg <= 3.0, "{rms_deg}°");
+}
+
+/// `calibrate` through the MAVLink backend on SITL's vehicle: every axis fitted (the command
+/// refuses a fit below its R² bar), each gain and time constant near the built-in profile's
+/// (which is this vehicle's calibration), and the square flown with the calibrated profile
+/// within [`MAX_RMS_M`].
+#[test]
+fn calibrate_fits_sitls_vehicle_and_the_fit_flies() {
+    let Some(sitl) = sitl("calibrate") else {
+        return;
+    };
+    let dir = temp_dir("sitl-calibrate");
+    let fitted = dir.path().join("fitted.toml");
+    let args = format!(
+        "calibrate --profile arducopter-quad --drone {drone} -o '{fitted}'",
+        drone = sitl_drone(),
+        fitted = fitted.display(),
+    );
+    let calibration = dir.path().join("calibration");
+    std::fs::create_dir_all(&calibration).unwrap();
+    in_sitl(&sitl, &calibration, "", &args);
+    let got = dronecine_profile::Profile::load(&fitted).unwrap().0;
+    let want = dronecine_profile::Profile::builtin("arducopter-quad").unwrap();
+    let (g, w) = (&got.model, &want.model);
+    let pairs = [
+        (
+            "K_roll",
+            g.gain_roll_mps_per_rad,
+            w.gain_roll_mps_per_rad,
+            0.15,
+        ),
+        (
+            "K_pitch",
+            g.gain_pitch_mps_per_rad,
+            w.gain_pitch_mps_per_rad,
+            0.15,
+        ),
+        ("tau_roll", g.tau_roll_s, w.tau_roll_s, 0.25),
+        ("tau_pitch", g.tau_pitch_s, w.tau_pitch_s, 0.25),
+        ("K_vz", g.gain_vz, w.gain_vz, 0.15),
+        ("tau_vz", g.tau_vz_s, w.tau_vz_s, 0.30),
+        ("K_yaw", g.gain_yaw, w.gain_yaw, 0.15),
+    ];
+    for (name, got, want, share) in pairs {
+        eprintln!("calibrate through SITL: {name} {got:.3} (the built-in profile's {want:.3})");
+        assert!(
+            (got - want).abs() <= share * want,
+            "{name}: {got} against {want} (±{share})"
+        );
+    }
+    let square = for_arducopter("square.psl", dir.path());
+    let text = std::fs::read_to_string(&square).unwrap().replace(
+        "drone arducopter-quad",
+        &format!("drone \"{}\"", fitted.display()),
+    );
+    std::fs::write(&square, text).unwrap();
+    let flight = dir.path().join("flight");
+    std::fs::create_dir_all(&flight).unwrap();
+    let flown = fly_sitl(&sitl, &square, &flight, "");
+    let rms_m = flown["rms_position_error_m"].as_f64().unwrap();
+    eprintln!(
+        "the square through SITL with the calibrated profile: {:.1} cm RMS, saturated {:.1} %",
+        rms_m * 100.0,
+        flown["saturated_fraction"].as_f64().unwrap() * 100.0
+    );
+    assert_eq!(flown["completed"], true, "{flown}");
+    assert!(rms_m <= MAX_RMS_M, "{flown}");
 }
