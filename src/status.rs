@@ -29,9 +29,37 @@ pub struct Args<'a> {
     pub interval_s: f64,
 }
 
-fn fail(msg: impl std::fmt::Display) -> ExitCode {
+/// Prints `msg` as the command's error: the exit code of a failed `status`.
+pub(crate) fn fail(msg: impl std::fmt::Display) -> ExitCode {
     errln!("error: {msg}");
     ExitCode::FAILURE
+}
+
+/// A single read-out's exit: success without a problem, else how many the read-out above
+/// lists, with `of` (what has them) and `advice`.
+pub(crate) fn verdict(problems: usize, of: &str, advice: &str) -> ExitCode {
+    match problems {
+        0 => ExitCode::SUCCESS,
+        n => fail(format!(
+            "{n} problem{} with {of} (listed above): {advice}",
+            if n == 1 { "" } else { "s" }
+        )),
+    }
+}
+
+/// `--watch` on a drone read in the background: `each` prints a read-out every `interval_s`,
+/// a blank line between text read-outs, until the command is interrupted.
+pub(crate) fn watch(interval_s: f64, json: bool, mut each: impl FnMut()) -> ExitCode {
+    let interval = Duration::from_secs_f64(interval_s);
+    let mut next = Instant::now() + interval;
+    loop {
+        std::thread::sleep(next.saturating_duration_since(Instant::now()));
+        next += interval;
+        if !json {
+            outln!();
+        }
+        each();
+    }
 }
 
 fn text(url: &ArDroneUrl, s: &ArDroneStatus) -> String {
@@ -169,14 +197,11 @@ pub fn run(a: &Args) -> ExitCode {
         return fail(e);
     }
     if !a.watch {
-        return match status.problems.len() {
-            0 => ExitCode::SUCCESS,
-            n => fail(format!(
-                "{n} problem{} with the drone's navdata (listed above): do not trust this \
-                 read-out",
-                if n == 1 { "" } else { "s" }
-            )),
-        };
+        return verdict(
+            status.problems.len(),
+            "the drone's navdata",
+            "do not trust this read-out",
+        );
     }
     let interval = Duration::from_secs_f64(a.interval_s);
     let mut next = Instant::now() + interval;

@@ -6,7 +6,7 @@
 //! read-out comes from are created on the Crazyflie, as any client's are).
 
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use dronecine_crazyflie::drone::monitor;
 use dronecine_crazyflie::frames::{YawRateSign, CCW_YAW_RATE_PROTOCOL};
@@ -14,6 +14,7 @@ use dronecine_crazyflie::link::Link;
 use dronecine_crazyflie::log::{supervisor, Field, Values};
 use dronecine_crazyflie::{CrazyflieOptions, CrazyflieUrl};
 
+use crate::status::{fail, verdict, watch};
 use crate::status_mavlink::Args;
 
 /// A link silent for longer than this is a problem.
@@ -156,11 +157,6 @@ fn print(url: &CrazyflieUrl, r: &Readout, json: bool) {
     }
 }
 
-fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    errln!("error: {msg}");
-    ExitCode::FAILURE
-}
-
 /// `status` of the Crazyflie at `url`.
 pub fn run(a: &Args, url: &CrazyflieUrl) -> ExitCode {
     let options = CrazyflieOptions {
@@ -175,22 +171,10 @@ pub fn run(a: &Args, url: &CrazyflieUrl) -> ExitCode {
     let readout = Readout::of(&link, protocol);
     print(url, &readout, a.json);
     if !a.watch {
-        return match readout.problems().len() {
-            0 => ExitCode::SUCCESS,
-            n => fail(format!(
-                "{n} problem{} with the Crazyflie (listed above): do not fly it yet",
-                if n == 1 { "" } else { "s" }
-            )),
-        };
+        let problems = readout.problems().len();
+        return verdict(problems, "the Crazyflie", "do not fly it yet");
     }
-    let interval = Duration::from_secs_f64(a.interval_s);
-    let mut next = Instant::now() + interval;
-    loop {
-        std::thread::sleep(next.saturating_duration_since(Instant::now()));
-        next += interval;
-        if !a.json {
-            outln!();
-        }
-        print(url, &Readout::of(&link, protocol), a.json);
-    }
+    watch(a.interval_s, a.json, || {
+        print(url, &Readout::of(&link, protocol), a.json)
+    })
 }

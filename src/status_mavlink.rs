@@ -7,9 +7,11 @@
 //! asks the vehicle for its telemetry streams, as any ground station does).
 
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use dronecine_mavlink::messages::copter_mode;
+
+use crate::status::{fail, verdict, watch};
 use dronecine_mavlink::{MavlinkDrone, MavlinkOptions, MavlinkUrl, ParamCheck, VehicleLimits};
 
 /// The longest the first read-out waits for the vehicle's EKF and SYS_STATUS reports (asked
@@ -179,11 +181,6 @@ pub struct Args {
     pub interval_s: f64,
 }
 
-fn fail(msg: impl std::fmt::Display) -> ExitCode {
-    errln!("error: {msg}");
-    ExitCode::FAILURE
-}
-
 /// `status` of an ArduPilot vehicle at `url`.
 pub fn run(a: &Args, url: &MavlinkUrl) -> ExitCode {
     let options = MavlinkOptions {
@@ -206,24 +203,12 @@ pub fn run(a: &Args, url: &MavlinkUrl) -> ExitCode {
     };
     print(url, &readout, a.json);
     if !a.watch {
-        return match readout.problems().len() {
-            0 => ExitCode::SUCCESS,
-            n => fail(format!(
-                "{n} problem{} with the vehicle (listed above): do not fly it yet",
-                if n == 1 { "" } else { "s" }
-            )),
-        };
+        let problems = readout.problems().len();
+        return verdict(problems, "the vehicle", "do not fly it yet");
     }
-    let interval = Duration::from_secs_f64(a.interval_s);
-    let mut next = Instant::now() + interval;
-    loop {
-        std::thread::sleep(next.saturating_duration_since(Instant::now()));
-        next += interval;
+    watch(a.interval_s, a.json, || {
         readout.state = drone.vehicle_state();
         readout.external_nav = drone.uses_external_nav();
-        if !a.json {
-            outln!();
-        }
         print(url, &readout, a.json);
-    }
+    })
 }
