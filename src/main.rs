@@ -25,8 +25,6 @@ mod report;
 mod shoot;
 mod signals;
 mod status;
-mod status_crazyflie;
-mod status_mavlink;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;

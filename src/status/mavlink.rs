@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use dronecine_mavlink::messages::copter_mode;
 
-use crate::status::{fail, verdict, watch};
+use super::{fail, verdict, watch};
 use dronecine_mavlink::{MavlinkDrone, MavlinkOptions, MavlinkUrl, ParamCheck, VehicleLimits};
 
 /// The longest the first read-out waits for the vehicle's EKF and SYS_STATUS reports (asked

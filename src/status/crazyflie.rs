@@ -14,8 +14,8 @@ use dronecine_crazyflie::link::Link;
 use dronecine_crazyflie::log::{supervisor, Field, Values};
 use dronecine_crazyflie::{CrazyflieOptions, CrazyflieUrl};
 
-use crate::status::{fail, verdict, watch};
-use crate::status_mavlink::Args;
+use super::mavlink::Args;
+use super::{fail, verdict, watch};
 
 /// A link silent for longer than this is a problem.
 const SILENT_S: f64 = 0.5;

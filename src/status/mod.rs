@@ -1,6 +1,11 @@
-//! `dronecine status`: connect to a drone, start its navdata, and print what a person checks
-//! before a flight — control state, battery, angles, altitude, velocities, the set state
-//! flags — once or continuously (`--watch`), as text or JSON (one object per line).
+//! `dronecine status`: connect to a drone and print what a person checks before a flight.
+//! This module reads the AR.Drone and holds what every read-out shares (the error, the
+//! one-shot verdict, the `--watch` loop); `mavlink` reads an ArduPilot Copter, `crazyflie` a
+//! Crazyflie.
+//!
+//! The AR.Drone read-out starts its navdata and prints — control state, battery, angles,
+//! altitude, velocities, the set state flags — once or continuously (`--watch`), as text or
+//! JSON (one object per line).
 //!
 //! Each read-out names what makes it untrustworthy (`ArDroneStatus::problems`): packets
 //! rejected by kind (bad checksum, truncated, not navdata, malformed) with how many of how
@@ -9,6 +14,9 @@
 //!
 //! The drone is only read: no limits are written and no take-off / land command is sent
 //! (`ArDroneClient::monitor`), so it is safe to watch a drone another program flies.
+
+mod crazyflie;
+mod mavlink;
 
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -30,14 +38,14 @@ pub struct Args<'a> {
 }
 
 /// Prints `msg` as the command's error: the exit code of a failed `status`.
-pub(crate) fn fail(msg: impl std::fmt::Display) -> ExitCode {
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
     errln!("error: {msg}");
     ExitCode::FAILURE
 }
 
 /// A single read-out's exit: success without a problem, else how many the read-out above
 /// lists, with `of` (what has them) and `advice`.
-pub(crate) fn verdict(problems: usize, of: &str, advice: &str) -> ExitCode {
+fn verdict(problems: usize, of: &str, advice: &str) -> ExitCode {
     match problems {
         0 => ExitCode::SUCCESS,
         n => fail(format!(
@@ -49,7 +57,7 @@ pub(crate) fn verdict(problems: usize, of: &str, advice: &str) -> ExitCode {
 
 /// `--watch` on a drone read in the background: `each` prints a read-out every `interval_s`,
 /// a blank line between text read-outs, until the command is interrupted.
-pub(crate) fn watch(interval_s: f64, json: bool, mut each: impl FnMut()) -> ExitCode {
+fn watch(interval_s: f64, json: bool, mut each: impl FnMut()) -> ExitCode {
     let interval = Duration::from_secs_f64(interval_s);
     let mut next = Instant::now() + interval;
     loop {
@@ -148,7 +156,7 @@ pub fn run(a: &Args) -> ExitCode {
         if !(timeout_ok && interval_ok) {
             return fail("--timeout must be in (0, 60] and --interval in [0.05, 60] seconds");
         }
-        let args = crate::status_mavlink::Args {
+        let args = mavlink::Args {
             watch: a.watch,
             json: a.json,
             timeout_s: a.timeout_s,
@@ -156,12 +164,12 @@ pub fn run(a: &Args) -> ExitCode {
         };
         if !mavlink {
             return match dronecine_crazyflie::CrazyflieUrl::parse(a.drone) {
-                Ok(url) => crate::status_crazyflie::run(&args, &url),
+                Ok(url) => crazyflie::run(&args, &url),
                 Err(e) => fail(format!("--drone: {e}")),
             };
         }
         return match dronecine_mavlink::MavlinkUrl::parse(a.drone) {
-            Ok(url) => crate::status_mavlink::run(&args, &url),
+            Ok(url) => mavlink::run(&args, &url),
             Err(e) => fail(format!("--drone: {e}")),
         };
     }
