@@ -78,6 +78,28 @@ impl<C: Clock> Clock for Paced<C> {
     }
 }
 
+/// Waits on the wall clock until `done` holds (`Ok(true)`) or `timeout` passes (`Ok(false)`),
+/// looking every `poll` and calling `tick` between looks (a backend's keep-alive, say); the
+/// first error `tick` returns ends the wait.
+pub fn wait_until<E>(
+    timeout: Duration,
+    poll: Duration,
+    mut tick: impl FnMut() -> Result<(), E>,
+    mut done: impl FnMut() -> bool,
+) -> Result<bool, E> {
+    let deadline = Instant::now() + timeout;
+    loop {
+        if done() {
+            return Ok(true);
+        }
+        if Instant::now() >= deadline {
+            return Ok(false);
+        }
+        tick()?;
+        std::thread::sleep(poll);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -122,5 +144,37 @@ mod tests {
         // In the past or NaN: returns at once.
         c.sleep_until(f64::NAN);
         c.sleep_until(-1.0);
+    }
+
+    #[test]
+    fn wait_until_ends_when_done_times_out_or_fails() {
+        let ticks = std::cell::Cell::new(0);
+        let got: Result<bool, ()> = wait_until(
+            Duration::from_secs(5),
+            Duration::from_millis(1),
+            || {
+                ticks.set(ticks.get() + 1);
+                Ok(())
+            },
+            || ticks.get() == 3,
+        );
+        assert_eq!(got, Ok(true));
+        assert_eq!(ticks.get(), 3);
+        let start = Instant::now();
+        let got: Result<bool, ()> = wait_until(
+            Duration::from_millis(20),
+            Duration::from_millis(1),
+            || Ok(()),
+            || false,
+        );
+        assert_eq!(got, Ok(false));
+        assert!(start.elapsed() >= Duration::from_millis(20));
+        let got = wait_until(
+            Duration::from_secs(5),
+            Duration::from_millis(1),
+            || Err("gone"),
+            || false,
+        );
+        assert_eq!(got, Err("gone"));
     }
 }

@@ -14,6 +14,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use dronecine_backend::clock::wait_until;
 use dronecine_backend::BackendError;
 
 use crate::crtp::{Packet, ToDrone};
@@ -162,20 +163,10 @@ impl Link {
     pub fn wait_for(
         &self,
         timeout: Duration,
-        mut tick: impl FnMut() -> Result<(), BackendError>,
+        tick: impl FnMut() -> Result<(), BackendError>,
         mut done: impl FnMut(&LinkState) -> bool,
     ) -> Result<bool, BackendError> {
-        let deadline = Instant::now() + timeout;
-        loop {
-            if done(&self.state()) {
-                return Ok(true);
-            }
-            if Instant::now() >= deadline {
-                return Ok(false);
-            }
-            tick()?;
-            std::thread::sleep(POLL);
-        }
+        wait_until(timeout, POLL, tick, || done(&self.state()))
     }
 
     /// The log layouts of [`BLOCKS`](crate::log::BLOCKS), installed for the reader to decode their samples.

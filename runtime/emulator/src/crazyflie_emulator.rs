@@ -25,7 +25,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-use dronecine_backend::{Clock, FlightState, MocapFrame};
+use dronecine_backend::FlightState;
 use dronecine_crazyflie::crtp::Packet;
 use dronecine_grammar::script::Scene;
 use dronecine_profile::Profile;
@@ -33,7 +33,8 @@ use dronecine_sim::{SimConfig, Truth};
 
 use crate::crazyflie::{CrazyflieCounters, CrazyflieFirmware};
 use crate::natnet_io::{NatNetCounts, NatNetIo};
-use crate::{bind, spawn_loop, EmulatorError, NatNetConfig, NatNetData, Paced, World};
+use crate::stage::Stage;
+use crate::{bind, spawn_loop, EmulatorError, NatNetConfig, NatNetData, Paced};
 
 /// cflib's first UDP port.
 pub const CRTP_PORT: u16 = 19850;
@@ -220,15 +221,10 @@ const MAX_DATAGRAMS_PER_STEP: usize = 512;
 struct CfLoop {
     cfg: CrazyflieEmulatorConfig,
     crtp: UdpSocket,
-    natnet: Option<NatNetIo>,
     fw: CrazyflieFirmware,
-    world: World,
-    sim_offset_s: f64,
-    frame_offset: u64,
-    last_frame_number: Option<u64>,
+    stage: Stage,
     client: Option<SocketAddr>,
     truth: Truth,
-    frame: MocapFrame,
     out: Vec<Packet>,
     status: CrazyflieStatus,
     shared: Arc<Mutex<CrazyflieStatus>>,
@@ -265,19 +261,14 @@ impl CfLoop {
         shared: Arc<Mutex<CrazyflieStatus>>,
         stop: Arc<AtomicBool>,
     ) -> Result<CfLoop, EmulatorError> {
-        let world = World::new(&cfg.sim, &cfg.profile, &cfg.scene).map_err(EmulatorError::Sim)?;
+        let stage = Stage::new(&cfg.sim, &cfg.profile, &cfg.scene, natnet, 1.0)?;
         Ok(CfLoop {
             fw: CrazyflieFirmware::new(cfg.protocol),
             cfg,
             crtp,
-            natnet,
-            world,
-            sim_offset_s: 0.0,
-            frame_offset: 0,
-            last_frame_number: None,
+            stage,
             client: None,
             truth: Truth::default(),
-            frame: MocapFrame::default(),
             out: Vec::with_capacity(64),
             status: CrazyflieStatus::default(),
             shared,
@@ -292,22 +283,19 @@ impl CfLoop {
     fn step(&mut self) {
         let setpoints_before = self.setpoints();
         self.drain_crtp();
-        if let Some(io) = &mut self.natnet {
-            let mut counts = NatNetCounts::default();
-            io.drain(&mut self.rx, &mut self.tx, &mut counts);
-            self.count(counts);
-        }
+        let counts = self.stage.drain_natnet(&mut self.rx, &mut self.tx);
+        self.count(counts);
         let now = Paced::now_s(self);
-        self.world.clock.sleep_until(now - self.sim_offset_s);
-        self.world.sim.truth_into(&mut self.truth);
+        self.stage.advance(now, &mut self.truth);
         let outcome = self
             .fw
-            .tick(now, &mut self.world.drone, &self.truth, &mut self.out);
+            .tick(now, self.stage.drone(), &self.truth, &mut self.out);
         self.send_out();
         if outcome.rest {
             self.rest(now);
         }
-        self.send_frame(now);
+        let counts = self.stage.send_frame(now, &mut self.tx);
+        self.count(counts);
         if self.truth.state == FlightState::Flying {
             self.status.flying_s += now - self.last_step_s;
             self.status.setpoints_flying += self.setpoints() - setpoints_before;
@@ -333,7 +321,7 @@ impl CfLoop {
             self.fw.datagram(
                 &self.rx[..n],
                 now,
-                &mut self.world.drone,
+                self.stage.drone(),
                 &self.truth,
                 &mut self.out,
             );
@@ -354,29 +342,16 @@ impl CfLoop {
         }
     }
 
-    /// The drone whose motors were cut rests on the floor: landed there, a new world.
+    /// The drone whose motors were cut rests on the floor: landed there, a new world, whose
+    /// state the status published this step carries with the rest.
     fn rest(&mut self, now: f64) {
         let cfg = &self.cfg;
-        if let Ok(w) = self.world.landed_here(&cfg.sim, &cfg.profile, &cfg.scene) {
-            self.world = w;
-            self.sim_offset_s = now;
-            self.frame_offset = self.last_frame_number.map_or(0, |n| n + 1);
+        if self
+            .stage
+            .rest(&cfg.sim, &cfg.profile, &cfg.scene, now, &mut self.truth)
+        {
             self.status.rests += 1;
-            // The status published this step pairs the rest with the rebuilt world's state.
-            self.world.sim.truth_into(&mut self.truth);
         }
-    }
-
-    fn send_frame(&mut self, now: f64) {
-        let Some(number) = self.world.next_frame(&mut self.frame, self.frame_offset) else {
-            return;
-        };
-        self.last_frame_number = Some(number);
-        let Some(io) = &mut self.natnet else { return };
-        let capture = self.sim_offset_s + self.frame.t_s;
-        let mut counts = NatNetCounts::default();
-        io.send_frame(&self.frame, number, capture, now, &mut self.tx, &mut counts);
-        self.count(counts);
     }
 
     fn count(&mut self, c: NatNetCounts) {

@@ -35,6 +35,7 @@ pub mod crazyflie_emulator;
 pub mod firmware;
 pub mod motive;
 mod natnet_io;
+mod stage;
 
 use std::fmt;
 use std::io;
@@ -47,11 +48,10 @@ use std::time::{Duration, Instant};
 use dronecine_grammar::script::Scene;
 use dronecine_profile::Profile;
 
-use dronecine_backend::{Clock, Mocap, MocapFrame};
 use dronecine_natnet::frame::{
     NatNetError, UpAxis, Version, COMMAND_PORT, DATA_PORT, MULTICAST_GROUP,
 };
-use dronecine_sim::{SimClock, SimConfig, SimDrone, SimError, SimMocap, Simulator, Truth};
+use dronecine_sim::{SimConfig, SimError, Truth};
 
 pub use crazyflie_emulator::{
     CrazyflieEmulator, CrazyflieEmulatorConfig, CrazyflieHandle, CrazyflieStatus,
@@ -59,6 +59,7 @@ pub use crazyflie_emulator::{
 pub use firmware::{AtCounters, Firmware, Limits, NavdataMode};
 pub use motive::{Motive, ACTOR_ID_BASE, DRONE_ID};
 use natnet_io::{NatNetCounts, NatNetIo};
+use stage::Stage;
 
 /// The AR.Drone's AT command port.
 pub const AT_PORT: u16 = 5556;
@@ -395,48 +396,6 @@ impl Emulator {
     }
 }
 
-/// The simulator and its handles (rebuilt when an emergency is cleared).
-pub(crate) struct World {
-    sim: Simulator,
-    drone: SimDrone,
-    mocap: SimMocap,
-    clock: SimClock,
-}
-
-impl World {
-    fn new(cfg: &SimConfig, profile: &Profile, scene: &Scene) -> Result<World, SimError> {
-        let sim = Simulator::new(cfg, profile, scene)?;
-        Ok(World {
-            drone: sim.drone(),
-            mocap: sim.mocap(),
-            clock: sim.clock(),
-            sim,
-        })
-    }
-
-    /// A world whose drone stands landed where this one's is, with its heading and battery
-    /// (the simulator cannot leave its emergency state itself); its clock starts again.
-    fn landed_here(
-        &self,
-        cfg: &SimConfig,
-        profile: &Profile,
-        scene: &Scene,
-    ) -> Result<World, SimError> {
-        let t = self.sim.truth();
-        let mut cfg = cfg.clone();
-        cfg.start_position_m = t.position_m;
-        cfg.start_heading_rad = t.heading_rad;
-        cfg.battery_start_percent = t.battery_percent.clamp(0.0, 100.0);
-        World::new(&cfg, profile, scene)
-    }
-
-    /// The newest motion-capture frame, if the simulator made one since the last call: its
-    /// number, counted on from `frame_offset`.
-    fn next_frame(&mut self, frame: &mut MocapFrame, frame_offset: u64) -> Option<u64> {
-        matches!(self.mocap.poll(frame), Ok(true)).then(|| frame_offset + frame.frame)
-    }
-}
-
 /// An emulator's loop, run every [`Paced::step_s`] of wall time on a thread of its own.
 pub(crate) trait Paced {
     /// One step: drain the sockets, advance the world, send what is due.
@@ -501,18 +460,11 @@ struct Loop {
     cfg: EmulatorConfig,
     at: UdpSocket,
     nav: UdpSocket,
-    natnet: Option<NatNetIo>,
     fw: Firmware,
-    world: World,
-    /// Wall time at which the current simulator's t = 0 was.
-    sim_offset_s: f64,
-    /// Added to the current simulator's frame numbers.
-    frame_offset: u64,
-    last_frame_number: Option<u64>,
+    stage: Stage,
     nav_dest: Option<SocketAddr>,
     next_nav_s: f64,
     truth: Truth,
-    frame: MocapFrame,
     counters: Counters,
     status: Arc<Mutex<Status>>,
     stop: Arc<AtomicBool>,
@@ -548,22 +500,17 @@ impl Loop {
         status: Arc<Mutex<Status>>,
         stop: Arc<AtomicBool>,
     ) -> Result<Loop, EmulatorError> {
-        let world = World::new(&cfg.sim, &cfg.profile, &cfg.scene).map_err(EmulatorError::Sim)?;
+        let stage = Stage::new(&cfg.sim, &cfg.profile, &cfg.scene, natnet, cfg.time_scale)?;
         let fw = Firmware::new(cfg.sim.battery_min_takeoff_percent);
         Ok(Loop {
             cfg,
             at,
             nav,
-            natnet,
             fw,
-            world,
-            sim_offset_s: 0.0,
-            frame_offset: 0,
-            last_frame_number: None,
+            stage,
             nav_dest: None,
             next_nav_s: 0.0,
             truth: Truth::default(),
-            frame: MocapFrame::default(),
             counters: Counters::default(),
             status,
             stop,
@@ -583,11 +530,9 @@ impl Loop {
         self.drain_natnet();
         let now = self.now_s();
         self.fw.tick(now);
-        self.world
-            .clock
-            .sleep_until((now - self.sim_offset_s) * self.cfg.time_scale);
-        self.world.sim.truth_into(&mut self.truth);
-        self.send_frame(now);
+        self.stage.advance(now, &mut self.truth);
+        let counts = self.stage.send_frame(now, &mut self.tx);
+        self.count(counts);
         self.send_navdata(now);
         self.counters.steps += 1;
         self.publish(now);
@@ -602,7 +547,7 @@ impl Loop {
             };
             let now = self.now_s();
             let before = self.fw.counters();
-            let out = self.fw.datagram(&self.rx[..n], now, &mut self.world.drone);
+            let out = self.fw.datagram(&self.rx[..n], now, self.stage.drone());
             if out.clear_emergency {
                 self.clear_emergency(now);
             }
@@ -627,10 +572,10 @@ impl Loop {
 
     fn clear_emergency(&mut self, now: f64) {
         let cfg = &self.cfg;
-        if let Ok(w) = self.world.landed_here(&cfg.sim, &cfg.profile, &cfg.scene) {
-            self.world = w;
-            self.sim_offset_s = now;
-            self.frame_offset = self.last_frame_number.map_or(0, |n| n + 1);
+        if self
+            .stage
+            .rest(&cfg.sim, &cfg.profile, &cfg.scene, now, &mut self.truth)
+        {
             self.counters.emergency_resets += 1;
         }
     }
@@ -655,9 +600,7 @@ impl Loop {
     }
 
     fn drain_natnet(&mut self) {
-        let Some(io) = &mut self.natnet else { return };
-        let mut counts = NatNetCounts::default();
-        io.drain(&mut self.rx, &mut self.tx, &mut counts);
+        let counts = self.stage.drain_natnet(&mut self.rx, &mut self.tx);
         self.count(counts);
     }
 
@@ -666,18 +609,6 @@ impl Loop {
         self.counters.natnet_rejected += c.rejected;
         self.counters.frames_sent += c.frames;
         self.counters.send_errors += c.send_errors;
-    }
-
-    fn send_frame(&mut self, now: f64) {
-        let Some(number) = self.world.next_frame(&mut self.frame, self.frame_offset) else {
-            return;
-        };
-        self.last_frame_number = Some(number);
-        let Some(io) = &mut self.natnet else { return };
-        let capture = self.sim_offset_s + self.frame.t_s / self.cfg.time_scale;
-        let mut counts = NatNetCounts::default();
-        io.send_frame(&self.frame, number, capture, now, &mut self.tx, &mut counts);
-        self.count(counts);
     }
 
     fn send_navdata(&mut self, now: f64) {
@@ -691,7 +622,7 @@ impl Loop {
         } else {
             self.next_nav_s + period
         };
-        let commanded = self.world.sim.applied_command().is_some();
+        let commanded = self.stage.commanded();
         match self.fw.navdata(&self.truth, commanded, now, &mut self.tx) {
             Ok(len) => match self.nav.send_to(&self.tx[..len], dest) {
                 Ok(_) => self.counters.navdata_sent += 1,
@@ -704,7 +635,7 @@ impl Loop {
     fn publish(&mut self, now: f64) {
         let mut counters = self.counters;
         counters.at = self.fw.counters();
-        let commanded = self.world.sim.applied_command().is_some();
+        let commanded = self.stage.commanded();
         if let Ok(mut s) = self.status.lock() {
             s.counters = counters;
             s.truth.clone_from(&self.truth);

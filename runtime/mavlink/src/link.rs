@@ -13,6 +13,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use dronecine_backend::clock::wait_until;
 use dronecine_backend::BackendError;
 use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::error::MessageReadError;
@@ -119,20 +120,10 @@ impl Link {
     pub fn wait_for(
         &self,
         timeout: Duration,
-        mut tick: impl FnMut() -> Result<(), BackendError>,
+        tick: impl FnMut() -> Result<(), BackendError>,
         mut done: impl FnMut(&VehicleState) -> bool,
     ) -> Result<bool, BackendError> {
-        let deadline = Instant::now() + timeout;
-        loop {
-            if done(&self.state()) {
-                return Ok(true);
-            }
-            if Instant::now() >= deadline {
-                return Ok(false);
-            }
-            tick()?;
-            std::thread::sleep(POLL);
-        }
+        wait_until(timeout, POLL, tick, || done(&self.state()))
     }
 
     /// Waits for the vehicle's first heartbeat.
