@@ -61,6 +61,20 @@ fn comp(angle: CameraAngle, framings: Vec<(Size, Vec<Subject>)>) -> Composition 
     }
 }
 
+/// A two-shot of A and B, placed by the size alone.
+fn two_shot(angle: CameraAngle, size: Size) -> Composition {
+    comp(
+        angle,
+        vec![(
+            size,
+            vec![
+                subject("A", None, None, None),
+                subject("B", None, None, None),
+            ],
+        )],
+    )
+}
+
 fn pose(p: &Placement) -> CameraPose {
     CameraPose {
         position_m: p.position_m,
@@ -356,16 +370,7 @@ fn feed_forward_velocity_matches_placement_derivative() {
                     vec![subject("A", Some(Profile::ThreeQuarterLeft), None, None)],
                 )],
             ),
-            comp(
-                CameraAngle::EyeLevel,
-                vec![(
-                    Size::MS,
-                    vec![
-                        subject("A", None, None, None),
-                        subject("B", None, None, None),
-                    ],
-                )],
-            ),
+            two_shot(CameraAngle::EyeLevel, Size::MS),
         ];
         for c in &comps {
             let v = solve(c, &NAMES[..2], &actors, &l, &g).unwrap();
@@ -400,16 +405,7 @@ fn a_two_shot_is_symmetric_and_sized_alike() {
         (2.5, Size::MS, false),
     ] {
         let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(apart_m, 0.0, 180.0, 1.65)];
-        let c = comp(
-            CameraAngle::EyeLevel,
-            vec![(
-                size_,
-                vec![
-                    subject("A", None, None, None),
-                    subject("B", None, None, None),
-                ],
-            )],
-        );
+        let c = two_shot(CameraAngle::EyeLevel, size_);
         let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
         let Visual::Two(t) = &v else { panic!("{v:?}") };
         let p = place(&v, &actors, &l, &g);
@@ -467,16 +463,7 @@ fn a_profile_on_a_two_shot_is_honoured_on_either_actor() {
     let l = lens(84.0);
     let g = Gimbal::None;
     let actors = [actor(-1.0, 0.0, 0.0, 1.8), actor(1.0, 0.0, 180.0, 1.65)];
-    let plain = comp(
-        CameraAngle::EyeLevel,
-        vec![(
-            Size::MLS,
-            vec![
-                subject("A", None, None, None),
-                subject("B", None, None, None),
-            ],
-        )],
-    );
+    let plain = two_shot(CameraAngle::EyeLevel, Size::MLS);
     let p0 = place(
         &solve(&plain, &NAMES[..2], &actors, &l, &g).unwrap(),
         &actors,
@@ -787,16 +774,7 @@ fn visuals() -> (Vec<ActorPose>, Vec<Visual>) {
                 vec![subject("A", Some(Profile::Right), Some(-1.0 / 3.0), None)],
             )],
         ),
-        comp(
-            CameraAngle::EyeLevel,
-            vec![(
-                Size::MS,
-                vec![
-                    subject("A", None, None, None),
-                    subject("B", None, None, None),
-                ],
-            )],
-        ),
+        two_shot(CameraAngle::EyeLevel, Size::MS),
         comp(
             CameraAngle::High,
             vec![(
@@ -1213,16 +1191,7 @@ fn the_toric_blend_keeps_its_way_round_while_one_end_circles() {
 fn a_two_shot_follows_walking_actors_smoothly() {
     let l = lens(84.0);
     let g = Gimbal::None;
-    let c = comp(
-        CameraAngle::Low,
-        vec![(
-            Size::LS,
-            vec![
-                subject("A", None, None, None),
-                subject("B", None, None, None),
-            ],
-        )],
-    );
+    let c = two_shot(CameraAngle::Low, Size::LS);
     let prepared = framing::Prepared::new(&c, &NAMES, &l);
     let at = |k: usize| {
         let t = k as f64 * 0.01;
@@ -1267,16 +1236,7 @@ fn a_two_shot_of_two_heights_frames_them_as_they_stand() {
     for g in [gimbal(), Gimbal::None] {
         for (xb, yb, hb) in [(2.0, 0.0, 1.65), (1.5, 1.0, 1.50), (2.5, -0.5, 1.95)] {
             let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(xb, yb, 180.0, hb)];
-            let c = comp(
-                CameraAngle::EyeLevel,
-                vec![(
-                    Size::FS,
-                    vec![
-                        subject("A", None, None, None),
-                        subject("B", None, None, None),
-                    ],
-                )],
-            );
+            let c = two_shot(CameraAngle::EyeLevel, Size::FS);
             let v = solve(&c, &NAMES[..2], &actors, &l, &g).unwrap();
             let p = place(&v, &actors, &l, &g);
             let e = screen_error(&v, &actors, &l, &g, &p);
@@ -1318,16 +1278,7 @@ fn a_narrow_gimbal_flags_the_pitch_it_cannot_hold() {
         rate_radps: PI,
     };
     let actors = [actor(0.0, 0.0, 0.0, 1.8), actor(2.0, 0.0, 180.0, 1.65)];
-    let c = comp(
-        CameraAngle::High,
-        vec![(
-            Size::FS,
-            vec![
-                subject("A", None, None, None),
-                subject("B", None, None, None),
-            ],
-        )],
-    );
+    let c = two_shot(CameraAngle::High, Size::FS);
     let v = solve(&c, &NAMES[..2], &actors, &l, &narrow).unwrap();
     let p = place(&v, &actors, &l, &narrow);
     assert!(p.flags.pitch_clamped, "{p:?}");
