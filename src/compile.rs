@@ -292,7 +292,7 @@ pub fn run(a: &Args) -> ExitCode {
         if let Some(c) = csv.as_mut() {
             c.write(s)?;
         }
-        if a.preview.is_some() && n % every == 0 {
+        if a.preview.is_some() && n.is_multiple_of(every) {
             kept.push(*s);
             kept_actors.push(actors.to_vec());
         }

@@ -525,7 +525,7 @@ fn log_setting(cmd: u8, b: &[u8]) -> Result<Option<ToDrone<'_>>, CrtpError> {
         }
         log_cmd::CREATE_BLOCK_V2 => {
             let n = b.len();
-            if n < 2 || (n - 2) % 3 != 0 {
+            if n < 2 || !(n - 2).is_multiple_of(3) {
                 return Err(CrtpError::Length { what, len: n });
             }
             ToDrone::LogCreate {

@@ -472,7 +472,7 @@ fn garbage_on_every_port_is_counted_never_a_panic() {
                 sock.send_to(&d, p).unwrap();
             }
             sent.set(sent.get() + 1);
-            if sent.get() % 16 == 0 {
+            if sent.get().is_multiple_of(16) {
                 // Leave the emulator time to drain (loopback buffers are finite).
                 std::thread::sleep(Duration::from_millis(6));
             }

@@ -331,8 +331,8 @@ impl SyncAsk {
     fn batch_written(&mut self) -> bool {
         self.batches += 1;
         self.tx.is_some()
-            && self.batches % SYNC_EVERY_BATCHES == 0
-            && (self.batches % SYNC_ANYWAY_BATCHES == 0
+            && self.batches.is_multiple_of(SYNC_EVERY_BATCHES)
+            && (self.batches.is_multiple_of(SYNC_ANYWAY_BATCHES)
                 || self.last.is_none_or(|t| t.elapsed() >= SYNC_PERIOD))
     }
 

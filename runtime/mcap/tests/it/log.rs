@@ -136,7 +136,7 @@ fn tick(k: usize, t_s: f64, x: [f64; 8]) -> Tick {
         heading_rad: x[5],
     });
     let output = if k % 11 == 5 {
-        Err(if k % 2 == 0 {
+        Err(if k.is_multiple_of(2) {
             TickFault::NotFinite
         } else {
             TickFault::TimeNotIncreasing
@@ -154,7 +154,7 @@ fn tick(k: usize, t_s: f64, x: [f64; 8]) -> Tick {
                 velocity_mps: [x[7], x[0], x[1]],
                 heading_rad: x[2],
             },
-            saturated: k % 5 == 0,
+            saturated: k.is_multiple_of(5),
         })
     };
     let command_sent = match &output {

@@ -61,7 +61,7 @@ fn input(k: usize) -> TickInput {
             1 => f64::NAN, // refused: not finite
             _ => dt,
         },
-        measurement: (k % 13 != 0).then_some(Measurement {
+        measurement: (!k.is_multiple_of(13)).then_some(Measurement {
             position_m: [c, s, 1.0 + 0.001 * (k % 7) as f64],
             heading_rad: 3.0 * s,
         }),
