@@ -23,4 +23,5 @@ mod signals;
 #[cfg(unix)]
 mod sitl;
 mod status;
+mod status_mavlink;
 mod storyboard;
