@@ -20,9 +20,6 @@
 
 use std::io;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr, UdpSocket};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 use std::time::Instant;
 
 use dronecine_backend::FlightState;
@@ -33,8 +30,9 @@ use dronecine_sim::{SimConfig, Truth};
 
 use crate::crazyflie::{CrazyflieCounters, CrazyflieFirmware};
 use crate::natnet_io::{NatNetCounts, NatNetIo};
+use crate::running::{check_step_s, Paced, Published, Running};
 use crate::stage::Stage;
-use crate::{bind, spawn_loop, EmulatorError, NatNetConfig, NatNetData, Paced};
+use crate::{bind, EmulatorError, NatNetConfig, NatNetData};
 
 /// cflib's first UDP port.
 pub const CRTP_PORT: u16 = 19850;
@@ -123,9 +121,7 @@ pub struct CrazyflieHandle {
     addr: SocketAddr,
     natnet_command_addr: Option<SocketAddr>,
     natnet_data: Option<NatNetData>,
-    status: Arc<Mutex<CrazyflieStatus>>,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
+    running: Running<CrazyflieStatus>,
 }
 
 impl CrazyflieHandle {
@@ -143,43 +139,24 @@ impl CrazyflieHandle {
     }
 
     pub fn status(&self) -> CrazyflieStatus {
-        self.status.lock().map(|s| s.clone()).unwrap_or_default()
+        self.running.read(CrazyflieStatus::clone)
     }
 
     /// Whether the loop still runs.
     pub fn is_running(&self) -> bool {
-        self.thread.as_ref().is_some_and(|t| !t.is_finished())
+        self.running.is_running()
     }
 
     /// Waits until the loop ends (it runs until dropped or the process ends).
     pub fn wait(mut self) -> Result<(), EmulatorError> {
-        match self.thread.take() {
-            Some(t) => t
-                .join()
-                .map_err(|_| EmulatorError::Thread("it panicked".into())),
-            None => Ok(()),
-        }
-    }
-}
-
-impl Drop for CrazyflieHandle {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::SeqCst);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
+        self.running.join()
     }
 }
 
 impl CrazyflieEmulator {
     /// Binds the sockets, builds the simulator and starts the loop.
     pub fn start(config: CrazyflieEmulatorConfig) -> Result<CrazyflieHandle, EmulatorError> {
-        if !(config.step_s.is_finite() && (1e-4..=0.05).contains(&config.step_s)) {
-            return Err(EmulatorError::Config(format!(
-                "the emulator's step {} s is outside 0.1–50 ms",
-                config.step_s
-            )));
-        }
+        check_step_s(config.step_s)?;
         config.sim.validate().map_err(EmulatorError::Sim)?;
         let at = SocketAddr::new(config.host, config.port);
         let crtp = bind("CRTP", at)?;
@@ -188,28 +165,16 @@ impl CrazyflieEmulator {
             addr: at,
             error,
         })?;
-        let natnet = match &config.natnet {
-            None => None,
-            Some(n) => Some(NatNetIo::bind(config.host, n)?),
-        };
-        let natnet_command_addr = match &natnet {
-            Some(n) => Some(n.command_addr()?),
-            None => None,
-        };
+        let (natnet, natnet_command_addr) =
+            NatNetIo::bind_configured(config.host, config.natnet.as_ref())?;
         let natnet_data = config.natnet.map(|n| n.data);
-        let status = Arc::new(Mutex::new(CrazyflieStatus::default()));
-        let stop = Arc::new(AtomicBool::new(false));
-        let (st, sp) = (Arc::clone(&status), Arc::clone(&stop));
-        let (thread, ready) = spawn_loop(move || CfLoop::new(config, crtp, natnet, st, sp))?;
-        let handle = CrazyflieHandle {
+        let running = Running::spawn(move |shared| CfLoop::new(config, crtp, natnet, shared))?;
+        Ok(CrazyflieHandle {
             addr,
             natnet_command_addr,
             natnet_data,
-            status,
-            stop,
-            thread: Some(thread),
-        };
-        ready.map(|()| handle)
+            running,
+        })
     }
 }
 
@@ -227,8 +192,7 @@ struct CfLoop {
     truth: Truth,
     out: Vec<Packet>,
     status: CrazyflieStatus,
-    shared: Arc<Mutex<CrazyflieStatus>>,
-    stop: Arc<AtomicBool>,
+    shared: Published<CrazyflieStatus>,
     start: Instant,
     last_step_s: f64,
     rx: Vec<u8>,
@@ -244,10 +208,6 @@ impl Paced for CfLoop {
         self.cfg.step_s
     }
 
-    fn stopped(&self) -> bool {
-        self.stop.load(Ordering::SeqCst)
-    }
-
     fn now_s(&self) -> f64 {
         self.start.elapsed().as_secs_f64()
     }
@@ -258,8 +218,7 @@ impl CfLoop {
         cfg: CrazyflieEmulatorConfig,
         crtp: UdpSocket,
         natnet: Option<NatNetIo>,
-        shared: Arc<Mutex<CrazyflieStatus>>,
-        stop: Arc<AtomicBool>,
+        shared: Published<CrazyflieStatus>,
     ) -> Result<CfLoop, EmulatorError> {
         let stage = Stage::new(&cfg.sim, &cfg.profile, &cfg.scene, natnet, 1.0)?;
         Ok(CfLoop {
@@ -272,7 +231,6 @@ impl CfLoop {
             out: Vec::with_capacity(64),
             status: CrazyflieStatus::default(),
             shared,
-            stop,
             start: Instant::now(),
             last_step_s: 0.0,
             rx: vec![0; RECV_BUF],

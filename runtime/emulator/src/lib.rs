@@ -35,15 +35,13 @@ pub mod crazyflie_emulator;
 pub mod firmware;
 pub mod motive;
 mod natnet_io;
+mod running;
 mod stage;
 
 use std::fmt;
 use std::io;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc, Mutex};
-use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use dronecine_grammar::script::Scene;
 use dronecine_profile::Profile;
@@ -59,6 +57,7 @@ pub use crazyflie_emulator::{
 pub use firmware::{AtCounters, Firmware, Limits, NavdataMode};
 pub use motive::{Motive, ACTOR_ID_BASE, DRONE_ID};
 use natnet_io::{NatNetCounts, NatNetIo};
+use running::{check_step_s, Paced, Published, Running};
 use stage::Stage;
 
 /// The AR.Drone's AT command port.
@@ -256,9 +255,7 @@ pub struct EmulatorHandle {
     navdata_addr: SocketAddr,
     natnet_command_addr: Option<SocketAddr>,
     natnet_data: Option<NatNetData>,
-    status: Arc<Mutex<Status>>,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
+    running: Running<Status>,
 }
 
 impl EmulatorHandle {
@@ -283,50 +280,30 @@ impl EmulatorHandle {
     }
 
     pub fn status(&self) -> Status {
-        self.status.lock().map(|s| s.clone()).unwrap_or_default()
+        self.running.read(Status::clone)
     }
 
     pub fn counters(&self) -> Counters {
-        self.status.lock().map(|s| s.counters).unwrap_or_default()
+        self.running.read(|s| s.counters)
     }
 
     pub fn truth(&self) -> Truth {
-        self.status
-            .lock()
-            .map(|s| s.truth.clone())
-            .unwrap_or_default()
+        self.running.read(|s| s.truth.clone())
     }
 
     /// Whether the loop still runs.
     pub fn is_running(&self) -> bool {
-        self.thread.as_ref().is_some_and(|t| !t.is_finished())
+        self.running.is_running()
     }
 
     /// Stops the loop and waits for it.
     pub fn stop(mut self) -> Result<(), EmulatorError> {
-        self.stop.store(true, Ordering::SeqCst);
-        self.join()
+        self.running.stop()
     }
 
     /// Waits until the loop ends (it runs until [`EmulatorHandle::stop`] or the process ends).
     pub fn wait(mut self) -> Result<(), EmulatorError> {
-        self.join()
-    }
-
-    fn join(&mut self) -> Result<(), EmulatorError> {
-        match self.thread.take() {
-            Some(t) => t
-                .join()
-                .map_err(|_| EmulatorError::Thread("it panicked".into())),
-            None => Ok(()),
-        }
-    }
-}
-
-impl Drop for EmulatorHandle {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::SeqCst);
-        let _ = self.join();
+        self.running.join()
     }
 }
 
@@ -340,12 +317,7 @@ pub(crate) fn bind(what: &'static str, addr: SocketAddr) -> Result<UdpSocket, Em
 impl Emulator {
     /// Binds the sockets, builds the simulator and starts the loop.
     pub fn start(config: EmulatorConfig) -> Result<EmulatorHandle, EmulatorError> {
-        if !(config.step_s.is_finite() && (1e-4..=0.05).contains(&config.step_s)) {
-            return Err(EmulatorError::Config(format!(
-                "the emulator's step {} s is outside 0.1–50 ms",
-                config.step_s
-            )));
-        }
+        check_step_s(config.step_s)?;
         if !(config.time_scale.is_finite() && config.time_scale > 0.0 && config.time_scale <= 100.0)
         {
             return Err(EmulatorError::Config(format!(
@@ -365,90 +337,22 @@ impl Emulator {
         };
         let at_addr = local(&at, "AT")?;
         let navdata_addr = local(&nav, "navdata")?;
-        let natnet = match &config.natnet {
-            None => None,
-            Some(n) => Some(NatNetIo::bind(config.host, n)?),
-        };
-        let natnet_command_addr = match &natnet {
-            Some(n) => Some(n.command_addr()?),
-            None => None,
-        };
+        let (natnet, natnet_command_addr) =
+            NatNetIo::bind_configured(config.host, config.natnet.as_ref())?;
         let natnet_data = config.natnet.map(|n| n.data);
-
-        let status = Arc::new(Mutex::new(Status::default()));
-        let stop = Arc::new(AtomicBool::new(false));
-        let (st, sp) = (Arc::clone(&status), Arc::clone(&stop));
-        let (thread, ready) = spawn_loop(move || {
-            let mut lp = Loop::new(config, at, nav, natnet, st, sp)?;
+        let running = Running::spawn(move |status| {
+            let mut lp = Loop::new(config, at, nav, natnet, status)?;
             lp.publish(0.0);
             Ok(lp)
         })?;
-        let handle = EmulatorHandle {
+        Ok(EmulatorHandle {
             at_addr,
             navdata_addr,
             natnet_command_addr,
             natnet_data,
-            status,
-            stop,
-            thread: Some(thread),
-        };
-        ready.map(|()| handle)
-    }
-}
-
-/// An emulator's loop, run every [`Paced::step_s`] of wall time on a thread of its own.
-pub(crate) trait Paced {
-    /// One step: drain the sockets, advance the world, send what is due.
-    fn step(&mut self);
-    fn step_s(&self) -> f64;
-    fn stopped(&self) -> bool;
-    /// Wall seconds since the loop started.
-    fn now_s(&self) -> f64;
-}
-
-/// Runs `lp` until it is stopped, step k at k·step_s; far behind (the process was
-/// suspended), it skips ahead rather than spin.
-fn run_paced(lp: &mut impl Paced) {
-    let step = lp.step_s();
-    let mut k: u64 = 0;
-    while !lp.stopped() {
-        lp.step();
-        k += 1;
-        let now = lp.now_s();
-        let mut next = k as f64 * step;
-        if next < now - 0.1 {
-            k = (now / step).ceil() as u64;
-            next = k as f64 * step;
-        }
-        let wait = next - now;
-        if wait > 0.0 {
-            std::thread::sleep(Duration::from_secs_f64(wait));
-        }
-    }
-}
-
-/// Starts an emulator's thread: `make` builds the loop there (the simulator is not `Send`),
-/// which then runs until stopped; its thread and whether it started (its error if not).
-pub(crate) fn spawn_loop<L: Paced>(
-    make: impl FnOnce() -> Result<L, EmulatorError> + Send + 'static,
-) -> Result<(JoinHandle<()>, Result<(), EmulatorError>), EmulatorError> {
-    let (ready_tx, ready_rx) = mpsc::channel();
-    let thread = std::thread::Builder::new()
-        .name("dronecine-emulator".into())
-        .spawn(move || match make() {
-            Ok(mut lp) => {
-                let _ = ready_tx.send(Ok(()));
-                run_paced(&mut lp);
-            }
-            Err(e) => {
-                let _ = ready_tx.send(Err(e));
-            }
+            running,
         })
-        .map_err(|e| EmulatorError::Thread(e.to_string()))?;
-    let ready = ready_rx
-        .recv()
-        .unwrap_or_else(|_| Err(EmulatorError::Thread("it ended before starting".into())));
-    Ok((thread, ready))
+    }
 }
 
 /// Largest datagram read.
@@ -466,8 +370,7 @@ struct Loop {
     next_nav_s: f64,
     truth: Truth,
     counters: Counters,
-    status: Arc<Mutex<Status>>,
-    stop: Arc<AtomicBool>,
+    status: Published<Status>,
     start: Instant,
     rx: Vec<u8>,
     tx: Vec<u8>,
@@ -482,10 +385,6 @@ impl Paced for Loop {
         self.cfg.step_s
     }
 
-    fn stopped(&self) -> bool {
-        self.stop.load(Ordering::SeqCst)
-    }
-
     fn now_s(&self) -> f64 {
         Loop::now_s(self)
     }
@@ -497,8 +396,7 @@ impl Loop {
         at: UdpSocket,
         nav: UdpSocket,
         natnet: Option<NatNetIo>,
-        status: Arc<Mutex<Status>>,
-        stop: Arc<AtomicBool>,
+        status: Published<Status>,
     ) -> Result<Loop, EmulatorError> {
         let stage = Stage::new(&cfg.sim, &cfg.profile, &cfg.scene, natnet, cfg.time_scale)?;
         let fw = Firmware::new(cfg.sim.battery_min_takeoff_percent);
@@ -513,7 +411,6 @@ impl Loop {
             truth: Truth::default(),
             counters: Counters::default(),
             status,
-            stop,
             start: Instant::now(),
             rx: vec![0; RECV_BUF],
             tx: vec![0; RECV_BUF],

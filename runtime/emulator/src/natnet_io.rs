@@ -61,6 +61,17 @@ impl NatNetIo {
         })
     }
 
+    /// The NatNet side an emulator is configured with, if any, and its bound command address.
+    pub(crate) fn bind_configured(
+        host: IpAddr,
+        n: Option<&NatNetConfig>,
+    ) -> Result<(Option<NatNetIo>, Option<SocketAddr>), EmulatorError> {
+        let Some(n) = n else { return Ok((None, None)) };
+        let io = NatNetIo::bind(host, n)?;
+        let addr = io.command_addr()?;
+        Ok((Some(io), Some(addr)))
+    }
+
     /// The bound command address.
     pub(crate) fn command_addr(&self) -> Result<SocketAddr, EmulatorError> {
         self.command
