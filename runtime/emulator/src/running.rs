@@ -18,10 +18,10 @@ pub(crate) trait Paced {
     fn now_s(&self) -> f64;
 }
 
-/// The loop's step (wall clock) if it is one an emulator can keep: 0.1 to 50 ms.
-pub(crate) fn check_step_s(step_s: f64) -> Result<f64, EmulatorError> {
+/// Refuses a loop step (wall clock) an emulator cannot keep: outside 0.1 to 50 ms.
+pub(crate) fn check_step_s(step_s: f64) -> Result<(), EmulatorError> {
     if step_s.is_finite() && (1e-4..=0.05).contains(&step_s) {
-        Ok(step_s)
+        Ok(())
     } else {
         Err(EmulatorError::Config(format!(
             "the emulator's step {step_s} s is outside 0.1–50 ms"

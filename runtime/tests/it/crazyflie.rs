@@ -93,13 +93,9 @@ fn a_flight_through_the_crazyflie_emulator_commands_at_the_loops_rate() {
 }
 
 /// Panics with `what` unless `done` holds within a second.
-fn within_a_second(what: &str, mut done: impl FnMut() -> bool) {
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(1);
-    while !done() {
-        assert!(
-            std::time::Instant::now() < deadline,
-            "{what}: not within 1 s"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+fn within_a_second(what: &str, done: impl FnMut() -> bool) {
+    let one_s = std::time::Duration::from_secs(1);
+    let poll = std::time::Duration::from_millis(10);
+    let held = dronecine_backend::clock::wait_until(one_s, poll, || Ok::<(), ()>(()), done);
+    assert_eq!(held, Ok(true), "{what}: not within 1 s");
 }
